@@ -1,0 +1,7 @@
+//! gustkit: aeroelastic gust analysis and gust-constrained wing design.
+//!
+//! The pipeline runs design vector → wing → plate model → modes → (aerodynamics) → gust response,
+//! and back again for gradients. See README.md for the architecture.
+
+pub mod structure;
+pub mod wing;

@@ -1,0 +1,15 @@
+//! Plate finite-element model of the wing: elements, mesh, assembly, modal analysis and exact
+//! sensitivities.
+
+pub mod element;
+mod material;
+pub mod mesh;
+pub mod modal;
+pub mod model;
+pub mod sensitivity;
+
+pub use material::{MaterialError, Orthotropic};
+pub use mesh::{Clamp, PlateMesh};
+pub use modal::{Mode, Modes, Sampler};
+pub use model::{airfoil_thickness, Field, PlateModel};
+pub use sensitivity::{mass_grad, modes_jvp, modes_vjp, ModalSeed};

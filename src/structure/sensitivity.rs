@@ -1,0 +1,263 @@
+//! Exact reverse- and forward-mode sensitivities of the structural outputs with respect to the
+//! design vector x = [t (patch thicknesses), span, sweep_c4, root_chord, tip_chord].
+//!
+//! Eigen-derivatives use the complete modal expansion of the (dense, fully solved) field, exact for
+//! distinct eigenvalues:
+//!   dλ_i = φ_iᵀ (dK − λ_i dM) φ_i,
+//!   dφ_i = Σ_{j≠i} φ_j φ_jᵀ (dK − λ_i dM) φ_i / (λ_i − λ_j) − ½ φ_i (φ_iᵀ dM φ_i),
+//! the second term keeping φᵀ M φ = 1. In reverse, the seeds (λ̄_i, φ̄_i) collapse to
+//!   x̄ = Σ_i u_iᵀ (∂K/∂x) φ_i − v_iᵀ (∂M/∂x) φ_i,
+//!   a_i = Σ_{j≠i} φ_j (φ_jᵀ φ̄_i)/(λ_i − λ_j),  u_i = a_i + λ̄_i φ_i,  v_i = λ_i u_i + ½ (φ̄_iᵀ φ_i) φ_i,
+//! so one sweep over the elements gives all 104 derivatives. Element matrix derivatives with
+//! respect to the planform come from dual numbers through the same element code.
+
+use super::element;
+use super::modal::{field_dofs, nodal_shape, Modes, Sampler, SAMPLED};
+use super::model::{Field, PlateModel, NODAL};
+use crate::wing::N_PLANFORM;
+use faer::Mat;
+use gustkit_core::scalar::{Dual, Scalar};
+
+/// Seeds on the modal outputs: one entry a retained mode.
+#[derive(Clone, Debug, Default)]
+pub struct ModalSeed {
+    /// Seed on λ_i = ω_i² (an empty vector means zero).
+    pub lambda: Vec<f64>,
+    /// Seed on the nodal mode shape of mode i ([`NODAL`] a node; an empty inner vector means zero).
+    pub shape: Vec<Vec<f64>>,
+}
+
+impl ModalSeed {
+    pub fn zeros(modes: &Modes) -> Self {
+        Self {
+            lambda: vec![0.0; modes.len()],
+            shape: vec![Vec::new(); modes.len()],
+        }
+    }
+}
+
+/// Planform variables as duals seeded with the unit directions.
+fn planform_duals(model: &PlateModel) -> [Dual<N_PLANFORM>; N_PLANFORM] {
+    let p = model.planform().to_array();
+    std::array::from_fn(|k| Dual::var(p[k], k))
+}
+
+/// Exponent of the thickness in the element stiffness of a field (t³ bending, t membrane).
+fn stiffness_power(field: Field) -> f64 {
+    match field {
+        Field::Bending => 3.0,
+        Field::Membrane => 1.0,
+    }
+}
+
+/// Gathers an element's local values from a free-DOF vector.
+fn gather(dofs: &[Option<usize>], v: &[f64]) -> Vec<f64> {
+    dofs.iter().map(|d| d.map_or(0.0, |g| v[g])).collect()
+}
+
+/// Reverse mode of the modal analysis: x̄ (length n_dv + 4) for seeds on λ and mode shapes.
+pub fn modes_vjp(model: &PlateModel, modes: &Modes, seed: &ModalSeed) -> Vec<f64> {
+    let n_dv = model.mesh.n_dv();
+    let mut grad = vec![0.0; n_dv + N_PLANFORM];
+    let pd = planform_duals(model);
+    for field in Field::ALL {
+        let fe = modes.field(field);
+        let n = fe.lambda.len();
+        // (u_i, v_i, φ_i) over the free DOFs of this field
+        let mut triples: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)> = Vec::new();
+        for (i, mode) in modes.modes.iter().enumerate() {
+            if mode.field != field {
+                continue;
+            }
+            let c = mode.column;
+            let phi: Vec<f64> = fe.vectors.col(c).iter().copied().collect();
+            let lam_bar = seed.lambda.get(i).copied().unwrap_or(0.0);
+            let mut u: Vec<f64> = phi.iter().map(|p| lam_bar * p).collect();
+            let mut cmix = 0.0;
+            if let Some(s) = seed.shape.get(i).filter(|s| !s.is_empty()) {
+                let phibar = field_dofs(model, field, s);
+                cmix = dot(&phibar, &phi);
+                let proj: Vec<f64> = (0..n)
+                    .map(|j| {
+                        if j == c {
+                            0.0
+                        } else {
+                            dot_col(&fe.vectors, j, &phibar) / (mode.lambda - fe.lambda[j])
+                        }
+                    })
+                    .collect();
+                for (j, pj) in proj.iter().enumerate() {
+                    if *pj != 0.0 {
+                        for (r, ur) in u.iter_mut().enumerate() {
+                            *ur += fe.vectors[(r, j)] * pj;
+                        }
+                    }
+                }
+            }
+            let v: Vec<f64> = u
+                .iter()
+                .zip(&phi)
+                .map(|(ui, pi)| mode.lambda * ui + 0.5 * cmix * pi)
+                .collect();
+            triples.push((u, v, phi));
+        }
+        if triples.is_empty() {
+            continue;
+        }
+        let pow = stiffness_power(field);
+        for e in 0..model.mesh.elements.len() {
+            let dofs = model.element_dofs(field, e);
+            let nl = dofs.len();
+            // UΦ = Σ u φᵀ and VΦ = Σ v φᵀ on the element
+            let mut uphi = vec![0.0; nl * nl];
+            let mut vphi = vec![0.0; nl * nl];
+            for (u, v, phi) in &triples {
+                let (ul, vl, pl) = (gather(&dofs, u), gather(&dofs, v), gather(&dofs, phi));
+                for a in 0..nl {
+                    for b in 0..nl {
+                        uphi[a * nl + b] += ul[a] * pl[b];
+                        vphi[a * nl + b] += vl[a] * pl[b];
+                    }
+                }
+            }
+            let t = model.element_thickness(e);
+            let (ke, me) = model.element_matrices(field, pd, e, Dual::cst(t));
+            let mut gk = Dual::<N_PLANFORM>::cst(0.0);
+            let mut gm = Dual::<N_PLANFORM>::cst(0.0);
+            for q in 0..nl * nl {
+                gk += ke[q] * uphi[q];
+                gm += me[q] * vphi[q];
+            }
+            grad[model.mesh.element_dv[e]] += (pow * gk.v - gm.v) / t;
+            for k in 0..N_PLANFORM {
+                grad[n_dv + k] += gk.d[k] - gm.d[k];
+            }
+        }
+    }
+    grad
+}
+
+/// Forward mode of the modal analysis along dx: (dλ_i, dφ_i nodal) for each retained mode.
+pub fn modes_jvp(model: &PlateModel, modes: &Modes, dx: &[f64]) -> (Vec<f64>, Vec<Vec<f64>>) {
+    let n_dv = model.mesh.n_dv();
+    let p = model.planform().to_array();
+    let pd: [Dual<1>; 4] = std::array::from_fn(|k| Dual::new(p[k], [dx[n_dv + k]]));
+    let mut dlam = vec![0.0; modes.len()];
+    let mut dphi = vec![Vec::new(); modes.len()];
+    for field in Field::ALL {
+        let fe = modes.field(field);
+        let n = fe.lambda.len();
+        let mut dk = Mat::<f64>::zeros(n, n);
+        let mut dm = Mat::<f64>::zeros(n, n);
+        for e in 0..model.mesh.elements.len() {
+            let dv = model.mesh.element_dv[e];
+            let t = Dual::new(model.design.thickness[dv], [dx[dv]]);
+            let (ke, me) = model.element_matrices(field, pd, e, t);
+            let dofs = model.element_dofs(field, e);
+            let nl = dofs.len();
+            for (a, ga) in dofs.iter().enumerate() {
+                let Some(ga) = *ga else { continue };
+                for (b, gb) in dofs.iter().enumerate() {
+                    let Some(gb) = *gb else { continue };
+                    dk[(ga, gb)] += ke[a * nl + b].d[0];
+                    dm[(ga, gb)] += me[a * nl + b].d[0];
+                }
+            }
+        }
+        for (i, mode) in modes.modes.iter().enumerate() {
+            if mode.field != field {
+                continue;
+            }
+            let c = mode.column;
+            let phi: Vec<f64> = fe.vectors.col(c).iter().copied().collect();
+            let kphi = matvec(&dk, &phi);
+            let mphi = matvec(&dm, &phi);
+            let r: Vec<f64> = kphi
+                .iter()
+                .zip(&mphi)
+                .map(|(a, b)| a - mode.lambda * b)
+                .collect();
+            dlam[i] = dot(&phi, &r);
+            let mut d: Vec<f64> = phi.iter().map(|p| -0.5 * dot(&phi, &mphi) * p).collect();
+            for j in 0..n {
+                if j == c {
+                    continue;
+                }
+                let coef = dot_col(&fe.vectors, j, &r) / (mode.lambda - fe.lambda[j]);
+                for (row, dr) in d.iter_mut().enumerate() {
+                    *dr += fe.vectors[(row, j)] * coef;
+                }
+            }
+            dphi[i] = nodal_shape(model, field, d.into_iter());
+        }
+    }
+    (dlam, dphi)
+}
+
+/// Gradient of the structural mass with respect to x.
+pub fn mass_grad(model: &PlateModel) -> Vec<f64> {
+    let n_dv = model.mesh.n_dv();
+    let mut g = vec![0.0; n_dv + N_PLANFORM];
+    let pd = planform_duals(model);
+    let rho = model.material.density;
+    for e in 0..model.mesh.elements.len() {
+        let a = element::area(&model.element_xy(pd, e));
+        let t = model.element_thickness(e);
+        g[model.mesh.element_dv[e]] += rho * a.v;
+        for k in 0..N_PLANFORM {
+            g[n_dv + k] += rho * t * a.d[k];
+        }
+    }
+    g
+}
+
+impl Sampler {
+    /// Reverse mode of [`Sampler::sample`]: for seeds on the sampled values, the seed on the nodal
+    /// field and the gradient with respect to the planform variables (slopes move with the geometry).
+    pub fn sample_vjp(
+        &self,
+        model: &PlateModel,
+        nodal: &[f64],
+        seed: &[[f64; SAMPLED]],
+    ) -> (Vec<f64>, [f64; N_PLANFORM]) {
+        let pd = planform_duals(model);
+        let mut nodal_bar = vec![0.0; nodal.len()];
+        let mut p_bar = [0.0; N_PLANFORM];
+        for (q, s) in seed.iter().enumerate() {
+            if s.iter().all(|v| *v == 0.0) {
+                continue;
+            }
+            let w = self.weights(model, pd, q);
+            for (r, wr) in w.iter().enumerate() {
+                for &(node, slot, c) in wr {
+                    let idx = NODAL * node + slot;
+                    nodal_bar[idx] += c.v * s[r];
+                    for k in 0..N_PLANFORM {
+                        p_bar[k] += c.d[k] * nodal[idx] * s[r];
+                    }
+                }
+            }
+        }
+        (nodal_bar, p_bar)
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn dot_col(m: &Mat<f64>, j: usize, v: &[f64]) -> f64 {
+    m.col(j).iter().zip(v).map(|(x, y)| x * y).sum()
+}
+
+fn matvec(m: &Mat<f64>, v: &[f64]) -> Vec<f64> {
+    let mut out = vec![0.0; m.nrows()];
+    for (j, vj) in v.iter().enumerate() {
+        if *vj != 0.0 {
+            for (i, o) in out.iter_mut().enumerate() {
+                *o += m[(i, j)] * vj;
+            }
+        }
+    }
+    out
+}
