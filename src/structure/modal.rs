@@ -28,14 +28,56 @@ pub enum ModalError {
     Unconstrained(Field),
 }
 
-/// Complete eigen-decomposition of one field.
+/// Complete eigen-decomposition of one field, in the well-conditioned inverse form:
+/// K = L Lᵀ, L⁻¹ M L⁻ᵀ y_j = μ_j y_j with μ_j = 1/λ_j, φ_j = L⁻ᵀ y_j / √μ_j.
+///
+/// Reducing with the stiffness (not the mass) puts the lowest modes at the top of the spectrum of
+/// a bounded operator, so they carry full relative precision, and the modal expansion can be
+/// written without ever dividing by the tiny μ_j of the highest modes.
 #[derive(Clone, Debug)]
 pub struct FieldEigen {
     pub field: Field,
-    /// All eigenvalues λ = ω², ascending.
-    pub lambda: Vec<f64>,
-    /// M-orthonormal eigenvectors as columns (free DOFs of the field).
-    pub vectors: Mat<f64>,
+    /// Cholesky factor L of the field stiffness.
+    pub chol: Mat<f64>,
+    /// Orthonormal eigenvectors y_j (columns).
+    pub y: Mat<f64>,
+    /// Eigenvalues μ_j = 1/λ_j, ascending (lowest structural modes last).
+    pub mu: Vec<f64>,
+}
+
+impl FieldEigen {
+    /// Column of the j-th lowest structural mode.
+    pub fn column_of_mode(&self, j: usize) -> usize {
+        self.mu.len() - 1 - j
+    }
+
+    /// Mass-normalized mode of column c: φ = L⁻ᵀ y_c / √μ_c.
+    pub fn mode_vector(&self, c: usize) -> Vec<f64> {
+        let mut v = self.y.col(c).to_owned();
+        solve_upper_triangular_in_place(self.chol.transpose(), v.as_mat_mut(), Par::Seq);
+        let s = 1.0 / self.mu[c].sqrt();
+        v.iter().map(|x| x * s).collect()
+    }
+
+    /// Σ_{j≠c} φ_j (φ_jᵀ r) / (λ_c − λ_j), the complete modal expansion applied to r, evaluated as
+    /// L⁻ᵀ Σ_{j≠c} y_j (y_jᵀ L⁻¹ r) μ_c / (μ_j − μ_c).
+    pub fn expansion(&self, c: usize, r: &[f64]) -> Vec<f64> {
+        let n = r.len();
+        let mut z = Mat::from_fn(n, 1, |i, _| r[i]);
+        solve_lower_triangular_in_place(self.chol.as_ref(), z.as_mut(), Par::Seq);
+        let mut coef = self.y.transpose() * &z;
+        let mu_c = self.mu[c];
+        for j in 0..n {
+            coef[(j, 0)] = if j == c {
+                0.0
+            } else {
+                coef[(j, 0)] * mu_c / (self.mu[j] - mu_c)
+            };
+        }
+        let mut out = &self.y * &coef;
+        solve_upper_triangular_in_place(self.chol.transpose(), out.as_mut(), Par::Seq);
+        out.col(0).iter().copied().collect()
+    }
 }
 
 /// One retained mode.
@@ -117,29 +159,28 @@ impl Modes {
 pub fn solve_field(model: &PlateModel, field: Field) -> Result<FieldEigen, ModalError> {
     let (k, m) = model.assemble(field);
     let n = k.nrows();
-    let llt = m
+    let llt = k
         .llt(Side::Lower)
-        .map_err(|_| ModalError::MassNotPositive(field))?;
-    let l = llt.L();
-    // C = L⁻¹ K L⁻ᵀ
-    let mut c = k;
-    solve_lower_triangular_in_place(l, c.as_mut(), Par::Seq);
-    let mut ct = c.transpose().to_owned();
-    solve_lower_triangular_in_place(l, ct.as_mut(), Par::Seq);
-    let c = Mat::from_fn(n, n, |i, j| 0.5 * (ct[(i, j)] + ct[(j, i)]));
-    let eig = c
+        .map_err(|_| ModalError::Unconstrained(field))?;
+    let chol = llt.L().to_owned();
+    // B = L⁻¹ M L⁻ᵀ
+    let mut b = m;
+    solve_lower_triangular_in_place(chol.as_ref(), b.as_mut(), Par::Seq);
+    let mut bt = b.transpose().to_owned();
+    solve_lower_triangular_in_place(chol.as_ref(), bt.as_mut(), Par::Seq);
+    let b = Mat::from_fn(n, n, |i, j| 0.5 * (bt[(i, j)] + bt[(j, i)]));
+    let eig = b
         .self_adjoint_eigen(Side::Lower)
         .map_err(|_| ModalError::Eigen(field))?;
-    let lambda: Vec<f64> = (0..n).map(|i| eig.S()[i]).collect();
-    if lambda.first().is_some_and(|&l0| l0 <= 0.0) {
-        return Err(ModalError::Unconstrained(field));
+    let mu: Vec<f64> = (0..n).map(|i| eig.S()[i]).collect();
+    if mu.last().is_some_and(|&top| top <= 0.0) {
+        return Err(ModalError::MassNotPositive(field));
     }
-    let mut vectors = eig.U().to_owned();
-    solve_upper_triangular_in_place(l.transpose(), vectors.as_mut(), Par::Seq);
     Ok(FieldEigen {
         field,
-        lambda,
-        vectors,
+        chol,
+        y: eig.U().to_owned(),
+        mu,
     })
 }
 
@@ -161,11 +202,10 @@ pub fn solve(model: &PlateModel, n_modes: usize, damping_ratio: f64) -> Result<M
         .iter()
         .enumerate()
         .flat_map(|(fi, fe)| {
-            fe.lambda
-                .iter()
-                .take(n_modes)
-                .enumerate()
-                .map(move |(c, &l)| (l, fi, c))
+            (0..n_modes.min(fe.mu.len())).map(move |j| {
+                let c = fe.column_of_mode(j);
+                (1.0 / fe.mu[c], fi, c)
+            })
         })
         .collect();
     picks.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -175,7 +215,7 @@ pub fn solve(model: &PlateModel, n_modes: usize, damping_ratio: f64) -> Result<M
         .into_iter()
         .map(|(lambda, fi, column)| {
             let fe = &mut fields[fi];
-            let mut shape = nodal_shape(model, fe.field, fe.vectors.col(column).iter().copied());
+            let mut shape = nodal_shape(model, fe.field, fe.mode_vector(column).into_iter());
             // sign convention
             let off = fe.field.nodal_offset();
             let trans: Vec<usize> = match fe.field {
@@ -188,7 +228,7 @@ pub fn solve(model: &PlateModel, n_modes: usize, damping_ratio: f64) -> Result<M
                 .fold(0.0f64, |a, v| if v.abs() > a.abs() { v } else { a });
             if big < 0.0 {
                 shape.iter_mut().for_each(|v| *v = -*v);
-                fe.vectors.col_mut(column).iter_mut().for_each(|v| *v = -*v);
+                fe.y.col_mut(column).iter_mut().for_each(|v| *v = -*v);
             }
             Mode {
                 field: fe.field,

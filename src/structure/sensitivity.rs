@@ -62,7 +62,6 @@ pub fn modes_vjp(model: &PlateModel, modes: &Modes, seed: &ModalSeed) -> Vec<f64
     let pd = planform_duals(model);
     for field in Field::ALL {
         let fe = modes.field(field);
-        let n = fe.lambda.len();
         // (u_i, v_i, φ_i) over the free DOFs of this field
         let mut triples: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)> = Vec::new();
         for (i, mode) in modes.modes.iter().enumerate() {
@@ -70,28 +69,15 @@ pub fn modes_vjp(model: &PlateModel, modes: &Modes, seed: &ModalSeed) -> Vec<f64
                 continue;
             }
             let c = mode.column;
-            let phi: Vec<f64> = fe.vectors.col(c).iter().copied().collect();
+            let phi = fe.mode_vector(c);
             let lam_bar = seed.lambda.get(i).copied().unwrap_or(0.0);
             let mut u: Vec<f64> = phi.iter().map(|p| lam_bar * p).collect();
             let mut cmix = 0.0;
             if let Some(s) = seed.shape.get(i).filter(|s| !s.is_empty()) {
                 let phibar = field_dofs(model, field, s);
                 cmix = dot(&phibar, &phi);
-                let proj: Vec<f64> = (0..n)
-                    .map(|j| {
-                        if j == c {
-                            0.0
-                        } else {
-                            dot_col(&fe.vectors, j, &phibar) / (mode.lambda - fe.lambda[j])
-                        }
-                    })
-                    .collect();
-                for (j, pj) in proj.iter().enumerate() {
-                    if *pj != 0.0 {
-                        for (r, ur) in u.iter_mut().enumerate() {
-                            *ur += fe.vectors[(r, j)] * pj;
-                        }
-                    }
+                for (ur, ar) in u.iter_mut().zip(fe.expansion(c, &phibar)) {
+                    *ur += ar;
                 }
             }
             let v: Vec<f64> = u
@@ -146,7 +132,7 @@ pub fn modes_jvp(model: &PlateModel, modes: &Modes, dx: &[f64]) -> (Vec<f64>, Ve
     let mut dphi = vec![Vec::new(); modes.len()];
     for field in Field::ALL {
         let fe = modes.field(field);
-        let n = fe.lambda.len();
+        let n = fe.mu.len();
         let mut dk = Mat::<f64>::zeros(n, n);
         let mut dm = Mat::<f64>::zeros(n, n);
         for e in 0..model.mesh.elements.len() {
@@ -169,7 +155,7 @@ pub fn modes_jvp(model: &PlateModel, modes: &Modes, dx: &[f64]) -> (Vec<f64>, Ve
                 continue;
             }
             let c = mode.column;
-            let phi: Vec<f64> = fe.vectors.col(c).iter().copied().collect();
+            let phi = fe.mode_vector(c);
             let kphi = matvec(&dk, &phi);
             let mphi = matvec(&dm, &phi);
             let r: Vec<f64> = kphi
@@ -178,16 +164,13 @@ pub fn modes_jvp(model: &PlateModel, modes: &Modes, dx: &[f64]) -> (Vec<f64>, Ve
                 .map(|(a, b)| a - mode.lambda * b)
                 .collect();
             dlam[i] = dot(&phi, &r);
-            let mut d: Vec<f64> = phi.iter().map(|p| -0.5 * dot(&phi, &mphi) * p).collect();
-            for j in 0..n {
-                if j == c {
-                    continue;
-                }
-                let coef = dot_col(&fe.vectors, j, &r) / (mode.lambda - fe.lambda[j]);
-                for (row, dr) in d.iter_mut().enumerate() {
-                    *dr += fe.vectors[(row, j)] * coef;
-                }
-            }
+            let half_m = 0.5 * dot(&phi, &mphi);
+            let d: Vec<f64> = fe
+                .expansion(c, &r)
+                .iter()
+                .zip(&phi)
+                .map(|(a, p)| a - half_m * p)
+                .collect();
             dphi[i] = nodal_shape(model, field, d.into_iter());
         }
     }
@@ -244,10 +227,6 @@ impl Sampler {
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-fn dot_col(m: &Mat<f64>, j: usize, v: &[f64]) -> f64 {
-    m.col(j).iter().zip(v).map(|(x, y)| x * y).sum()
 }
 
 fn matvec(m: &Mat<f64>, v: &[f64]) -> Vec<f64> {

@@ -1,0 +1,125 @@
+//! Checkers every derivative test in gustkit uses: finite differences at several steps (with
+//! Richardson extrapolation) and dot-product tests, plus deterministic pseudo-random vectors.
+
+/// Deterministic pseudo-random numbers in [-1, 1) (xorshift64), reproducible across platforms.
+pub fn rand_vec(n: usize, seed: u64) -> Vec<f64> {
+    let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+    (0..n)
+        .map(|_| {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        })
+        .collect()
+}
+
+/// Euclidean inner product.
+pub fn dot(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len(), "dot of vectors of different lengths");
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Central difference of f along variable k with absolute step h.
+pub fn central_difference(f: &dyn Fn(&[f64]) -> f64, x: &[f64], k: usize, h: f64) -> f64 {
+    let mut a = x.to_vec();
+    let mut b = x.to_vec();
+    a[k] += h;
+    b[k] -= h;
+    (f(&a) - f(&b)) / (2.0 * h)
+}
+
+/// One row of a finite-difference check.
+#[derive(Clone, Debug)]
+pub struct FdRow {
+    /// Relative step (absolute step = rel_step · |x_k|, or rel_step where x_k = 0).
+    pub rel_step: f64,
+    /// Central difference.
+    pub central: f64,
+    /// Richardson extrapolation of the central differences at h and h/2 (error O(h⁴)).
+    pub richardson: f64,
+}
+
+/// Result of checking one derivative against finite differences at several steps.
+#[derive(Clone, Debug)]
+pub struct FdReport {
+    pub exact: f64,
+    pub rows: Vec<FdRow>,
+    /// Smallest |fd − exact| / scale over all steps and both estimates.
+    pub best_rel_error: f64,
+    /// The finite-difference value that achieved it.
+    pub best: f64,
+}
+
+/// Relative steps used by [`fd_check`]: truncation error falls with h, round-off grows as ε/h, so
+/// one of them reaches the floor set by the noise of the function itself.
+pub const FD_STEPS: [f64; 5] = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6];
+
+/// Compares `exact` (an adjoint or forward derivative of f along x_k) with central differences
+/// and their Richardson extrapolations at [`FD_STEPS`]; errors are taken relative to `scale`.
+pub fn fd_check(f: &dyn Fn(&[f64]) -> f64, x: &[f64], k: usize, exact: f64, scale: f64) -> FdReport {
+    let mut rows = Vec::new();
+    let (mut best_rel_error, mut best) = (f64::INFINITY, f64::NAN);
+    for &rel in &FD_STEPS {
+        let h = rel * if x[k] == 0.0 { 1.0 } else { x[k].abs() };
+        let d1 = central_difference(f, x, k, h);
+        let d2 = central_difference(f, x, k, 0.5 * h);
+        let r = (4.0 * d2 - d1) / 3.0;
+        for v in [d1, r] {
+            let e = (v - exact).abs() / scale;
+            if e < best_rel_error {
+                best_rel_error = e;
+                best = v;
+            }
+        }
+        rows.push(FdRow {
+            rel_step: rel,
+            central: d1,
+            richardson: r,
+        });
+    }
+    FdReport {
+        exact,
+        rows,
+        best_rel_error,
+        best,
+    }
+}
+
+/// Dot-product test: relative mismatch |⟨w, J v⟩ − ⟨Jᵀ w, v⟩| / max(|⟨w, J v⟩|, tiny).
+pub fn dot_product_mismatch(w: &[f64], jv: &[f64], jtw: &[f64], v: &[f64]) -> f64 {
+    let forward = dot(w, jv);
+    let reverse = dot(jtw, v);
+    (forward - reverse).abs() / forward.abs().max(f64::MIN_POSITIVE)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The checker itself: on an analytic function it finds the derivative to ~1e-10 and it flags
+    /// a wrong one.
+    #[test]
+    fn fd_check_on_analytic_function() {
+        let f = |x: &[f64]| (x[0] * x[1]).sin() + x[1].exp();
+        let x = [0.3, 1.7];
+        let exact = x[0] * (x[0] * x[1]).cos() + x[1].exp();
+        let rep = fd_check(&f, &x, 1, exact, exact.abs());
+        assert!(rep.best_rel_error < 1e-10, "{rep:?}");
+        let wrong = fd_check(&f, &x, 1, exact * 1.001, exact.abs());
+        assert!(wrong.best_rel_error > 5e-4);
+    }
+
+    #[test]
+    fn dot_product_of_transpose() {
+        // J = [[1, 2], [3, 4], [5, 6]]
+        let v = [0.5, -1.0];
+        let w = [1.0, 2.0, -3.0];
+        let jv = [1.0 * 0.5 - 2.0, 3.0 * 0.5 - 4.0, 5.0 * 0.5 - 6.0];
+        let jtw = [1.0 + 6.0 - 15.0, 2.0 + 8.0 - 18.0];
+        assert!(dot_product_mismatch(&w, &jv, &jtw, &v) < 1e-15);
+        let r = rand_vec(1000, 5);
+        assert!(r.iter().all(|v| (-1.0..1.0).contains(v)));
+        assert!((r.iter().sum::<f64>() / 1000.0).abs() < 0.1);
+    }
+}
