@@ -189,8 +189,11 @@ fn mass_gradient_matches_finite_differences() {
     let g = mass_grad(&model_at(&x));
     let f = |x: &[f64]| model_at(x).mass();
     let n = x.len() - 4;
+    let gnorm = g.iter().map(|v| v * v).sum::<f64>().sqrt();
     for k in [0, 55, n, n + 1, n + 2, n + 3] {
-        let err = best_rel_error(&f, &x, k, g[k], g[k].abs().max(1e-12));
+        // dm/dsweep vanishes in exact arithmetic (shearing keeps each element's area): errors are
+        // measured against 1e-3 of the gradient norm for such components
+        let err = best_rel_error(&f, &x, k, g[k], g[k].abs().max(1e-3 * gnorm));
         assert!(err < 1e-7, "dv {k}: rel error {err}");
     }
     // mass is homogeneous of degree one in the thicknesses
