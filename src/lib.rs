@@ -3,5 +3,8 @@
 //! The pipeline runs design vector → wing → plate model → modes → (aerodynamics) → gust response,
 //! and back again for gradients. See README.md for the architecture.
 
+pub mod cli;
+pub mod report;
 pub mod structure;
+pub mod study;
 pub mod wing;

@@ -1,1 +1,58 @@
-fn main() {}
+//! The `gustkit` command line.
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+use gustkit::cli;
+use std::path::PathBuf;
+
+#[derive(Parser)]
+#[command(
+    name = "gustkit",
+    version,
+    about = "Aeroelastic gust analysis and gust-constrained wing design"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a study: every analysis its file defines, with a report in reports/<study name>/.
+    Run {
+        study: PathBuf,
+        /// Folder that holds the per-study report folders.
+        #[arg(long, default_value = "reports")]
+        reports: PathBuf,
+    },
+    /// Modal analysis of a study's wing: frequency table, mode-shape figures and a VTK file.
+    Modes {
+        study: PathBuf,
+        /// Print a JSON object instead of the table.
+        #[arg(long)]
+        json: bool,
+        /// Folder that holds the per-study report folders.
+        #[arg(long, default_value = "reports")]
+        reports: PathBuf,
+    },
+    /// Time the structural chain (assembly, modes, all sensitivities) of a study.
+    Bench {
+        study: PathBuf,
+        /// Repetitions (the median is reported).
+        #[arg(long, default_value_t = 20)]
+        repeat: usize,
+    },
+}
+
+fn main() -> Result<()> {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Run { study, reports } => cli::run(&study, &reports),
+        Command::Modes {
+            study,
+            json,
+            reports,
+        } => cli::modes(&study, json, &reports),
+        Command::Bench { study, repeat } => cli::bench(&study, repeat),
+    }
+}

@@ -2,7 +2,7 @@
 //! differences, for frequencies, sampled mode shapes and mass, on the AGARD 445.6 plate model.
 
 use gustkit::structure::{
-    airfoil_thickness, mass_grad, modal, modes_jvp, modes_vjp, Clamp, ModalSeed, Modes,
+    airfoil_thickness, mass_grad, modal, modes_jvp, modes_vjp, Clamp, Field, ModalSeed, Modes,
     Orthotropic, PlateMesh, PlateModel, Sampler,
 };
 use gustkit::wing::{Airfoil, DesignVector, Planform};
@@ -18,7 +18,10 @@ fn base_design(mesh: &PlateMesh) -> DesignVector {
         tip_chord: 0.3682,
     };
     let thickness = airfoil_thickness(mesh, &planform, &Airfoil::naca65a004());
-    DesignVector { thickness, planform }
+    DesignVector {
+        thickness,
+        planform,
+    }
 }
 
 fn material() -> Orthotropic {
@@ -58,12 +61,15 @@ impl Probe {
                     .collect()
             })
             .collect();
-        Self { lam_bar, sample_bar }
+        Self {
+            lam_bar,
+            sample_bar,
+        }
     }
 
     fn value(&self, x: &[f64]) -> f64 {
         let model = model_at(x);
-        let modes = modal::solve(&model, N_MODES, 0.0).unwrap();
+        let modes = modal::solve(&model, N_MODES, 0.0, &Field::ALL).unwrap();
         let sampler = Sampler::new(&model, &POINTS);
         let mut j = 0.0;
         for (i, m) in modes.modes.iter().enumerate() {
@@ -80,7 +86,7 @@ impl Probe {
 
     fn gradient(&self, x: &[f64]) -> Vec<f64> {
         let model = model_at(x);
-        let modes = modal::solve(&model, N_MODES, 0.0).unwrap();
+        let modes = modal::solve(&model, N_MODES, 0.0, &Field::ALL).unwrap();
         let sampler = Sampler::new(&model, &POINTS);
         let mut seed = ModalSeed::zeros(&modes);
         seed.lambda = self.lam_bar.clone();
@@ -138,7 +144,7 @@ fn modal_gradient_matches_finite_differences() {
 fn modal_vjp_dot_product_test() {
     let x = x0();
     let model = model_at(&x);
-    let modes: Modes = modal::solve(&model, N_MODES, 0.0).unwrap();
+    let modes: Modes = modal::solve(&model, N_MODES, 0.0, &Field::ALL).unwrap();
     let dx: Vec<f64> = rand_vec(x.len(), 3)
         .iter()
         .zip(&x)
@@ -148,7 +154,9 @@ fn modal_vjp_dot_product_test() {
     let nodal_len = modes.modes[0].shape.len();
     let seed = ModalSeed {
         lambda: rand_vec(N_MODES, 11),
-        shape: (0..N_MODES).map(|i| rand_vec(nodal_len, 100 + i as u64)).collect(),
+        shape: (0..N_MODES)
+            .map(|i| rand_vec(nodal_len, 100 + i as u64))
+            .collect(),
     };
     // stack the outputs (λ, then every nodal shape) into one vector on both sides
     let mut w = seed.lambda.clone();
@@ -168,13 +176,18 @@ fn modal_vjp_dot_product_test() {
 fn frequency_gradients_match_finite_differences() {
     let x = x0();
     let model = model_at(&x);
-    let modes = modal::solve(&model, N_MODES, 0.0).unwrap();
+    let modes = modal::solve(&model, N_MODES, 0.0, &Field::ALL).unwrap();
     let n = x.len() - 4;
     for i in 0..N_MODES {
         let mut seed = ModalSeed::zeros(&modes);
         seed.lambda[i] = 0.5 / modes.modes[i].omega(); // dω = dλ / (2ω)
         let g = modes_vjp(&model, &modes, &seed);
-        let f = |x: &[f64]| modal::solve(&model_at(x), N_MODES, 0.0).unwrap().modes[i].omega();
+        let f = |x: &[f64]| {
+            modal::solve(&model_at(x), N_MODES, 0.0, &Field::ALL)
+                .unwrap()
+                .modes[i]
+                .omega()
+        };
         for k in [12, 77, n + 1, n + 3] {
             let err = best_rel_error(&f, &x, k, g[k], g[k].abs());
             assert!(err < 1e-6, "mode {i} dv {k}: rel error {err}");
@@ -201,4 +214,3 @@ fn mass_gradient_matches_finite_differences() {
     let euler: f64 = (0..n).map(|k| g[k] * x[k]).sum();
     assert!((euler - m).abs() < 1e-12 * m);
 }
-

@@ -151,7 +151,7 @@ mod tests {
         let (e, nat) = m.locate(1.0, 1.0);
         assert_eq!(e, 20 * 20 - 1);
         assert_eq!(nat, [1.0, 1.0]);
-        let (e, nat) = m.locate(0.0625, 0.5);
+        let (e, nat) = m.locate(0.075, 0.5);
         assert_eq!(e, 10 * 20 + 1);
         assert!((nat[0] - 0.0).abs() < 1e-12 && (nat[1] + 1.0).abs() < 1e-12);
         assert_eq!(m.dv_patch(11), [[0.1, 0.2], [0.1, 0.2]]);

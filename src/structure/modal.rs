@@ -147,11 +147,9 @@ impl Modes {
             }
         })
     }
-    pub(crate) fn field(&self, f: Field) -> &FieldEigen {
-        self.fields
-            .iter()
-            .find(|e| e.field == f)
-            .expect("field solved")
+    /// The complete decomposition of a field, if that field was solved.
+    pub(crate) fn field(&self, f: Field) -> Option<&FieldEigen> {
+        self.fields.iter().find(|e| e.field == f)
     }
 }
 
@@ -184,16 +182,24 @@ pub fn solve_field(model: &PlateModel, field: Field) -> Result<FieldEigen, Modal
     })
 }
 
-/// The `n_modes` lowest modes over both fields with modal damping ratio `damping_ratio`.
-pub fn solve(model: &PlateModel, n_modes: usize, damping_ratio: f64) -> Result<Modes, ModalError> {
-    let available = model.n_dofs(Field::Bending) + model.n_dofs(Field::Membrane);
+/// The `n_modes` lowest modes over the given fields with modal damping ratio `damping_ratio`.
+///
+/// Aeroelastic studies retain bending modes only: for a flat plate the in-plane (membrane) field is
+/// uncoupled from the deflection, so its modes carry no aerodynamic force.
+pub fn solve(
+    model: &PlateModel,
+    n_modes: usize,
+    damping_ratio: f64,
+    fields: &[Field],
+) -> Result<Modes, ModalError> {
+    let available: usize = fields.iter().map(|&f| model.n_dofs(f)).sum();
     if n_modes > available {
         return Err(ModalError::TooManyModes {
             asked: n_modes,
             available,
         });
     }
-    let fields: Vec<FieldEigen> = Field::ALL
+    let fields: Vec<FieldEigen> = fields
         .iter()
         .map(|&f| solve_field(model, f))
         .collect::<Result<_, _>>()?;

@@ -5,7 +5,11 @@ use super::mesh::PlateMesh;
 use super::Orthotropic;
 use crate::wing::{planform_point, DesignVector, Planform};
 use faer::Mat;
-use gustkit_core::scalar::Scalar;
+use gustkit_core::scalar::{Dual, Scalar};
+use std::sync::OnceLock;
+
+/// Element stiffness and mass (row-major) with their derivatives along the four planform variables.
+pub type ElementDuals = (Vec<Dual<4>>, Vec<Dual<4>>);
 
 /// Values per node in a nodal field: (w, w_x, w_y, u, v).
 pub const NODAL: usize = 5;
@@ -62,6 +66,9 @@ pub struct PlateModel {
     pub(crate) dof_start: [Vec<Option<usize>>; 2],
     pub(crate) n_dofs: [usize; 2],
     qbar: [[f64; 3]; 3],
+    /// Element matrices with planform derivatives, per field, computed on first use by the
+    /// sensitivities and shared by every reverse or forward product on this model.
+    duals: [OnceLock<Vec<ElementDuals>>; 2],
 }
 
 impl PlateModel {
@@ -109,6 +116,7 @@ impl PlateModel {
             design,
             dof_start,
             n_dofs,
+            duals: Default::default(),
         };
         let p = model.design.planform.to_array();
         for e in 0..model.mesh.elements.len() {
@@ -191,6 +199,18 @@ impl PlateModel {
                 )
             }
         }
+    }
+
+    /// Element matrices of a field with their planform derivatives (see [`ElementDuals`]), at the
+    /// current thicknesses; cached.
+    pub fn element_duals(&self, field: Field) -> &[ElementDuals] {
+        self.duals[field as usize].get_or_init(|| {
+            let p = self.design.planform.to_array();
+            let pd: [Dual<4>; 4] = std::array::from_fn(|k| Dual::var(p[k], k));
+            (0..self.mesh.elements.len())
+                .map(|e| self.element_matrices(field, pd, e, Dual::cst(self.element_thickness(e))))
+                .collect()
+        })
     }
 
     /// Dense stiffness and mass matrices of a field over its free DOFs.

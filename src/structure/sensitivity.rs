@@ -59,9 +59,10 @@ fn gather(dofs: &[Option<usize>], v: &[f64]) -> Vec<f64> {
 pub fn modes_vjp(model: &PlateModel, modes: &Modes, seed: &ModalSeed) -> Vec<f64> {
     let n_dv = model.mesh.n_dv();
     let mut grad = vec![0.0; n_dv + N_PLANFORM];
-    let pd = planform_duals(model);
     for field in Field::ALL {
-        let fe = modes.field(field);
+        let Some(fe) = modes.field(field) else {
+            continue;
+        };
         // (u_i, v_i, φ_i) over the free DOFs of this field
         let mut triples: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)> = Vec::new();
         for (i, mode) in modes.modes.iter().enumerate() {
@@ -107,7 +108,7 @@ pub fn modes_vjp(model: &PlateModel, modes: &Modes, seed: &ModalSeed) -> Vec<f64
                 }
             }
             let t = model.element_thickness(e);
-            let (ke, me) = model.element_matrices(field, pd, e, Dual::cst(t));
+            let (ke, me) = &model.element_duals(field)[e];
             let mut gk = Dual::<N_PLANFORM>::cst(0.0);
             let mut gm = Dual::<N_PLANFORM>::cst(0.0);
             for q in 0..nl * nl {
@@ -126,27 +127,32 @@ pub fn modes_vjp(model: &PlateModel, modes: &Modes, seed: &ModalSeed) -> Vec<f64
 /// Forward mode of the modal analysis along dx: (dλ_i, dφ_i nodal) for each retained mode.
 pub fn modes_jvp(model: &PlateModel, modes: &Modes, dx: &[f64]) -> (Vec<f64>, Vec<Vec<f64>>) {
     let n_dv = model.mesh.n_dv();
-    let p = model.planform().to_array();
-    let pd: [Dual<1>; 4] = std::array::from_fn(|k| Dual::new(p[k], [dx[n_dv + k]]));
+    let dp = &dx[n_dv..];
     let mut dlam = vec![0.0; modes.len()];
     let mut dphi = vec![Vec::new(); modes.len()];
     for field in Field::ALL {
-        let fe = modes.field(field);
+        let Some(fe) = modes.field(field) else {
+            continue;
+        };
         let n = fe.mu.len();
+        let pow = stiffness_power(field);
         let mut dk = Mat::<f64>::zeros(n, n);
         let mut dm = Mat::<f64>::zeros(n, n);
-        for e in 0..model.mesh.elements.len() {
+        for (e, (ke, me)) in model.element_duals(field).iter().enumerate() {
             let dv = model.mesh.element_dv[e];
-            let t = Dual::new(model.design.thickness[dv], [dx[dv]]);
-            let (ke, me) = model.element_matrices(field, pd, e, t);
+            let rel = dx[dv] / model.design.thickness[dv];
+            // d(t^pow K) = pow (dt/t) K + Σ_k ∂K/∂p_k dp_k; the mass is linear in t
+            let dir = |v: &Dual<N_PLANFORM>, pw: f64| {
+                pw * rel * v.v + (0..N_PLANFORM).map(|k| v.d[k] * dp[k]).sum::<f64>()
+            };
             let dofs = model.element_dofs(field, e);
             let nl = dofs.len();
             for (a, ga) in dofs.iter().enumerate() {
                 let Some(ga) = *ga else { continue };
                 for (b, gb) in dofs.iter().enumerate() {
                     let Some(gb) = *gb else { continue };
-                    dk[(ga, gb)] += ke[a * nl + b].d[0];
-                    dm[(ga, gb)] += me[a * nl + b].d[0];
+                    dk[(ga, gb)] += dir(&ke[a * nl + b], pow);
+                    dm[(ga, gb)] += dir(&me[a * nl + b], 1.0);
                 }
             }
         }

@@ -57,7 +57,13 @@ pub const FD_STEPS: [f64; 5] = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6];
 
 /// Compares `exact` (an adjoint or forward derivative of f along x_k) with central differences
 /// and their Richardson extrapolations at [`FD_STEPS`]; errors are taken relative to `scale`.
-pub fn fd_check(f: &dyn Fn(&[f64]) -> f64, x: &[f64], k: usize, exact: f64, scale: f64) -> FdReport {
+pub fn fd_check(
+    f: &dyn Fn(&[f64]) -> f64,
+    x: &[f64],
+    k: usize,
+    exact: f64,
+    scale: f64,
+) -> FdReport {
     let mut rows = Vec::new();
     let (mut best_rel_error, mut best) = (f64::INFINITY, f64::NAN);
     for &rel in &FD_STEPS {
@@ -102,7 +108,7 @@ mod tests {
     #[test]
     fn fd_check_on_analytic_function() {
         let f = |x: &[f64]| (x[0] * x[1]).sin() + x[1].exp();
-        let x = [0.3, 1.7];
+        let x = [0.3f64, 1.7];
         let exact = x[0] * (x[0] * x[1]).cos() + x[1].exp();
         let rep = fd_check(&f, &x, 1, exact, exact.abs());
         assert!(rep.best_rel_error < 1e-10, "{rep:?}");

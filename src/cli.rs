@@ -1,0 +1,224 @@
+//! What the `gustkit` subcommands do; `main.rs` only parses arguments.
+
+use crate::report::{self, figures::ModeShapes, save_figure, write_atomic};
+use crate::structure::model::Field;
+use crate::structure::{mass_grad, modal, modes_vjp, ModalSeed, Modes, PlateModel, Sampler};
+use crate::study::Study;
+use anyhow::{Context, Result};
+use serde::Serialize;
+use std::path::Path;
+use std::time::Instant;
+
+/// One mode in the modal summary.
+#[derive(Serialize)]
+pub struct ModeRow {
+    pub mode: usize,
+    pub frequency_hz: f64,
+    /// "bending" or "membrane".
+    pub field: &'static str,
+    /// Vertical displacement of the wing-tip trailing edge in the mass-normalized mode, m/√kg.
+    pub tip_te_w: f64,
+}
+
+/// The modal analysis of a study as written to JSON.
+#[derive(Serialize)]
+pub struct ModalSummary {
+    pub study: String,
+    pub mass_kg: f64,
+    pub area_m2: f64,
+    pub frequencies_hz: Vec<f64>,
+    pub modes: Vec<ModeRow>,
+}
+
+fn field_name(f: Field) -> &'static str {
+    match f {
+        Field::Bending => "bending",
+        Field::Membrane => "membrane",
+    }
+}
+
+/// Builds the model of a study and solves its modes.
+pub fn analyze(study: &Study) -> Result<(PlateModel, Modes, ModalSummary)> {
+    let model = study.build_model()?;
+    let st = &study.spec.structure;
+    let modes = modal::solve(&model, st.modes, st.damping_ratio, &study.mode_fields())
+        .with_context(|| format!("{}: modal analysis", study.file.display()))?;
+    let tip = Sampler::new(&model, &[[1.0, 1.0]]);
+    let summary = ModalSummary {
+        study: study.spec.name.clone(),
+        mass_kg: model.mass(),
+        area_m2: model.planform().area(),
+        frequencies_hz: modes.freq_hz(),
+        modes: modes
+            .modes
+            .iter()
+            .enumerate()
+            .map(|(i, m)| ModeRow {
+                mode: i + 1,
+                frequency_hz: m.freq_hz(),
+                field: field_name(m.field),
+                tip_te_w: tip.sample(&model, &m.shape)[0][0],
+            })
+            .collect(),
+    };
+    Ok((model, modes, summary))
+}
+
+/// Markdown frequency table.
+fn frequency_table(s: &ModalSummary) -> String {
+    let mut t = String::from("| mode | field | frequency [Hz] |\n|---:|---|---:|\n");
+    for r in &s.modes {
+        t += &format!("| {} | {} | {:.3} |\n", r.mode, r.field, r.frequency_hz);
+    }
+    t
+}
+
+/// Writes the modal figures and the VTK file into `dir`.
+fn write_modal_files(study: &Study, model: &PlateModel, modes: &Modes, dir: &Path) -> Result<()> {
+    let unit = study.spec.length_unit;
+    let label = match unit {
+        crate::study::LengthUnit::M => "m",
+        crate::study::LengthUnit::In => "in",
+        crate::study::LengthUnit::Ft => "ft",
+    };
+    save_figure(
+        dir,
+        "modes",
+        &ModeShapes::new(model, modes, label, unit.to_m()),
+    )?;
+    let vtk = report::vtk::plate_modes(model, modes, &format!("gustkit {} modes", study.spec.name));
+    write_atomic(&dir.join("modes.vtk"), vtk.as_bytes())
+}
+
+/// `gustkit modes`.
+pub fn modes(file: &Path, json: bool, reports: &Path) -> Result<()> {
+    let study = Study::load(file)?;
+    let (model, modes, summary) = analyze(&study)?;
+    let dir = study.report_dir(reports);
+    write_modal_files(&study, &model, &modes, &dir)?;
+    if json {
+        println!("{}", serde_json::to_string_pretty(&summary)?);
+        eprintln!("figures and VTK written to {}", dir.display());
+    } else {
+        println!(
+            "{}: mass {:.4} kg, planform area {:.4} m²",
+            summary.study, summary.mass_kg, summary.area_m2
+        );
+        print!("{}", frequency_table(&summary));
+        println!("figures and VTK written to {}", dir.display());
+    }
+    Ok(())
+}
+
+/// `gustkit run`: every analysis the study defines, with its report.
+pub fn run(file: &Path, reports: &Path) -> Result<()> {
+    let study = Study::load(file)?;
+    let t0 = Instant::now();
+    let (model, modes, summary) = analyze(&study)?;
+    let dir = study.report_dir(reports);
+    write_modal_files(&study, &model, &modes, &dir)?;
+    write_atomic(
+        &dir.join("results.json"),
+        serde_json::to_string_pretty(&summary)?.as_bytes(),
+    )?;
+    let md = format!(
+        "# {}\n\n{}\n\n## Structure\n\nMass {:.4} kg, planform area {:.4} m², {} design variables.\n\n{}\n![modes](modes.png)\n\nVTK: `modes.vtk`. Run time {:.2} s.\n",
+        study.spec.name,
+        study.spec.description,
+        summary.mass_kg,
+        summary.area_m2,
+        model.design.len(),
+        frequency_table(&summary),
+        t0.elapsed().as_secs_f64()
+    );
+    write_atomic(&dir.join("summary.md"), md.as_bytes())?;
+    println!("{}", frequency_table(&summary));
+    println!("report written to {}", dir.display());
+    Ok(())
+}
+
+/// Timings of the structural chain, seconds (medians).
+#[derive(Debug, Serialize)]
+pub struct StructureTimings {
+    /// Assembly of K and M alone (informational: the modal analysis includes it).
+    pub assembly_s: f64,
+    /// Assembly + Cholesky + complete eigen-decomposition.
+    pub modes_s: f64,
+    pub sensitivities_s: f64,
+    pub total_s: f64,
+    pub n_dv: usize,
+    pub n_modes: usize,
+}
+
+/// Times assembly + modal analysis + the gradients of every frequency, the tip deflection of every
+/// mode and the mass with respect to all design variables (one reverse sweep each).
+pub fn bench_structure(study: &Study, repeat: usize) -> Result<StructureTimings> {
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let (mut ta, mut tm, mut ts, mut tt) = (vec![], vec![], vec![], vec![]);
+    let st = &study.spec.structure;
+    let (mut n_dv, mut n_modes) = (0, 0);
+    for _ in 0..repeat.max(1) {
+        let t0 = Instant::now();
+        let model = study.build_model()?;
+        let t0b = Instant::now();
+        for f in study.mode_fields() {
+            std::hint::black_box(model.assemble(f));
+        }
+        let t1 = Instant::now();
+        let modes = modal::solve(&model, st.modes, st.damping_ratio, &study.mode_fields())?;
+        let t2 = Instant::now();
+        let tip = Sampler::new(&model, &[[1.0, 1.0]]);
+        let mut grads = vec![mass_grad(&model)];
+        for i in 0..modes.len() {
+            let mut seed = ModalSeed::zeros(&modes);
+            seed.lambda[i] = 1.0;
+            grads.push(modes_vjp(&model, &modes, &seed));
+            let mut seed = ModalSeed::zeros(&modes);
+            let (nodal_bar, _) =
+                tip.sample_vjp(&model, &modes.modes[i].shape, &[[1.0, 0.0, 0.0, 0.0, 0.0]]);
+            seed.shape[i] = nodal_bar;
+            grads.push(modes_vjp(&model, &modes, &seed));
+        }
+        let t3 = Instant::now();
+        n_dv = grads[0].len();
+        n_modes = modes.len();
+        std::hint::black_box(grads);
+        ta.push((t1 - t0).as_secs_f64());
+        tm.push((t2 - t1).as_secs_f64());
+        ts.push((t3 - t2).as_secs_f64());
+        // the modal analysis assembles again: the chain is model + modes + sensitivities
+        tt.push((t3 - t1).as_secs_f64() + (t0b - t0).as_secs_f64());
+    }
+    Ok(StructureTimings {
+        assembly_s: median(ta),
+        modes_s: median(tm),
+        sensitivities_s: median(ts),
+        total_s: median(tt),
+        n_dv,
+        n_modes,
+    })
+}
+
+/// `gustkit bench`.
+pub fn bench(file: &Path, repeat: usize) -> Result<()> {
+    let study = Study::load(file)?;
+    let t = bench_structure(&study, repeat)?;
+    println!(
+        "structure ({}; {} design variables, {} modes, median of {repeat}):",
+        study.spec.name, t.n_dv, t.n_modes
+    );
+    println!(
+        "  assembly of K, M alone        {:8.2} ms",
+        1e3 * t.assembly_s
+    );
+    println!("  modal analysis (+ assembly)   {:8.2} ms", 1e3 * t.modes_s);
+    println!(
+        "  sensitivities (2N+1 gradients){:8.2} ms",
+        1e3 * t.sensitivities_s
+    );
+    println!("  total (model, modes, grads)   {:8.2} ms", 1e3 * t.total_s);
+    Ok(())
+}

@@ -1,0 +1,118 @@
+//! Reports: figures (plotters, PNG and SVG), VTK files and markdown, always written atomically.
+
+pub mod figures;
+pub mod vtk;
+
+use anyhow::{Context, Result};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::Path;
+
+/// Writes `bytes` to `path` atomically: a temporary file in the same folder, then a rename, so a
+/// reader never sees a half-written file and an earlier result survives a failed write.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("cannot create folder {}", dir.display()))?;
+    let tmp = dir.join(format!(
+        ".{}.tmp{}",
+        path.file_name().and_then(|n| n.to_str()).unwrap_or("out"),
+        std::process::id()
+    ));
+    std::fs::write(&tmp, bytes).with_context(|| format!("cannot write {}", tmp.display()))?;
+    std::fs::rename(&tmp, path)
+        .with_context(|| format!("cannot move {} into place", path.display()))?;
+    Ok(())
+}
+
+/// Registers the embedded DejaVu Sans font with plotters once (no system font libraries needed).
+fn register_fonts() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        // the embedded font is a valid TrueType file; a failure here would only lose text
+        let _ = plotters::style::register_font(
+            "sans-serif",
+            FontStyle::Normal,
+            dejavu::sans::regular(),
+        );
+    });
+}
+
+/// Something that can draw itself on any plotters backend.
+pub trait Figure {
+    /// Pixel size of the figure.
+    fn size(&self) -> (u32, u32);
+    /// Draws onto `area`.
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static;
+}
+
+/// Saves a figure as `dir/stem.png` and `dir/stem.svg`, both atomically.
+pub fn save_figure(dir: &Path, stem: &str, fig: &impl Figure) -> Result<()> {
+    register_fonts();
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("cannot create folder {}", dir.display()))?;
+    let size = fig.size();
+    // PNG: render to a temporary .png (the encoder picks the format from the extension), then rename
+    let tmp_png = dir.join(format!(".{stem}.tmp{}.png", std::process::id()));
+    {
+        let area = BitMapBackend::new(&tmp_png, size).into_drawing_area();
+        fig.draw(&area)?;
+        area.present()
+            .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", tmp_png.display()))?;
+    }
+    let png = dir.join(format!("{stem}.png"));
+    std::fs::rename(&tmp_png, &png)
+        .with_context(|| format!("cannot move {} into place", png.display()))?;
+    let mut svg = String::new();
+    {
+        let area = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        fig.draw(&area)?;
+        area.present().map_err(|e| anyhow::anyhow!("svg: {e}"))?;
+    }
+    write_atomic(&dir.join(format!("{stem}.svg")), svg.as_bytes())
+}
+
+/// Diverging blue–white–red colour for v in [-1, 1].
+pub fn diverging(v: f64) -> RGBColor {
+    let v = v.clamp(-1.0, 1.0);
+    let lerp = |a: f64, b: f64, t: f64| (a + (b - a) * t).round() as u8;
+    if v >= 0.0 {
+        RGBColor(
+            lerp(255.0, 178.0, v),
+            lerp(255.0, 24.0, v),
+            lerp(255.0, 43.0, v),
+        )
+    } else {
+        let t = -v;
+        RGBColor(
+            lerp(255.0, 33.0, t),
+            lerp(255.0, 102.0, t),
+            lerp(255.0, 172.0, t),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn atomic_write_replaces_and_leaves_no_temporary() {
+        let dir = std::env::temp_dir().join(format!("gustkit-atomic-{}", std::process::id()));
+        let p = dir.join("a.txt");
+        write_atomic(&p, b"one").unwrap();
+        write_atomic(&p, b"two").unwrap();
+        assert_eq!(std::fs::read_to_string(&p).unwrap(), "two");
+        let n = std::fs::read_dir(&dir).unwrap().count();
+        assert_eq!(n, 1);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn unwritable_destination_is_an_error() {
+        let e = write_atomic(Path::new("/proc/gustkit/x.txt"), b"x").unwrap_err();
+        assert!(e.to_string().contains("cannot"), "{e}");
+    }
+}

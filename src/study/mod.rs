@@ -1,0 +1,273 @@
+//! Study files: the JSON case schema, its validation, and what a study builds.
+//!
+//! Every field is checked at load; an error names the file, the JSON path of the field and the
+//! reason. Unknown fields are rejected (so a typo never silently falls back to a default).
+//! Lengths are given in `length_unit` (m, in or ft) and converted to SI here; angles in degrees;
+//! material constants in SI with the unit in the field name.
+
+mod schema;
+
+pub use schema::{
+    AirfoilSpec, ClampSpec, LengthUnit, MaterialSpec, MeshSpec, StructureSpec, StudyFile, WingSpec,
+};
+
+use crate::structure::{airfoil_thickness, Clamp, Orthotropic, PlateMesh, PlateModel};
+use crate::wing::{Airfoil, DesignVector, Planform};
+use std::path::{Path, PathBuf};
+
+/// The schema version this build reads.
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// A study input error: which file, which field, why.
+#[derive(Debug, thiserror::Error)]
+#[error("{file}: {path}: {reason}")]
+pub struct StudyError {
+    pub file: PathBuf,
+    /// JSON path of the offending field (`.` for the whole document).
+    pub path: String,
+    pub reason: String,
+}
+
+/// A loaded, validated study.
+#[derive(Clone, Debug)]
+pub struct Study {
+    pub file: PathBuf,
+    pub spec: StudyFile,
+}
+
+impl Study {
+    /// Reads and validates a study file.
+    pub fn load(file: &Path) -> Result<Self, StudyError> {
+        let text = std::fs::read_to_string(file).map_err(|e| StudyError {
+            file: file.to_path_buf(),
+            path: ".".into(),
+            reason: format!("cannot read the file: {e}"),
+        })?;
+        Self::from_str(file, &text)
+    }
+
+    /// Parses and validates study text; `file` is used in error messages.
+    pub fn from_str(file: &Path, text: &str) -> Result<Self, StudyError> {
+        let de = &mut serde_json::Deserializer::from_str(text);
+        let spec: StudyFile = serde_path_to_error::deserialize(de).map_err(|e| {
+            let path = e.path().to_string();
+            let inner = e.into_inner();
+            StudyError {
+                file: file.to_path_buf(),
+                path: if path.is_empty() { ".".into() } else { path },
+                reason: inner.to_string(),
+            }
+        })?;
+        let study = Self {
+            file: file.to_path_buf(),
+            spec,
+        };
+        study.validate()?;
+        Ok(study)
+    }
+
+    fn err(&self, path: &str, reason: impl Into<String>) -> StudyError {
+        StudyError {
+            file: self.file.clone(),
+            path: path.into(),
+            reason: reason.into(),
+        }
+    }
+
+    fn validate(&self) -> Result<(), StudyError> {
+        let s = &self.spec;
+        if s.schema_version != SCHEMA_VERSION {
+            return Err(self.err(
+                "schema_version",
+                format!(
+                    "this gustkit reads schema version {SCHEMA_VERSION}, the file has {}",
+                    s.schema_version
+                ),
+            ));
+        }
+        if s.name.is_empty()
+            || !s
+                .name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.')
+        {
+            return Err(self.err(
+                "name",
+                "must be a non-empty file-name-safe string (letters, digits, '_', '-', '.')",
+            ));
+        }
+        self.planform()?;
+        self.airfoil()?;
+        self.material()?;
+        let st = &s.structure;
+        if st.modes == 0 {
+            return Err(self.err("structure.modes", "must be at least 1"));
+        }
+        if !(0.0..1.0).contains(&st.damping_ratio) {
+            return Err(self.err(
+                "structure.damping_ratio",
+                format!("must lie in [0, 1) (got {})", st.damping_ratio),
+            ));
+        }
+        self.build_model()?;
+        Ok(())
+    }
+
+    /// The planform in SI.
+    pub fn planform(&self) -> Result<Planform, StudyError> {
+        let w = &self.spec.wing;
+        let to_m = self.spec.length_unit.to_m();
+        let p = Planform {
+            span: w.span * to_m,
+            sweep_c4: w.sweep_c4_deg.to_radians(),
+            root_chord: w.root_chord * to_m,
+            tip_chord: w.tip_chord * to_m,
+        };
+        p.validate().map_err(|e| {
+            let path = match &e {
+                crate::wing::PlanformError::NotPositive { field, .. } => format!("wing.{field}"),
+                crate::wing::PlanformError::Sweep { .. } => "wing.sweep_c4_deg".into(),
+            };
+            self.err(
+                &path,
+                e.to_string()
+                    .split_once(": ")
+                    .map_or(e.to_string(), |x| x.1.to_string()),
+            )
+        })?;
+        Ok(p)
+    }
+
+    /// The airfoil thickness table.
+    pub fn airfoil(&self) -> Result<Airfoil, StudyError> {
+        match &self.spec.wing.airfoil {
+            AirfoilSpec::Builtin(name) => match name.to_ascii_lowercase().as_str() {
+                "naca65a004" | "naca 65a004" => Ok(Airfoil::naca65a004()),
+                other => Err(self.err(
+                    "wing.airfoil",
+                    format!("unknown built-in airfoil '{other}' (built in: naca65a004; or give {{\"name\", \"x_c\", \"z_c\"}})"),
+                )),
+            },
+            AirfoilSpec::Table { name, x_c, z_c } => Airfoil::from_table(name, x_c.clone(), z_c.clone())
+                .map_err(|e| self.err("wing.airfoil", e.to_string())),
+        }
+    }
+
+    /// The material in SI.
+    pub fn material(&self) -> Result<Orthotropic, StudyError> {
+        let m = &self.spec.material;
+        let mat = Orthotropic {
+            e1: m.e1_pa,
+            e2: m.e2_pa,
+            g12: m.g12_pa,
+            nu12: m.nu12,
+            density: m.density_kg_m3,
+            grain_angle: m.grain_angle_deg.to_radians(),
+        };
+        mat.validate().map_err(|e| {
+            let path = match &e {
+                crate::structure::MaterialError::NotPositive { field, .. } => match *field {
+                    "density" => "material.density_kg_m3".to_string(),
+                    f => format!("material.{f}_pa"),
+                },
+                crate::structure::MaterialError::NotPositiveDefinite { .. } => {
+                    "material.nu12".into()
+                }
+            };
+            self.err(&path, e.to_string())
+        })?;
+        Ok(mat)
+    }
+
+    /// The structural mesh.
+    pub fn mesh(&self) -> Result<PlateMesh, StudyError> {
+        let st = &self.spec.structure;
+        let clamp = match &st.clamp {
+            ClampSpec::Named(n) if n == "all" => Clamp::All,
+            ClampSpec::Named(n) if n == "interior" => Clamp::Interior,
+            ClampSpec::Named(n) => {
+                return Err(self.err(
+                    "structure.clamp",
+                    format!(
+                    "unknown clamp '{n}' (use \"all\", \"interior\" or {{\"root_nodes\": [...]}})"
+                ),
+                ))
+            }
+            ClampSpec::RootNodes { root_nodes } => Clamp::Nodes(root_nodes.clone()),
+        };
+        PlateMesh::new(st.mesh.chordwise, st.mesh.spanwise, st.mesh.refine, &clamp).map_err(|e| {
+            let path = match e {
+                crate::structure::mesh::MeshError::Empty => "structure.mesh",
+                _ => "structure.clamp",
+            };
+            self.err(path, e.to_string())
+        })
+    }
+
+    /// The initial design vector in SI: thicknesses from the airfoil (or the file), planform.
+    pub fn initial_design(&self) -> Result<DesignVector, StudyError> {
+        let mesh = self.mesh()?;
+        let planform = self.planform()?;
+        let thickness = match &self.spec.structure.thickness {
+            Some(t) => {
+                if t.len() != mesh.n_dv() {
+                    return Err(self.err(
+                        "structure.thickness",
+                        format!(
+                            "expected {} values (one a design patch), got {}",
+                            mesh.n_dv(),
+                            t.len()
+                        ),
+                    ));
+                }
+                let to_m = self.spec.length_unit.to_m();
+                t.iter().map(|v| v * to_m).collect()
+            }
+            None => airfoil_thickness(&mesh, &planform, &self.airfoil()?),
+        };
+        Ok(DesignVector {
+            thickness,
+            planform,
+        })
+    }
+
+    /// The plate model of the initial design.
+    pub fn build_model(&self) -> Result<PlateModel, StudyError> {
+        self.model_at(self.initial_design()?)
+    }
+
+    /// The plate model of a given design.
+    pub fn model_at(&self, design: DesignVector) -> Result<PlateModel, StudyError> {
+        PlateModel::new(self.mesh()?, self.material()?, design).map_err(|e| {
+            let path = match &e {
+                crate::structure::model::ModelError::Thickness { index, .. } => {
+                    format!("structure.thickness[{index}]")
+                }
+                crate::structure::model::ModelError::ThicknessCount { .. } => {
+                    "structure.thickness".into()
+                }
+                crate::structure::model::ModelError::Material(_) => "material".into(),
+                _ => "wing".into(),
+            };
+            self.err(&path, e.to_string())
+        })
+    }
+
+    /// Plate fields whose modes are retained.
+    pub fn mode_fields(&self) -> Vec<crate::structure::Field> {
+        use crate::structure::Field;
+        if self.spec.structure.in_plane_modes {
+            vec![Field::Bending, Field::Membrane]
+        } else {
+            vec![Field::Bending]
+        }
+    }
+
+    /// Report folder of this study under `root` (normally `reports/`).
+    pub fn report_dir(&self, root: &Path) -> PathBuf {
+        root.join(&self.spec.name)
+    }
+}
+
+#[cfg(test)]
+mod tests;

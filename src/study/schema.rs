@@ -1,0 +1,150 @@
+//! Serde types of the study file (schema version 1).
+
+use serde::{Deserialize, Serialize};
+
+/// Top level of a study file.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct StudyFile {
+    /// Must equal [`super::SCHEMA_VERSION`].
+    pub schema_version: u32,
+    /// Study name; also the report folder name.
+    pub name: String,
+    #[serde(default)]
+    pub description: String,
+    /// Unit of every length in the file (span, chords, thicknesses).
+    #[serde(default)]
+    pub length_unit: LengthUnit,
+    pub wing: WingSpec,
+    pub material: MaterialSpec,
+    pub structure: StructureSpec,
+}
+
+/// Length unit of a study file.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(rename_all = "lowercase")]
+pub enum LengthUnit {
+    #[default]
+    M,
+    In,
+    Ft,
+}
+
+impl LengthUnit {
+    /// Metres per unit.
+    pub fn to_m(self) -> f64 {
+        match self {
+            LengthUnit::M => 1.0,
+            LengthUnit::In => 0.0254,
+            LengthUnit::Ft => 0.3048,
+        }
+    }
+}
+
+/// Planform and section.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct WingSpec {
+    /// Semispan, length unit.
+    pub span: f64,
+    /// Quarter-chord sweep, degrees.
+    pub sweep_c4_deg: f64,
+    /// Streamwise root chord, length unit.
+    pub root_chord: f64,
+    /// Streamwise tip chord, length unit.
+    pub tip_chord: f64,
+    /// A built-in section name or a half-thickness table.
+    pub airfoil: AirfoilSpec,
+}
+
+/// `"naca65a004"` or `{"name": …, "x_c": […], "z_c": […]}` (half-thickness over chord).
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum AirfoilSpec {
+    Builtin(String),
+    Table {
+        name: String,
+        x_c: Vec<f64>,
+        z_c: Vec<f64>,
+    },
+}
+
+/// Orthotropic plate material (SI).
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    pub e1_pa: f64,
+    pub e2_pa: f64,
+    pub g12_pa: f64,
+    pub nu12: f64,
+    pub density_kg_m3: f64,
+    /// Grain (axis 1) angle from the spanwise axis toward the trailing edge, degrees.
+    #[serde(default)]
+    pub grain_angle_deg: f64,
+}
+
+/// Structural model and modal analysis settings.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct StructureSpec {
+    #[serde(default)]
+    pub mesh: MeshSpec,
+    #[serde(default)]
+    pub clamp: ClampSpec,
+    /// Number of retained modes.
+    #[serde(default = "default_modes")]
+    pub modes: usize,
+    /// Modal damping ratio ζ of every mode.
+    #[serde(default)]
+    pub damping_ratio: f64,
+    /// Also retain in-plane (membrane) modes. Off by default: a flat plate's in-plane modes are
+    /// uncoupled from its deflection and carry no aerodynamic force.
+    #[serde(default)]
+    pub in_plane_modes: bool,
+    /// Thickness of each design patch (length unit), chordwise fastest from the root; defaults to
+    /// the airfoil thickness.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub thickness: Option<Vec<f64>>,
+}
+
+fn default_modes() -> usize {
+    6
+}
+
+/// Design patches chordwise × spanwise, each split into refine × refine elements.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshSpec {
+    pub chordwise: usize,
+    pub spanwise: usize,
+    #[serde(default = "default_refine")]
+    pub refine: usize,
+}
+
+fn default_refine() -> usize {
+    1
+}
+
+impl Default for MeshSpec {
+    fn default() -> Self {
+        Self {
+            chordwise: 10,
+            spanwise: 10,
+            refine: 1,
+        }
+    }
+}
+
+/// `"all"`, `"interior"` or `{"root_nodes": [i, …]}` (chordwise node indices of the root row).
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum ClampSpec {
+    Named(String),
+    RootNodes { root_nodes: Vec<usize> },
+}
+
+impl Default for ClampSpec {
+    fn default() -> Self {
+        ClampSpec::Named("all".into())
+    }
+}

@@ -1,0 +1,143 @@
+//! Study loading: the shipped study parses, and bad input names the file, field and reason.
+
+use super::*;
+
+fn agard_text() -> String {
+    std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/studies/agard445_dlm.json"
+    ))
+    .unwrap()
+}
+
+fn load_modified(edit: impl FnOnce(&mut serde_json::Value)) -> Result<Study, StudyError> {
+    let mut v: serde_json::Value = serde_json::from_str(&agard_text()).unwrap();
+    edit(&mut v);
+    Study::from_str(Path::new("case.json"), &v.to_string())
+}
+
+#[test]
+fn shipped_study_loads_in_si() {
+    let s = load_modified(|_| {}).unwrap();
+    let p = s.planform().unwrap();
+    assert!((p.span - 0.762).abs() < 1e-12);
+    assert!((p.root_chord - 0.5587).abs() < 1e-4);
+    let d = s.initial_design().unwrap();
+    assert_eq!(d.thickness.len(), 100);
+    // root leading-edge patch: chord at 5 % span × (z(0) + z(0.1))
+    let expect = p.chord(0.05) * (0.0 + 0.01213);
+    assert!((d.thickness[0] - expect).abs() < 1e-12);
+}
+
+fn expect_error(edit: impl FnOnce(&mut serde_json::Value), path: &str, reason_part: &str) {
+    let e = load_modified(edit).unwrap_err();
+    assert_eq!(e.path, path, "{e}");
+    assert!(e.reason.contains(reason_part), "{e}");
+    assert!(e.to_string().starts_with("case.json: "), "{e}");
+}
+
+#[test]
+fn unknown_and_missing_fields_name_their_path() {
+    expect_error(
+        |v| v["wing"]["spam"] = 1.0.into(),
+        "wing.spam",
+        "unknown field `spam`",
+    );
+    expect_error(
+        |v| {
+            v["wing"].as_object_mut().unwrap().remove("span");
+        },
+        "wing",
+        "missing field `span`",
+    );
+    expect_error(
+        |v| v["structure"]["mesh"]["chordwise"] = "ten".into(),
+        "structure.mesh.chordwise",
+        "invalid type",
+    );
+    expect_error(
+        |v| v["schema_version"] = 7.into(),
+        "schema_version",
+        "schema version 1",
+    );
+}
+
+#[test]
+fn bad_values_name_their_field() {
+    expect_error(
+        |v| v["wing"]["span"] = (-1.0).into(),
+        "wing.span",
+        "positive",
+    );
+    expect_error(
+        |v| v["wing"]["tip_chord"] = 0.0.into(),
+        "wing.tip_chord",
+        "positive",
+    );
+    expect_error(
+        |v| v["wing"]["sweep_c4_deg"] = 89.0.into(),
+        "wing.sweep_c4_deg",
+        "80",
+    );
+    expect_error(
+        |v| v["material"]["g12_pa"] = 0.0.into(),
+        "material.g12_pa",
+        "positive",
+    );
+    expect_error(
+        |v| v["material"]["nu12"] = 3.0.into(),
+        "material.nu12",
+        "positive definite",
+    );
+    expect_error(
+        |v| v["material"]["density_kg_m3"] = (-3.0).into(),
+        "material.density_kg_m3",
+        "positive",
+    );
+    expect_error(
+        |v| v["structure"]["damping_ratio"] = 1.5.into(),
+        "structure.damping_ratio",
+        "[0, 1)",
+    );
+    expect_error(
+        |v| v["structure"]["modes"] = 0.into(),
+        "structure.modes",
+        "at least 1",
+    );
+    expect_error(
+        |v| v["structure"]["clamp"] = "none".into(),
+        "structure.clamp",
+        "unknown clamp",
+    );
+    expect_error(
+        |v| v["structure"]["clamp"] = serde_json::json!({"root_nodes": [99]}),
+        "structure.clamp",
+        "outside",
+    );
+    expect_error(
+        |v| v["wing"]["airfoil"] = "naca0012".into(),
+        "wing.airfoil",
+        "unknown built-in",
+    );
+    let mut t = vec![0.1; 100];
+    t[17] = -0.01;
+    expect_error(
+        |v| v["structure"]["thickness"] = t.into(),
+        "structure.thickness[17]",
+        "positive",
+    );
+    expect_error(
+        |v| v["structure"]["thickness"] = vec![0.1; 3].into(),
+        "structure.thickness",
+        "expected 100",
+    );
+    expect_error(|v| v["name"] = "a/b".into(), "name", "file-name-safe");
+}
+
+#[test]
+fn unreadable_file_and_syntax_errors() {
+    let e = Study::load(Path::new("/nonexistent/study.json")).unwrap_err();
+    assert!(e.reason.contains("cannot read"), "{e}");
+    let e = Study::from_str(Path::new("x.json"), "{\"schema_version\": 1,").unwrap_err();
+    assert!(e.reason.contains("EOF"), "{e}");
+}
