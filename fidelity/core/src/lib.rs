@@ -1,1 +1,10 @@
+//! Shared aerodynamic contract of gustkit: the [`aero::Aerodynamics`] trait with its types and
+//! conventions, and a small forward-mode AD scalar. No solver code lives here.
+
+pub mod aero;
 pub mod scalar;
+
+pub use aero::{
+    check_reduced_frequencies, AeroError, AeroSurface, Aerodynamics, FlightCondition, GafGradient,
+    GafTable, ModalSurface,
+};

@@ -38,6 +38,16 @@ pub trait Scalar:
     fn tan(self) -> Self;
     fn atan2(self, x: Self) -> Self;
     fn powi(self, n: i32) -> Self;
+    fn exp(self) -> Self;
+    fn ln(self) -> Self;
+    fn atan(self) -> Self;
+    fn abs(self) -> Self {
+        if self.re() < 0.0 {
+            -self
+        } else {
+            self
+        }
+    }
     fn zero() -> Self {
         Self::cst(0.0)
     }
@@ -78,6 +88,18 @@ impl Scalar for f64 {
     #[inline]
     fn powi(self, n: i32) -> Self {
         f64::powi(self, n)
+    }
+    #[inline]
+    fn exp(self) -> Self {
+        f64::exp(self)
+    }
+    #[inline]
+    fn ln(self) -> Self {
+        f64::ln(self)
+    }
+    #[inline]
+    fn atan(self) -> Self {
+        f64::atan(self)
     }
 }
 
@@ -260,6 +282,16 @@ impl<const N: usize> Scalar for Dual<N> {
         };
         self.chain(p, dp)
     }
+    fn exp(self) -> Self {
+        let e = self.v.exp();
+        self.chain(e, e)
+    }
+    fn ln(self) -> Self {
+        self.chain(self.v.ln(), 1.0 / self.v)
+    }
+    fn atan(self) -> Self {
+        self.chain(self.v.atan(), 1.0 / (1.0 + self.v * self.v))
+    }
 }
 
 #[cfg(test)]
@@ -269,16 +301,25 @@ mod tests {
     /// The dual derivative of a composite function equals its analytic derivative.
     #[test]
     fn dual_matches_analytic_derivative() {
-        let f =
-            |x: Dual<2>, y: Dual<2>| (x * y).sin() / (x.powi(3) + y.sqrt()) - x.atan2(y) * x.tan();
+        let f = |x: Dual<2>, y: Dual<2>| {
+            (x * y).sin() / (x.powi(3) + y.sqrt()) - x.atan2(y) * x.tan()
+                + (x * y).exp().ln() * y.atan()
+        };
         let (x0, y0) = (0.7, 1.3);
         let r = f(Dual::var(x0, 0), Dual::var(y0, 1));
         let h = 1e-6;
-        let g = |x: f64, y: f64| (x * y).sin() / (x.powi(3) + y.sqrt()) - x.atan2(y) * x.tan();
+        let g = |x: f64, y: f64| {
+            (x * y).sin() / (x.powi(3) + y.sqrt()) - x.atan2(y) * x.tan()
+                + (x * y).exp().ln() * y.atan()
+        };
         let fdx = (g(x0 + h, y0) - g(x0 - h, y0)) / (2.0 * h);
         let fdy = (g(x0, y0 + h) - g(x0, y0 - h)) / (2.0 * h);
         // central differences with h = 1e-6 are good to ~1e-9 relative here
-        assert!((r.d[0] - fdx).abs() < 1e-8 * fdx.abs().max(1.0));
+        assert!(
+            (r.d[0] - fdx).abs() < 1e-8 * fdx.abs().max(1.0),
+            "{} {fdx}",
+            r.d[0]
+        );
         assert!((r.d[1] - fdy).abs() < 1e-8 * fdy.abs().max(1.0));
     }
 }

@@ -1,0 +1,257 @@
+//! The aerodynamic contract shared by every fidelity (DLM, LFD).
+//!
+//! # Conventions (stated once; every fidelity follows them)
+//! - Harmonic time dependence `exp(+i ω t)`.
+//! - Reduced frequency `k = ω b_ref / U` with the reference **semichord** `b_ref` of
+//!   [`FlightCondition`] (Nastran's convention).
+//! - Gust: vertical (+z), unit amplitude `w_g / U = 1`, convecting with the flow, phase
+//!   `exp(-i ω (x - x_ref) / U) = exp(-i k (x - x_ref) / b_ref)` at streamwise station x, with the
+//!   stated `x_ref`.
+//! - Generalized aerodynamic forces: the modal force is `q_inf · Q_ss(ik) · η + q_inf · Q_gs(ik) · w_g/U`
+//!   (paper Eq. 16), `q_inf = ½ ρ U²`, η the generalized displacements of mass-normalized or any
+//!   other modes: Q_ss\[m\]\[n\] is the force on mode m from unit motion of mode n.
+//! - Mode shapes reach a fidelity sampled at its [`AeroSurface`] points: displacement vectors and
+//!   their streamwise derivatives ∂/∂x (SI, m and m/m).
+//! - Reverse mode with complex quantities (paper Sec. III): for a real output J and a complex
+//!   Q = a + i b the seed is `Q̄ = ∂J/∂a + i ∂J/∂b`, so that `dJ = Re(conj(Q̄) dQ)`; for real inputs
+//!   x, `∂J/∂x = Re(conj(Q̄) ∂Q/∂x)`. A linear map Q = A z then pulls back as z̄ = Aᴴ Q̄.
+
+use num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+
+/// Flight condition and the reference values that define k and the gust phase.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FlightCondition {
+    /// Free-stream Mach number.
+    pub mach: f64,
+    /// Free-stream speed U, m/s.
+    pub velocity: f64,
+    /// Air density ρ, kg/m³.
+    pub density: f64,
+    /// Reference semichord b_ref of k = ω b_ref / U, m.
+    pub b_ref: f64,
+    /// Streamwise station where the gust phase is zero, m.
+    pub x_ref: f64,
+}
+
+impl FlightCondition {
+    /// Dynamic pressure q_inf = ½ ρ U², Pa.
+    pub fn q_inf(&self) -> f64 {
+        0.5 * self.density * self.velocity * self.velocity
+    }
+    /// Circular frequency of reduced frequency k, rad/s.
+    pub fn omega(&self, k: f64) -> f64 {
+        k * self.velocity / self.b_ref
+    }
+    /// Checks the condition is physical.
+    pub fn validate(&self) -> Result<(), AeroError> {
+        for (name, v) in [
+            ("velocity", self.velocity),
+            ("density", self.density),
+            ("b_ref", self.b_ref),
+        ] {
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(AeroError::Input(format!(
+                    "{name}: must be positive (got {v})"
+                )));
+            }
+        }
+        if !(self.mach >= 0.0) || !self.x_ref.is_finite() {
+            return Err(AeroError::Input(format!(
+                "mach: must be non-negative (got {})",
+                self.mach
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Points where a fidelity wants structural displacements, with the unit normals there.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct AeroSurface {
+    pub points: Vec<[f64; 3]>,
+    pub normals: Vec<[f64; 3]>,
+}
+
+/// Mode shapes sampled on an [`AeroSurface`]: `disp[m][p]` and `disp_x[m][p]` (∂/∂x) for mode m at
+/// point p.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ModalSurface {
+    pub disp: Vec<Vec<[f64; 3]>>,
+    pub disp_x: Vec<Vec<[f64; 3]>>,
+}
+
+impl ModalSurface {
+    /// Zero shapes for `n_modes` modes on `n_points` points.
+    pub fn zeros(n_modes: usize, n_points: usize) -> Self {
+        Self {
+            disp: vec![vec![[0.0; 3]; n_points]; n_modes],
+            disp_x: vec![vec![[0.0; 3]; n_points]; n_modes],
+        }
+    }
+    pub fn n_modes(&self) -> usize {
+        self.disp.len()
+    }
+    /// Checks the shapes fit a surface of `n_points` points.
+    pub fn check(&self, n_points: usize) -> Result<(), AeroError> {
+        if self.disp.len() != self.disp_x.len() {
+            return Err(AeroError::Input(format!(
+                "modes: {} displacement sets but {} slope sets",
+                self.disp.len(),
+                self.disp_x.len()
+            )));
+        }
+        for (m, (d, dx)) in self.disp.iter().zip(&self.disp_x).enumerate() {
+            if d.len() != n_points || dx.len() != n_points {
+                return Err(AeroError::Input(format!(
+                    "modes: mode {} has {} points, the aerodynamic surface has {n_points}",
+                    m + 1,
+                    d.len()
+                )));
+            }
+            if d.iter().chain(dx).flatten().any(|v| !v.is_finite()) {
+                return Err(AeroError::Input(format!(
+                    "modes: mode {} is not finite",
+                    m + 1
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Generalized aerodynamic forces at a list of reduced frequencies (see the module conventions).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GafTable {
+    pub mach: f64,
+    pub b_ref: f64,
+    pub x_ref: f64,
+    /// Reduced frequencies.
+    pub k: Vec<f64>,
+    /// `q_ss[i][m][n]`: structure-on-structure GAFs at k\[i\].
+    pub q_ss: Vec<Vec<Vec<Complex64>>>,
+    /// `q_gs[i][m]`: gust-on-structure GAFs at k\[i\].
+    pub q_gs: Vec<Vec<Complex64>>,
+}
+
+impl GafTable {
+    /// A table of zeros with the given shape (used for seeds).
+    pub fn zeros(flight: &FlightCondition, k: &[f64], n_modes: usize) -> Self {
+        Self {
+            mach: flight.mach,
+            b_ref: flight.b_ref,
+            x_ref: flight.x_ref,
+            k: k.to_vec(),
+            q_ss: vec![vec![vec![Complex64::new(0.0, 0.0); n_modes]; n_modes]; k.len()],
+            q_gs: vec![vec![Complex64::new(0.0, 0.0); n_modes]; k.len()],
+        }
+    }
+    pub fn n_modes(&self) -> usize {
+        self.q_gs.first().map_or(0, Vec::len)
+    }
+}
+
+/// Reverse-mode result: gradients with respect to the sampled mode shapes and to the fidelity's
+/// geometry parameters (see [`Aerodynamics::geometry_names`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GafGradient {
+    pub modes: ModalSurface,
+    pub geometry: Vec<f64>,
+}
+
+/// Errors of an aerodynamic model.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum AeroError {
+    #[error("{0}")]
+    Input(String),
+    #[error("the aerodynamic influence matrix is singular at k = {k}")]
+    Singular { k: f64 },
+}
+
+/// Checks a reduced-frequency list: finite, non-negative, no duplicates.
+pub fn check_reduced_frequencies(k: &[f64]) -> Result<(), AeroError> {
+    if k.is_empty() {
+        return Err(AeroError::Input(
+            "k: the reduced-frequency list is empty".into(),
+        ));
+    }
+    for (i, &ki) in k.iter().enumerate() {
+        if !(ki >= 0.0 && ki.is_finite()) {
+            return Err(AeroError::Input(format!(
+                "k[{i}]: reduced frequencies must be finite and non-negative (got {ki})"
+            )));
+        }
+        if k[..i].contains(&ki) {
+            return Err(AeroError::Input(format!(
+                "k[{i}]: duplicate reduced frequency {ki}"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// An aerodynamic model that supplies GAFs and their reverse-mode derivatives.
+pub trait Aerodynamics: Send + Sync {
+    /// Points where this model wants structural displacements.
+    fn surface(&self) -> &AeroSurface;
+    /// Names of the geometry parameters that [`GafGradient::geometry`] refers to.
+    fn geometry_names(&self) -> Vec<String>;
+    /// GAFs at each reduced frequency for modes sampled on [`Aerodynamics::surface`].
+    fn gafs(
+        &self,
+        flight: &FlightCondition,
+        modes: &ModalSurface,
+        k: &[f64],
+    ) -> Result<GafTable, AeroError>;
+    /// Reverse mode: for seeds on Q_ss and Q_gs (conjugate convention above), the gradient with
+    /// respect to the sampled mode shapes and the geometry parameters.
+    fn gafs_vjp(
+        &self,
+        flight: &FlightCondition,
+        modes: &ModalSurface,
+        k: &[f64],
+        seed: &GafTable,
+    ) -> Result<GafGradient, AeroError>;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reduced_frequency_checks() {
+        assert!(check_reduced_frequencies(&[0.0, 0.1, 2.0]).is_ok());
+        assert!(check_reduced_frequencies(&[]).is_err());
+        let e = check_reduced_frequencies(&[0.1, -0.2]).unwrap_err();
+        assert!(e.to_string().contains("k[1]"));
+        let e = check_reduced_frequencies(&[0.1, 0.5, 0.1]).unwrap_err();
+        assert!(e.to_string().contains("duplicate"));
+        assert!(check_reduced_frequencies(&[f64::NAN]).is_err());
+    }
+
+    /// The trap of the two reduced-frequency conventions: k = ω b / U uses the semichord, so
+    /// ω for k = 1 at U = 100 m/s and b = 0.5 m is 200 rad/s (not 100).
+    #[test]
+    fn reduced_frequency_uses_semichord() {
+        let f = FlightCondition {
+            mach: 0.5,
+            velocity: 100.0,
+            density: 1.2,
+            b_ref: 0.5,
+            x_ref: 0.0,
+        };
+        assert_eq!(f.omega(1.0), 200.0);
+        assert_eq!(f.q_inf(), 6000.0);
+        let mut bad = f;
+        bad.mach = -0.1;
+        assert!(bad.validate().is_err());
+    }
+
+    #[test]
+    fn modal_surface_shape_check() {
+        let m = ModalSurface::zeros(2, 3);
+        assert!(m.check(3).is_ok());
+        let e = m.check(4).unwrap_err();
+        assert!(e.to_string().contains("mode 1 has 3 points"));
+    }
+}

@@ -1,0 +1,397 @@
+//! The DLM aerodynamic model: boxes, influence matrices per reduced frequency, GAFs and their
+//! reverse mode.
+//!
+//! Boundary condition (no flow through the surface moving as u(x, t) e^{iωt}, gust w_g):
+//!   w_j / U = n_j · (i ω/U u(cp_j) + ∂u/∂x(cp_j)) − (n_j · ẑ) e^{−i ω (x_cp,j − x_ref)/U}   (gust column)
+//! pressure ΔCp = D⁻¹ w / U, and generalized forces Q_mn = Σ_j A_j (n_j · u_m(dp_j)) ΔCp_j^{(n)} at
+//! the doublet (¼-chord) points, so that the modal force is q_inf Q η (see gustkit_core::aero).
+
+use crate::cplx::Cplx;
+use crate::geometry::{check_strip_alignment, surface_boxes, AeroBox, SurfaceSpec, SURFACE_PARAMS};
+use crate::influence::{oscillatory_influence, steady_influence};
+use faer::linalg::solvers::Solve;
+use faer::{c64, Mat};
+use gustkit_core::scalar::{Dual, Scalar};
+use gustkit_core::{
+    check_reduced_frequencies, AeroError, AeroSurface, Aerodynamics, FlightCondition, GafGradient,
+    GafTable, ModalSurface,
+};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Symmetry about the x-z plane (y = 0).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Symmetry {
+    /// The surfaces are the whole configuration.
+    #[default]
+    None,
+    /// Mirror image with the same pressure (symmetric motion; a wall-mounted half wing).
+    Symmetric,
+    /// Mirror image with opposite pressure (antisymmetric motion).
+    Antisymmetric,
+}
+
+impl Symmetry {
+    fn sign(self) -> Option<f64> {
+        match self {
+            Symmetry::None => None,
+            Symmetry::Symmetric => Some(1.0),
+            Symmetry::Antisymmetric => Some(-1.0),
+        }
+    }
+}
+
+/// The Doublet-Lattice model of a set of lifting surfaces.
+#[derive(Clone, Debug)]
+pub struct Dlm {
+    pub surfaces: Vec<SurfaceSpec>,
+    pub symmetry: Symmetry,
+    /// Boxes of all surfaces in order.
+    pub boxes: Vec<AeroBox<f64>>,
+    surface: AeroSurface,
+}
+
+/// Number of geometry parameters of one surface.
+const NQ: usize = 8;
+
+impl Dlm {
+    /// Builds the boxes; checks every surface and the strip alignment of coplanar surfaces.
+    pub fn new(surfaces: Vec<SurfaceSpec>, symmetry: Symmetry) -> Result<Self, AeroError> {
+        if surfaces.is_empty() {
+            return Err(AeroError::Input(
+                "surfaces: at least one lifting surface is needed".into(),
+            ));
+        }
+        for (i, s) in surfaces.iter().enumerate() {
+            s.validate(i)?;
+        }
+        check_strip_alignment(&surfaces)?;
+        let boxes: Vec<AeroBox<f64>> = surfaces
+            .iter()
+            .flat_map(|s| surface_boxes(s, s.params()))
+            .collect();
+        let n = boxes.len();
+        let mut surface = AeroSurface::default();
+        for b in &boxes {
+            surface.points.push(b.cp);
+            surface.normals.push(b.normal());
+        }
+        for b in &boxes {
+            surface.points.push(b.dp);
+            surface.normals.push(b.normal());
+        }
+        debug_assert_eq!(surface.points.len(), 2 * n);
+        Ok(Self {
+            surfaces,
+            symmetry,
+            boxes,
+            surface,
+        })
+    }
+
+    pub fn n_boxes(&self) -> usize {
+        self.boxes.len()
+    }
+
+    /// Influence matrix D (row: receiving control point, column: sending box) at Mach `mach` and
+    /// ω/U = `kd`, for boxes of any scalar type.
+    pub fn influence_matrix<S: Scalar>(
+        &self,
+        boxes: &[AeroBox<S>],
+        mach: f64,
+        kd: f64,
+    ) -> Vec<Cplx<S>> {
+        let n = boxes.len();
+        let images: Vec<AeroBox<S>> = match self.symmetry.sign() {
+            Some(_) => boxes.iter().map(AeroBox::mirrored).collect(),
+            None => Vec::new(),
+        };
+        let sign = self.symmetry.sign().unwrap_or(0.0);
+        let entry = |r: &AeroBox<S>, s: &AeroBox<S>| {
+            let mut d = Cplx::real(steady_influence(r, s, mach));
+            if kd != 0.0 {
+                d = d + oscillatory_influence(r, s, mach, kd);
+            }
+            d
+        };
+        let mut out = Vec::with_capacity(n * n);
+        for r in boxes {
+            for (j, s) in boxes.iter().enumerate() {
+                let mut d = entry(r, s);
+                if let Some(img) = images.get(j) {
+                    d = d + entry(r, img).scale_f(sign);
+                }
+                out.push(d);
+            }
+        }
+        out
+    }
+
+    fn check_inputs(
+        &self,
+        flight: &FlightCondition,
+        modes: &ModalSurface,
+        k: &[f64],
+    ) -> Result<(), AeroError> {
+        flight.validate()?;
+        if !(flight.mach < 1.0) {
+            return Err(AeroError::Input(format!(
+                "mach: the doublet-lattice method is subsonic only (got M = {})",
+                flight.mach
+            )));
+        }
+        check_reduced_frequencies(k)?;
+        modes.check(self.surface.points.len())
+    }
+
+    /// Right-hand sides w/U: one column a mode, then the gust column (n × (n_modes + 1)).
+    fn normalwash<S: Scalar>(
+        boxes: &[AeroBox<S>],
+        modes: &ModalSurface,
+        kd: f64,
+        x_ref: f64,
+    ) -> Vec<Vec<Cplx<S>>> {
+        let nm = modes.n_modes();
+        let mut cols = vec![Vec::with_capacity(boxes.len()); nm + 1];
+        for (j, b) in boxes.iter().enumerate() {
+            let nrm = b.normal();
+            for m in 0..nm {
+                let (u, ux) = (modes.disp[m][j], modes.disp_x[m][j]);
+                let un = nrm[0] * u[0] + nrm[1] * u[1] + nrm[2] * u[2];
+                let uxn = nrm[0] * ux[0] + nrm[1] * ux[1] + nrm[2] * ux[2];
+                cols[m].push(Cplx::new(uxn, un * kd));
+            }
+            let phase = Cplx::expi_neg((b.cp[0] - x_ref) * kd);
+            cols[nm].push(-phase.scale(nrm[2]));
+        }
+        cols
+    }
+
+    /// Generalized-force weights h_jm A_j = A_j n_j · u_m(dp_j).
+    fn force_weights<S: Scalar>(boxes: &[AeroBox<S>], modes: &ModalSurface) -> Vec<Vec<S>> {
+        let n = boxes.len();
+        (0..modes.n_modes())
+            .map(|m| {
+                boxes
+                    .iter()
+                    .enumerate()
+                    .map(|(j, b)| {
+                        let nrm = b.normal();
+                        let u = modes.disp[m][n + j];
+                        (nrm[0] * u[0] + nrm[1] * u[1] + nrm[2] * u[2]) * b.area
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Pressure solutions c = D⁻¹ W at one frequency (columns: modes, gust) with the factorization.
+    fn solve_k(
+        &self,
+        flight: &FlightCondition,
+        modes: &ModalSurface,
+        k: f64,
+    ) -> Result<(faer::linalg::solvers::PartialPivLu<c64>, Mat<c64>), AeroError> {
+        let n = self.n_boxes();
+        let kd = k / flight.b_ref;
+        let d = self.influence_matrix(&self.boxes, flight.mach, kd);
+        let dm = Mat::<c64>::from_fn(n, n, |i, j| d[i * n + j].value());
+        let lu = dm.partial_piv_lu();
+        let w = Self::normalwash(&self.boxes, modes, kd, flight.x_ref);
+        let rhs = Mat::<c64>::from_fn(n, w.len(), |i, c| w[c][i].value());
+        let c = lu.solve(&rhs);
+        if c.col_iter()
+            .flat_map(|col| col.iter().copied().collect::<Vec<_>>())
+            .any(|v| !v.re.is_finite() || !v.im.is_finite())
+        {
+            return Err(AeroError::Singular { k });
+        }
+        Ok((lu, c))
+    }
+}
+
+impl Aerodynamics for Dlm {
+    fn surface(&self) -> &AeroSurface {
+        &self.surface
+    }
+
+    fn geometry_names(&self) -> Vec<String> {
+        self.surfaces
+            .iter()
+            .flat_map(|s| {
+                SURFACE_PARAMS
+                    .iter()
+                    .map(move |p| format!("{}.{p}", s.name))
+            })
+            .collect()
+    }
+
+    fn gafs(
+        &self,
+        flight: &FlightCondition,
+        modes: &ModalSurface,
+        k: &[f64],
+    ) -> Result<GafTable, AeroError> {
+        self.check_inputs(flight, modes, k)?;
+        let nm = modes.n_modes();
+        let weights = Self::force_weights(&self.boxes, modes);
+        let per_k: Vec<(Vec<Vec<c64>>, Vec<c64>)> = k
+            .par_iter()
+            .map(|&kk| {
+                let (_, c) = self.solve_k(flight, modes, kk)?;
+                let gaf = |col: usize, m: usize| -> c64 {
+                    weights[m]
+                        .iter()
+                        .enumerate()
+                        .map(|(j, h)| c[(j, col)] * h)
+                        .sum()
+                };
+                let q_ss = (0..nm)
+                    .map(|m| (0..nm).map(|n| gaf(n, m)).collect())
+                    .collect();
+                let q_gs = (0..nm).map(|m| gaf(nm, m)).collect();
+                Ok((q_ss, q_gs))
+            })
+            .collect::<Result<_, AeroError>>()?;
+        let (q_ss, q_gs) = per_k.into_iter().unzip();
+        Ok(GafTable {
+            mach: flight.mach,
+            b_ref: flight.b_ref,
+            x_ref: flight.x_ref,
+            k: k.to_vec(),
+            q_ss,
+            q_gs,
+        })
+    }
+
+    fn gafs_vjp(
+        &self,
+        flight: &FlightCondition,
+        modes: &ModalSurface,
+        k: &[f64],
+        seed: &GafTable,
+    ) -> Result<GafGradient, AeroError> {
+        self.check_inputs(flight, modes, k)?;
+        let nm = modes.n_modes();
+        if seed.k.len() != k.len() || seed.n_modes() != nm {
+            return Err(AeroError::Input(
+                "seed: its shape does not match the GAF table".into(),
+            ));
+        }
+        let n = self.n_boxes();
+        let weights = Self::force_weights(&self.boxes, modes);
+        let parts: Vec<GafGradient> = k
+            .par_iter()
+            .enumerate()
+            .map(|(ik, &kk)| {
+                let kd = kk / flight.b_ref;
+                let (lu, c) = self.solve_k(flight, modes, kk)?;
+                // c̄_jn = Σ_m h_jm A_j Q̄_mn (gust column n = nm)
+                let qbar = |m: usize, col: usize| {
+                    if col < nm {
+                        seed.q_ss[ik][m][col]
+                    } else {
+                        seed.q_gs[ik][m]
+                    }
+                };
+                let cbar = Mat::<c64>::from_fn(n, nm + 1, |j, col| {
+                    (0..nm).map(|m| qbar(m, col) * weights[m][j]).sum()
+                });
+                let mut lam = cbar;
+                lu.solve_adjoint_in_place(lam.as_mut());
+                let mut g = GafGradient {
+                    modes: ModalSurface::zeros(nm, 2 * n),
+                    geometry: vec![0.0; NQ * self.surfaces.len()],
+                };
+                // mode shapes at the doublet points: h̄_jm A_j = Re Σ_n conj(Q̄_mn) c_jn
+                for m in 0..nm {
+                    for j in 0..n {
+                        let b = &self.boxes[j];
+                        let s: f64 = (0..=nm)
+                            .map(|col| (qbar(m, col).conj() * c[(j, col)]).re)
+                            .sum();
+                        let nrm = b.normal();
+                        for a in 0..3 {
+                            g.modes.disp[m][n + j][a] += s * b.area * nrm[a];
+                        }
+                    }
+                }
+                // mode shapes at the control points through W: W̄ = λ
+                for m in 0..nm {
+                    for j in 0..n {
+                        let nrm = self.boxes[j].normal();
+                        let l = lam[(j, m)].conj();
+                        // W = n·u_x + i kd n·u  ⇒  ū = Re(conj(λ) i kd) n, ū_x = Re(conj(λ)) n
+                        let (sx, su) = (l.re, (l * c64::new(0.0, kd)).re);
+                        for a in 0..3 {
+                            g.modes.disp_x[m][j][a] += sx * nrm[a];
+                            g.modes.disp[m][j][a] += su * nrm[a];
+                        }
+                    }
+                }
+                // geometry: ℒ(q) = Re[Σ conj(Q̄) Hᵀ A c + Σ conj(λ)(W − D c)] with c, λ frozen
+                for (si, spec) in self.surfaces.iter().enumerate() {
+                    let q = spec.params();
+                    let qd: [Dual<NQ>; NQ] = std::array::from_fn(|i| Dual::var(q[i], i));
+                    let boxes: Vec<AeroBox<Dual<NQ>>> = self
+                        .surfaces
+                        .iter()
+                        .enumerate()
+                        .flat_map(|(sj, s)| {
+                            if sj == si {
+                                surface_boxes(s, qd)
+                            } else {
+                                surface_boxes(s, s.params().map(Dual::cst))
+                            }
+                        })
+                        .collect();
+                    let d = self.influence_matrix(&boxes, flight.mach, kd);
+                    let w = Self::normalwash(&boxes, modes, kd, flight.x_ref);
+                    let hw = Self::force_weights(&boxes, modes);
+                    let mut lag = Dual::<NQ>::cst(0.0);
+                    for col in 0..=nm {
+                        for j in 0..n {
+                            let cj = c[(j, col)];
+                            let lj = lam[(j, col)];
+                            // Re(conj(Q̄_m,col) h_jm A_j c_j,col) summed over m
+                            for m in 0..nm {
+                                lag += hw[m][j] * (qbar(m, col).conj() * cj).re;
+                            }
+                            // Re(conj(λ_j) (W_j − Σ_i D_ji c_i))
+                            let mut r = w[col][j];
+                            for i in 0..n {
+                                let ci =
+                                    Cplx::new(Dual::cst(c[(i, col)].re), Dual::cst(c[(i, col)].im));
+                                r = r - d[j * n + i] * ci;
+                            }
+                            lag += r.re * lj.re + r.im * lj.im;
+                        }
+                    }
+                    for p in 0..NQ {
+                        g.geometry[si * NQ + p] += lag.d[p];
+                    }
+                }
+                Ok(g)
+            })
+            .collect::<Result<_, AeroError>>()?;
+        let mut total = GafGradient {
+            modes: ModalSurface::zeros(nm, 2 * n),
+            geometry: vec![0.0; NQ * self.surfaces.len()],
+        };
+        for p in parts {
+            for m in 0..nm {
+                for j in 0..2 * n {
+                    for a in 0..3 {
+                        total.modes.disp[m][j][a] += p.modes.disp[m][j][a];
+                        total.modes.disp_x[m][j][a] += p.modes.disp_x[m][j][a];
+                    }
+                }
+            }
+            for (t, v) in total.geometry.iter_mut().zip(&p.geometry) {
+                *t += v;
+            }
+        }
+        Ok(total)
+    }
+}
