@@ -211,6 +211,79 @@ impl Dlm {
     }
 }
 
+impl Dlm {
+    /// Forward mode with respect to the geometry parameters ([`Aerodynamics::geometry_names`]):
+    /// dQ along `dq`, from the tangent equation dc = D⁻¹ (dW − dD c) with dD, dW and the force
+    /// weights differentiated by dual numbers through the box geometry.
+    pub fn gafs_geometry_jvp(
+        &self,
+        flight: &FlightCondition,
+        modes: &ModalSurface,
+        k: &[f64],
+        dq: &[f64],
+    ) -> Result<GafTable, AeroError> {
+        self.check_inputs(flight, modes, k)?;
+        if dq.len() != NQ * self.surfaces.len() {
+            return Err(AeroError::Input(format!(
+                "geometry direction: expected {} values, got {}",
+                NQ * self.surfaces.len(),
+                dq.len()
+            )));
+        }
+        let nm = modes.n_modes();
+        let n = self.n_boxes();
+        let boxes: Vec<AeroBox<Dual<1>>> = self
+            .surfaces
+            .iter()
+            .enumerate()
+            .flat_map(|(si, s)| {
+                let q = s.params();
+                surface_boxes(
+                    s,
+                    std::array::from_fn(|p| Dual::new(q[p], [dq[si * NQ + p]])),
+                )
+            })
+            .collect();
+        let hw = Self::force_weights(&boxes, modes);
+        let per_k: Vec<(Vec<Vec<c64>>, Vec<c64>)> = k
+            .par_iter()
+            .map(|&kk| {
+                let kd = kk / flight.b_ref;
+                let (lu, c) = self.solve_k(flight, modes, kk)?;
+                let d = self.influence_matrix(&boxes, flight.mach, kd);
+                let w = Self::normalwash(&boxes, modes, kd, flight.x_ref);
+                let rhs = Mat::<c64>::from_fn(n, nm + 1, |j, col| {
+                    let dw = c64::new(w[col][j].re.d[0], w[col][j].im.d[0]);
+                    let ddc: c64 = (0..n)
+                        .map(|i| c64::new(d[j * n + i].re.d[0], d[j * n + i].im.d[0]) * c[(i, col)])
+                        .sum();
+                    dw - ddc
+                });
+                let dc = lu.solve(&rhs);
+                let dgaf = |col: usize, m: usize| -> c64 {
+                    (0..n)
+                        .map(|j| c[(j, col)] * hw[m][j].d[0] + dc[(j, col)] * hw[m][j].v)
+                        .sum()
+                };
+                let q_ss = (0..nm)
+                    .map(|m| (0..nm).map(|nn| dgaf(nn, m)).collect())
+                    .collect();
+                let q_gs = (0..nm).map(|m| dgaf(nm, m)).collect();
+                Ok((q_ss, q_gs))
+            })
+            .collect::<Result<_, AeroError>>()?;
+        let (q_ss, q_gs) = per_k.into_iter().unzip();
+        Ok(GafTable {
+            mach: flight.mach,
+            b_ref: flight.b_ref,
+            x_ref: flight.x_ref,
+            k: k.to_vec(),
+            q_ss,
+            q_gs,
+        })
+    }
+}
+
 impl Aerodynamics for Dlm {
     fn surface(&self) -> &AeroSurface {
         &self.surface
