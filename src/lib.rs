@@ -7,4 +7,5 @@ pub mod cli;
 pub mod report;
 pub mod structure;
 pub mod study;
+pub mod transfer;
 pub mod wing;

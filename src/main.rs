@@ -35,6 +35,26 @@ enum Command {
         #[arg(long, default_value = "reports")]
         reports: PathBuf,
     },
+    /// Generalized aerodynamic forces of a study's modes at its reduced frequencies, as JSON.
+    Gafs {
+        study: PathBuf,
+        /// Output file.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Box geometry and complex influence matrices of a study's DLM or of a surface file.
+    Aic {
+        /// A study file or a surface file {"b_ref", "symmetry", "surfaces": [...]} (SI).
+        input: PathBuf,
+        #[arg(long)]
+        mach: f64,
+        /// Reduced frequencies, comma separated.
+        #[arg(long, value_delimiter = ',', required = true)]
+        k: Vec<f64>,
+        /// Output file.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Time the structural chain (assembly, modes, all sensitivities) of a study.
     Bench {
         study: PathBuf,
@@ -53,6 +73,13 @@ fn main() -> Result<()> {
             json,
             reports,
         } => cli::modes(&study, json, &reports),
+        Command::Gafs { study, out } => cli::gafs(&study, &out),
+        Command::Aic {
+            input,
+            mach,
+            k,
+            out,
+        } => cli::aic(&input, mach, &k, &out),
         Command::Bench { study, repeat } => cli::bench(&study, repeat),
     }
 }

@@ -5,10 +5,13 @@
 //! Lengths are given in `length_unit` (m, in or ft) and converted to SI here; angles in degrees;
 //! material constants in SI with the unit in the field name.
 
+pub mod fidelity;
 mod schema;
 
+pub use fidelity::AeroModel;
 pub use schema::{
-    AirfoilSpec, ClampSpec, LengthUnit, MaterialSpec, MeshSpec, StructureSpec, StudyFile, WingSpec,
+    AeroSpec, AirfoilSpec, ClampSpec, DlmSpec, FidelitySpec, FlightSpec, LengthUnit, MaterialSpec,
+    MeshSpec, StructureSpec, StudyFile, WingSpec,
 };
 
 use crate::structure::{airfoil_thickness, Clamp, Orthotropic, PlateMesh, PlateModel};
@@ -66,7 +69,7 @@ impl Study {
         Ok(study)
     }
 
-    fn err(&self, path: &str, reason: impl Into<String>) -> StudyError {
+    pub(crate) fn err(&self, path: &str, reason: impl Into<String>) -> StudyError {
         StudyError {
             file: self.file.clone(),
             path: path.into(),
@@ -109,8 +112,73 @@ impl Study {
                 format!("must lie in [0, 1) (got {})", st.damping_ratio),
             ));
         }
-        self.build_model()?;
+        let plate = self.build_model()?;
+        if self.spec.aero.is_some() || self.spec.flight.is_some() {
+            self.flight_condition()?;
+            let aero = self
+                .spec
+                .aero
+                .as_ref()
+                .expect("checked by flight_condition");
+            gustkit_core::check_reduced_frequencies(&aero.reduced_frequencies)
+                .map_err(|e| self.err("aero.reduced_frequencies", e.to_string()))?;
+            AeroModel::new(self, &plate)?;
+        }
         Ok(())
+    }
+
+    /// The flight condition with the GAF reference values (SI); needs `flight` and `aero`.
+    pub fn flight_condition(&self) -> Result<gustkit_core::FlightCondition, StudyError> {
+        let f = self.spec.flight.as_ref().ok_or_else(|| {
+            self.err(
+                "flight",
+                "missing: the aerodynamic model needs a flight condition",
+            )
+        })?;
+        let aero = self.spec.aero.as_ref().ok_or_else(|| {
+            self.err(
+                "aero",
+                "missing: a flight condition needs an aerodynamic model",
+            )
+        })?;
+        let to_m = self.spec.length_unit.to_m();
+        if !(f.mach >= 0.0 && f.mach < 1.0) {
+            return Err(self.err(
+                "flight.mach",
+                format!(
+                    "must lie in [0, 1): the aerodynamic models are subsonic (got {})",
+                    f.mach
+                ),
+            ));
+        }
+        for (path, v) in [
+            ("flight.velocity_m_s", f.velocity_m_s),
+            ("flight.density_kg_m3", f.density_kg_m3),
+        ] {
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(self.err(path, format!("must be positive (got {v})")));
+            }
+        }
+        let b_ref = match aero.reference_semichord {
+            Some(b) if b > 0.0 && b.is_finite() => b * to_m,
+            Some(b) => {
+                return Err(self.err(
+                    "aero.reference_semichord",
+                    format!("must be positive (got {b})"),
+                ))
+            }
+            None => 0.5 * self.planform()?.root_chord,
+        };
+        if !aero.gust_x_ref.is_finite() {
+            return Err(self.err("aero.gust_x_ref", "must be finite"));
+        }
+        Ok(gustkit_core::FlightCondition {
+            mach: f.mach,
+            velocity: f.velocity_m_s,
+            density: f.density_kg_m3,
+            b_ref,
+            x_ref: aero.gust_x_ref * to_m,
+        })
     }
 
     /// The planform in SI.

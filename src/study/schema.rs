@@ -18,6 +18,64 @@ pub struct StudyFile {
     pub wing: WingSpec,
     pub material: MaterialSpec,
     pub structure: StructureSpec,
+    /// Aerodynamic model and the reduced frequencies of the GAFs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub aero: Option<AeroSpec>,
+    /// Flight condition.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flight: Option<FlightSpec>,
+}
+
+/// The aerodynamic model of a study.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct AeroSpec {
+    /// Which fidelity and its settings, e.g. `{"dlm": {...}}`.
+    pub fidelity: FidelitySpec,
+    /// Reduced frequencies k = ω b_ref / U of the GAF table.
+    pub reduced_frequencies: Vec<f64>,
+    /// Reference semichord b_ref (length unit); default half the root chord.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_semichord: Option<f64>,
+    /// Streamwise station of zero gust phase (length unit); default the root leading edge.
+    #[serde(default)]
+    pub gust_x_ref: f64,
+}
+
+/// The aerodynamic fidelities a study can name.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase", deny_unknown_fields)]
+pub enum FidelitySpec {
+    /// Doublet-Lattice Method on the wing planform.
+    Dlm(DlmSpec),
+}
+
+/// Box layout of the DLM on the planform.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct DlmSpec {
+    pub n_chord: usize,
+    pub n_span: usize,
+    #[serde(default)]
+    pub chord_spacing: gustkit_dlm::Spacing,
+    #[serde(default)]
+    pub span_spacing: gustkit_dlm::Spacing,
+    /// `"symmetric"` (a wall-mounted half wing, the default), `"antisymmetric"` or `"none"`.
+    #[serde(default = "default_symmetry")]
+    pub symmetry: gustkit_dlm::Symmetry,
+}
+
+fn default_symmetry() -> gustkit_dlm::Symmetry {
+    gustkit_dlm::Symmetry::Symmetric
+}
+
+/// Free-stream condition (SI).
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct FlightSpec {
+    pub mach: f64,
+    pub velocity_m_s: f64,
+    pub density_kg_m3: f64,
 }
 
 /// Length unit of a study file.

@@ -35,6 +35,7 @@ impl Spacing {
 /// `n_chord × n_span` boxes. Surfaces are defined root (left) to tip (right): p4.y > p1.y, or
 /// p4.z > p1.z for a vertical surface.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SurfaceSpec {
     pub name: String,
     pub p1: [f64; 3],
@@ -96,6 +97,8 @@ impl SurfaceSpec {
 /// One box: doublet line at its ¼-chord, control point at ¾-chord mid-span, all in SI.
 #[derive(Clone, Copy, Debug)]
 pub struct AeroBox<S> {
+    /// Corners: inboard LE, inboard TE, outboard TE, outboard LE.
+    pub corners: [[S; 3]; 4],
     /// Inboard and outboard ends of the doublet line (¼-chord of the box edges).
     pub line_a: [S; 3],
     pub line_b: [S; 3],
@@ -125,7 +128,9 @@ impl<S: Scalar> AeroBox<S> {
     /// The mirror image in the x-z plane (y → −y), itself defined left to right.
     pub fn mirrored(&self) -> Self {
         let m = |p: [S; 3]| [p[0], -p[1], p[2]];
+        let c = self.corners;
         Self {
+            corners: [m(c[3]), m(c[2]), m(c[1]), m(c[0])],
             line_a: m(self.line_b),
             line_b: m(self.line_a),
             cp: m(self.cp),
@@ -135,6 +140,23 @@ impl<S: Scalar> AeroBox<S> {
             ..*self
         }
     }
+}
+
+/// Parametric coordinates (ξ chord fraction, η span fraction) of a box's control point (¾-chord,
+/// mid-span) and doublet point (¼-chord, mid-span), the same for any values of the surface
+/// parameters; chordwise index fastest.
+pub fn box_parametric_points(spec: &SurfaceSpec) -> Vec<([f64; 2], [f64; 2])> {
+    let xi = spec.chord_spacing.edges(spec.n_chord);
+    let eta = spec.span_spacing.edges(spec.n_span);
+    let mut out = Vec::with_capacity(spec.n_chord * spec.n_span);
+    for j in 0..spec.n_span {
+        let em = 0.5 * (eta[j] + eta[j + 1]);
+        for i in 0..spec.n_chord {
+            let (xa, xb) = (xi[i], xi[i + 1]);
+            out.push(([xa + 0.75 * (xb - xa), em], [xa + 0.25 * (xb - xa), em]));
+        }
+    }
+    out
 }
 
 /// Boxes of a surface for parameters `q` (see [`SURFACE_PARAMS`]); chordwise index fastest.
@@ -156,6 +178,7 @@ pub fn surface_boxes<S: Scalar>(spec: &SurfaceSpec, q: [S; 8]) -> Vec<AeroBox<S>
             p1[2] + dz * eta,
         ]
     };
+    let params = box_parametric_points(spec);
     let mut boxes = Vec::with_capacity(spec.n_chord * spec.n_span);
     for j in 0..spec.n_span {
         let (ea, eb) = (eta[j], eta[j + 1]);
@@ -167,11 +190,13 @@ pub fn surface_boxes<S: Scalar>(spec: &SurfaceSpec, q: [S; 8]) -> Vec<AeroBox<S>
             let line_b = point(xq, eb);
             let e = width * (0.5 * (eb - ea));
             let chord = (c1 + (c4 - c1) * em) * (xb - xa);
+            let ([cx, ce], [dx, de]) = params[j * spec.n_chord + i];
             boxes.push(AeroBox {
+                corners: [point(xa, ea), point(xb, ea), point(xb, eb), point(xa, eb)],
                 line_a,
                 line_b,
-                cp: point(xa + 0.75 * (xb - xa), em),
-                dp: point(xq, em),
+                cp: point(cx, ce),
+                dp: point(dx, de),
                 chord,
                 area: chord * e * 2.0,
                 e,

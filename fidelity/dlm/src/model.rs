@@ -7,7 +7,10 @@
 //! the doublet (¼-chord) points, so that the modal force is q_inf Q η (see gustkit_core::aero).
 
 use crate::cplx::Cplx;
-use crate::geometry::{check_strip_alignment, surface_boxes, AeroBox, SurfaceSpec, SURFACE_PARAMS};
+use crate::geometry::{
+    box_parametric_points, check_strip_alignment, surface_boxes, AeroBox, SurfaceSpec,
+    SURFACE_PARAMS,
+};
 use crate::influence::{oscillatory_influence, steady_influence};
 use faer::linalg::solvers::Solve;
 use faer::{c64, Mat};
@@ -92,6 +95,28 @@ impl Dlm {
 
     pub fn n_boxes(&self) -> usize {
         self.boxes.len()
+    }
+
+    /// For every point of [`Aerodynamics::surface`] (control points, then doublet points): the
+    /// surface it lies on and its parametric coordinates (ξ, η) there, so that a structural model
+    /// laid on the same parametrization can sample its modes exactly at the aerodynamic points.
+    pub fn parametric_points(&self) -> Vec<(usize, [f64; 2])> {
+        let per: Vec<Vec<(usize, ([f64; 2], [f64; 2]))>> = self
+            .surfaces
+            .iter()
+            .enumerate()
+            .map(|(si, s)| {
+                box_parametric_points(s)
+                    .into_iter()
+                    .map(|p| (si, p))
+                    .collect()
+            })
+            .collect();
+        let all: Vec<(usize, ([f64; 2], [f64; 2]))> = per.into_iter().flatten().collect();
+        all.iter()
+            .map(|&(si, (cp, _))| (si, cp))
+            .chain(all.iter().map(|&(si, (_, dp))| (si, dp)))
+            .collect()
     }
 
     /// Influence matrix D (row: receiving control point, column: sending box) at Mach `mach` and
