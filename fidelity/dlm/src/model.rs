@@ -101,21 +101,19 @@ impl Dlm {
     /// surface it lies on and its parametric coordinates (ξ, η) there, so that a structural model
     /// laid on the same parametrization can sample its modes exactly at the aerodynamic points.
     pub fn parametric_points(&self) -> Vec<(usize, [f64; 2])> {
-        let per: Vec<Vec<(usize, ([f64; 2], [f64; 2]))>> = self
+        let all: Vec<(usize, [f64; 2], [f64; 2])> = self
             .surfaces
             .iter()
             .enumerate()
-            .map(|(si, s)| {
+            .flat_map(|(si, s)| {
                 box_parametric_points(s)
                     .into_iter()
-                    .map(|p| (si, p))
-                    .collect()
+                    .map(move |(cp, dp)| (si, cp, dp))
             })
             .collect();
-        let all: Vec<(usize, ([f64; 2], [f64; 2]))> = per.into_iter().flatten().collect();
         all.iter()
-            .map(|&(si, (cp, _))| (si, cp))
-            .chain(all.iter().map(|&(si, (_, dp))| (si, dp)))
+            .map(|&(si, cp, _)| (si, cp))
+            .chain(all.iter().map(|&(si, _, dp)| (si, dp)))
             .collect()
     }
 
