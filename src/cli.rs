@@ -220,6 +220,17 @@ pub fn bench(file: &Path, repeat: usize) -> Result<()> {
         1e3 * t.sensitivities_s
     );
     println!("  total (model, modes, grads)   {:8.2} ms", 1e3 * t.total_s);
+    if study.spec.aero.is_some() {
+        let a = bench_aero(&study, 3)?;
+        println!(
+            "aerodynamics (DLM, {} boxes, {} reduced frequencies, {} modes):",
+            a.n_boxes, a.n_k, a.n_modes
+        );
+        println!("  influence matrices, 1 thread  {:8.1} ms", 1e3 * a.assembly_s);
+        println!("  LU factorizations, 1 thread   {:8.1} ms", 1e3 * a.factorization_s);
+        println!("  GAFs (all k, rayon)           {:8.1} ms", 1e3 * a.gafs_s);
+        println!("  GAF reverse mode (all k)      {:8.1} ms", 1e3 * a.gafs_vjp_s);
+    }
     Ok(())
 }
 
@@ -425,4 +436,72 @@ pub fn aic(file: &Path, mach: f64, ks: &[f64], out: &Path) -> Result<()> {
         out.display()
     );
     Ok(())
+}
+
+/// Timings of the aerodynamic chain for a study, seconds.
+#[derive(Debug, Serialize)]
+pub struct AeroTimings {
+    pub n_boxes: usize,
+    pub n_k: usize,
+    pub n_modes: usize,
+    /// Influence matrices at every k, one thread.
+    pub assembly_s: f64,
+    /// LU factorizations at every k, one thread.
+    pub factorization_s: f64,
+    /// `Aerodynamics::gafs` as used (rayon over k): assembly, factorization, solves, GAFs.
+    pub gafs_s: f64,
+    /// `gafs_vjp` (reverse mode incl. geometry), rayon over k.
+    pub gafs_vjp_s: f64,
+}
+
+/// Times the DLM of a study (see [`AeroTimings`]); medians of `repeat` runs for the parallel parts.
+pub fn bench_aero(study: &Study, repeat: usize) -> Result<AeroTimings> {
+    use faer::{c64, Mat};
+    let (plate, modes, _) = analyze(study)?;
+    let aero = crate::study::AeroModel::new(study, &plate)?;
+    let Some(crate::study::AeroSpec { fidelity: crate::study::FidelitySpec::Dlm(spec), .. }) = &study.spec.aero
+    else {
+        anyhow::bail!("the study has no DLM");
+    };
+    let (surface, _) = crate::study::fidelity::dlm_surface(plate.planform(), spec);
+    let dlm = gustkit_dlm::Dlm::new(vec![surface], spec.symmetry).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let f = aero.flight;
+    let n = dlm.n_boxes();
+    let t0 = Instant::now();
+    let mats: Vec<Mat<c64>> = aero
+        .k
+        .iter()
+        .map(|&k| {
+            let d = dlm.influence_matrix(&dlm.boxes, f.mach, k / f.b_ref);
+            Mat::from_fn(n, n, |i, j| d[i * n + j].value())
+        })
+        .collect();
+    let t1 = Instant::now();
+    for m in &mats {
+        std::hint::black_box(m.partial_piv_lu());
+    }
+    let t2 = Instant::now();
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let mut tg = Vec::new();
+    let mut tv = Vec::new();
+    for _ in 0..repeat.max(1) {
+        let a = Instant::now();
+        let table = aero.gafs(&plate, &modes).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let b = Instant::now();
+        std::hint::black_box(aero.gafs_vjp(&plate, &modes, &table).map_err(|e| anyhow::anyhow!("{e}"))?);
+        tg.push((b - a).as_secs_f64());
+        tv.push(b.elapsed().as_secs_f64());
+    }
+    Ok(AeroTimings {
+        n_boxes: n,
+        n_k: aero.k.len(),
+        n_modes: modes.len(),
+        assembly_s: (t1 - t0).as_secs_f64(),
+        factorization_s: (t2 - t1).as_secs_f64(),
+        gafs_s: median(tg),
+        gafs_vjp_s: median(tv),
+    })
 }
