@@ -226,10 +226,19 @@ pub fn bench(file: &Path, repeat: usize) -> Result<()> {
             "aerodynamics (DLM, {} boxes, {} reduced frequencies, {} modes):",
             a.n_boxes, a.n_k, a.n_modes
         );
-        println!("  influence matrices, 1 thread  {:8.1} ms", 1e3 * a.assembly_s);
-        println!("  LU factorizations, 1 thread   {:8.1} ms", 1e3 * a.factorization_s);
+        println!(
+            "  influence matrices, 1 thread  {:8.1} ms",
+            1e3 * a.assembly_s
+        );
+        println!(
+            "  LU factorizations, 1 thread   {:8.1} ms",
+            1e3 * a.factorization_s
+        );
         println!("  GAFs (all k, rayon)           {:8.1} ms", 1e3 * a.gafs_s);
-        println!("  GAF reverse mode (all k)      {:8.1} ms", 1e3 * a.gafs_vjp_s);
+        println!(
+            "  GAF reverse mode (all k)      {:8.1} ms",
+            1e3 * a.gafs_vjp_s
+        );
     }
     Ok(())
 }
@@ -459,12 +468,16 @@ pub fn bench_aero(study: &Study, repeat: usize) -> Result<AeroTimings> {
     use faer::{c64, Mat};
     let (plate, modes, _) = analyze(study)?;
     let aero = crate::study::AeroModel::new(study, &plate)?;
-    let Some(crate::study::AeroSpec { fidelity: crate::study::FidelitySpec::Dlm(spec), .. }) = &study.spec.aero
+    let Some(crate::study::AeroSpec {
+        fidelity: crate::study::FidelitySpec::Dlm(spec),
+        ..
+    }) = &study.spec.aero
     else {
         anyhow::bail!("the study has no DLM");
     };
     let (surface, _) = crate::study::fidelity::dlm_surface(plate.planform(), spec);
-    let dlm = gustkit_dlm::Dlm::new(vec![surface], spec.symmetry).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let dlm =
+        gustkit_dlm::Dlm::new(vec![surface], spec.symmetry).map_err(|e| anyhow::anyhow!("{e}"))?;
     let f = aero.flight;
     let n = dlm.n_boxes();
     let t0 = Instant::now();
@@ -489,9 +502,14 @@ pub fn bench_aero(study: &Study, repeat: usize) -> Result<AeroTimings> {
     let mut tv = Vec::new();
     for _ in 0..repeat.max(1) {
         let a = Instant::now();
-        let table = aero.gafs(&plate, &modes).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let table = aero
+            .gafs(&plate, &modes)
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
         let b = Instant::now();
-        std::hint::black_box(aero.gafs_vjp(&plate, &modes, &table).map_err(|e| anyhow::anyhow!("{e}"))?);
+        std::hint::black_box(
+            aero.gafs_vjp(&plate, &modes, &table)
+                .map_err(|e| anyhow::anyhow!("{e}"))?,
+        );
         tg.push((b - a).as_secs_f64());
         tv.push(b.elapsed().as_secs_f64());
     }

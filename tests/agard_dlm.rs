@@ -7,7 +7,11 @@ use num_complex::Complex64 as C;
 use std::path::Path;
 
 fn study_with(n_chord: usize, n_span: usize, k: &[f64]) -> Study {
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/studies/agard445_dlm.json")).unwrap();
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/studies/agard445_dlm.json"
+    ))
+    .unwrap();
     let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
     v["aero"]["fidelity"]["dlm"]["n_chord"] = n_chord.into();
     v["aero"]["fidelity"]["dlm"]["n_span"] = n_span.into();
@@ -35,10 +39,24 @@ fn agard_gafs_converge_with_boxes() {
         v.extend(t.q_gs[0].iter().copied());
         v
     };
-    let (a, b, c) = (entries(&tables[0]), entries(&tables[1]), entries(&tables[2]));
+    let (a, b, c) = (
+        entries(&tables[0]),
+        entries(&tables[1]),
+        entries(&tables[2]),
+    );
     let scale = c.iter().map(|v| v.norm()).fold(0.0, f64::max);
-    let d1 = a.iter().zip(&b).map(|(x, y)| (x - y).norm()).fold(0.0, f64::max) / scale;
-    let d2 = b.iter().zip(&c).map(|(x, y)| (x - y).norm()).fold(0.0, f64::max) / scale;
+    let d1 = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| (x - y).norm())
+        .fold(0.0, f64::max)
+        / scale;
+    let d2 = b
+        .iter()
+        .zip(&c)
+        .map(|(x, y)| (x - y).norm())
+        .fold(0.0, f64::max)
+        / scale;
     println!("max change 6x8→12x16 {d1:.4}, 12x16→24x32 {d2:.4}");
     assert!(d1 / d2 > 2.5, "{d1} {d2}");
     assert!(d2 < 0.05, "{d2}");
@@ -63,9 +81,15 @@ fn rigid_heave_and_pitch_consistency() {
     let lift_pitch = t.q_ss[0][0][1];
     let lift_gust = t.q_gs[0][0];
     assert!(lift_pitch.re > 0.0);
-    assert!((lift_pitch - lift_gust).norm() < 1e-12 * lift_gust.norm(), "{lift_pitch} {lift_gust}");
+    assert!(
+        (lift_pitch - lift_gust).norm() < 1e-12 * lift_gust.norm(),
+        "{lift_pitch} {lift_gust}"
+    );
     let kd = 1e-4 / aero.flight.b_ref;
     let plunge = t.q_ss[1][0][0];
     let expect = C::new(0.0, -kd) * t.q_gs[1][0];
-    assert!((plunge - expect).norm() < 1e-3 * expect.norm(), "{plunge} {expect}");
+    assert!(
+        (plunge - expect).norm() < 1e-3 * expect.norm(),
+        "{plunge} {expect}"
+    );
 }

@@ -117,3 +117,141 @@ fn unwritable_report_folder_is_an_error() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("cannot create folder"), "{err}");
 }
+
+/// `gustkit gafs` writes the GAF table with its conventions; `gustkit aic` writes the box geometry
+/// and influence matrices, from a study or a bare surface file.
+#[test]
+fn gafs_and_aic_files() {
+    let dir = scratch("gafs");
+    let out = dir.join("gafs.json");
+    let o = gustkit()
+        .args(["gafs", study().to_str().unwrap(), "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(v["k"].as_array().unwrap().len(), 11);
+    assert_eq!(v["q_ss_re"][0].as_array().unwrap().len(), 6);
+    assert_eq!(v["q_gs_im"][3].as_array().unwrap().len(), 6);
+    assert!(v["conventions"][0]
+        .as_str()
+        .unwrap()
+        .contains("exp(+i omega t)"));
+    // steady gust GAF is real (k = 0)
+    assert_eq!(v["q_gs_im"][0][0].as_f64().unwrap(), 0.0);
+
+    let surf = dir.join("surface.json");
+    std::fs::write(
+        &surf,
+        r#"{"b_ref": 0.5, "symmetry": "symmetric", "surfaces": [{"name": "w", "p1": [0,0,0], "c1": 1.0,
+           "p4": [0.2, 2.0, 0], "c4": 0.8, "n_chord": 2, "n_span": 3}]}"#,
+    )
+    .unwrap();
+    let aic = dir.join("aic.json");
+    let o = gustkit()
+        .args([
+            "aic",
+            surf.to_str().unwrap(),
+            "--mach",
+            "0.5",
+            "--k",
+            "0,0.5",
+            "--out",
+        ])
+        .arg(&aic)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&aic).unwrap()).unwrap();
+    assert_eq!(v["boxes"].as_array().unwrap().len(), 6);
+    assert_eq!(v["aic"][1]["re"].as_array().unwrap().len(), 6);
+    // a box's own influence is downwash (negative) in the steady case
+    assert!(v["aic"][0]["re"][0][0].as_f64().unwrap() < 0.0);
+    assert_eq!(v["aic"][0]["im"][0][0].as_f64().unwrap(), 0.0);
+    // from the study file too
+    let o = gustkit()
+        .args([
+            "aic",
+            study().to_str().unwrap(),
+            "--mach",
+            "0.5",
+            "--k",
+            "0.1",
+            "--out",
+        ])
+        .arg(&aic)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+
+    // bad input: supersonic Mach, negative or duplicate k, unknown surface field
+    for (args, needle) in [
+        (vec!["--mach", "1.2", "--k", "0.1"], "subsonic"),
+        (vec!["--mach", "0.5", "--k", "0.1,-0.2"], "k[1]"),
+        (vec!["--mach", "0.5", "--k", "0.1,0.1"], "duplicate"),
+    ] {
+        let o = gustkit()
+            .arg("aic")
+            .arg(&surf)
+            .args(&args)
+            .arg("--out")
+            .arg(&aic)
+            .output()
+            .unwrap();
+        assert!(!o.status.success());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(needle), "{err}");
+    }
+    std::fs::write(&surf, r#"{"b_ref": 0.5, "surfaces": [{"name": "w", "p1": [0,0,0], "c1": 1.0, "p4": [0, 2, 0], "c4": 1.0, "n_chord": 2, "n_span": 2, "twist": 3}]}"#).unwrap();
+    let o = gustkit()
+        .arg("aic")
+        .arg(&surf)
+        .args(["--mach", "0.5", "--k", "0.1", "--out"])
+        .arg(&aic)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("surfaces[0].twist"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A study with a bad aerodynamic section names the field.
+#[test]
+fn bad_aero_section_names_field() {
+    let dir = scratch("badaero");
+    for (from, to, needle) in [
+        ("\"mach\": 0.5", "\"mach\": 1.1", "flight.mach"),
+        ("\"n_chord\": 16", "\"n_chord\": 0", "aero.fidelity.dlm"),
+        (
+            "\"reduced_frequencies\": [\n      0.0,",
+            "\"reduced_frequencies\": [\n      -1.0,",
+            "aero.reduced_frequencies",
+        ),
+        (
+            "\"density_kg_m3\": 0.2139",
+            "\"density_kg_m3\": -1",
+            "flight.density_kg_m3",
+        ),
+    ] {
+        let text = std::fs::read_to_string(study()).unwrap();
+        assert!(text.contains(from), "{from}");
+        let bad = dir.join("bad.json");
+        std::fs::write(&bad, text.replace(from, to)).unwrap();
+        let o = gustkit()
+            .args(["gafs", bad.to_str().unwrap(), "--out", "/dev/null"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains(needle),
+            "{needle}: {err}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

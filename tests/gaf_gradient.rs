@@ -11,7 +11,11 @@ use std::path::Path;
 
 /// The AGARD study with a coarser box layout and fewer frequencies, to keep the test quick.
 fn study() -> Study {
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/studies/agard445_dlm.json")).unwrap();
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/studies/agard445_dlm.json"
+    ))
+    .unwrap();
     let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
     v["aero"]["fidelity"]["dlm"]["n_chord"] = 5.into();
     v["aero"]["fidelity"]["dlm"]["n_span"] = 6.into();
@@ -28,8 +32,16 @@ fn seed(nk: usize, nm: usize) -> GafTable {
         b_ref: 1.0,
         x_ref: 0.0,
         k: vec![0.0; nk],
-        q_ss: (0..nk).map(|_| (0..nm).map(|_| (0..nm).map(|_| it.next().unwrap()).collect()).collect()).collect(),
-        q_gs: (0..nk).map(|_| (0..nm).map(|_| it.next().unwrap()).collect()).collect(),
+        q_ss: (0..nk)
+            .map(|_| {
+                (0..nm)
+                    .map(|_| (0..nm).map(|_| it.next().unwrap()).collect())
+                    .collect()
+            })
+            .collect(),
+        q_gs: (0..nk)
+            .map(|_| (0..nm).map(|_| it.next().unwrap()).collect())
+            .collect(),
     }
 }
 
@@ -73,7 +85,13 @@ fn gaf_functional_gradient_matches_finite_differences() {
     let f = |x: &[f64]| functional(&study, &sd, x);
     for k in [9, 44, 95, n, n + 1, n + 2, n + 3] {
         let rep = fd_check(&f, &x0, k, g[k], g[k].abs().max(1e-3 * gnorm));
-        println!("{}: adjoint {:+.10e} fd {:+.10e} rel err {:.1e}", DesignVector::from_slice(&x0).name(k), g[k], rep.best, rep.best_rel_error);
+        println!(
+            "{}: adjoint {:+.10e} fd {:+.10e} rel err {:.1e}",
+            DesignVector::from_slice(&x0).name(k),
+            g[k],
+            rep.best,
+            rep.best_rel_error
+        );
         assert!(rep.best_rel_error < 1e-6, "dv {k}: {rep:?}");
     }
 }

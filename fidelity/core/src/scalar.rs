@@ -35,6 +35,10 @@ pub trait Scalar:
     fn sqrt(self) -> Self;
     fn sin(self) -> Self;
     fn cos(self) -> Self;
+    /// (sin, cos) in one call.
+    fn sin_cos(self) -> (Self, Self) {
+        (self.sin(), self.cos())
+    }
     fn tan(self) -> Self;
     fn atan2(self, x: Self) -> Self;
     fn powi(self, n: i32) -> Self;
@@ -80,6 +84,10 @@ impl Scalar for f64 {
     #[inline]
     fn tan(self) -> Self {
         f64::tan(self)
+    }
+    #[inline]
+    fn sin_cos(self) -> (Self, Self) {
+        f64::sin_cos(self)
     }
     #[inline]
     fn atan2(self, x: Self) -> Self {

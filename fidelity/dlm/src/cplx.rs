@@ -23,10 +23,8 @@ impl<S: Scalar> Cplx<S> {
     }
     /// exp(-i θ) for real θ.
     pub fn expi_neg(theta: S) -> Self {
-        Self {
-            re: theta.cos(),
-            im: -theta.sin(),
-        }
+        let (s, c) = theta.sin_cos();
+        Self { re: c, im: -s }
     }
     pub fn scale(self, s: S) -> Self {
         Self {

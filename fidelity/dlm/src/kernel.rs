@@ -45,11 +45,12 @@ fn integrals_nonneg<S: Scalar>(u1: S, k1: S) -> (Cplx<S>, Cplx<S>) {
     let mut p = 2.0 * DESMARAIS_B;
     for a in DESMARAIS_A {
         let den = k2 + p * p;
-        let w = q * a / den;
+        let inv = S::one() / den;
+        let w = q * inv * a;
         // ∫ e^{−(p + i k1) u} = e^{−(p+ik1)u1}/(p + i k1): (p − i k1)/(p² + k1²)
         i0 = i0 + Cplx::new(w * p, -(w * k1));
         // second moment for I2
-        let wd = w / den;
+        let wd = w * inv;
         j0 = j0
             + Cplx::new(
                 wd * (S::cst(p * p) - k2 + u1 * den * p),
