@@ -2,7 +2,7 @@
 
 use gustkit::structure::modal;
 use gustkit::study::{AeroModel, Study};
-use gustkit_core::{Aerodynamics, ModalSurface};
+use gustkit_core::ModalSurface;
 use num_complex::Complex64 as C;
 use std::path::Path;
 
