@@ -84,3 +84,6 @@ impl ModeTransfer {
         self.sampler.sample_vjp(model, &zero, &seed).0
     }
 }
+
+#[cfg(test)]
+mod tests;

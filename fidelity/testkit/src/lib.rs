@@ -204,3 +204,227 @@ pub mod bessel {
         }
     }
 }
+
+/// A fake aerodynamic model with closed-form GAFs and an exact reverse mode, for testing code that
+/// consumes the [`gustkit_core::Aerodynamics`] trait without a real solver.
+///
+/// With h_m(p) = n_p · u_m(p) and s_m(p) = n_p · ∂u_m/∂x(p) at the surface points p (weights w_p),
+///   Q_ss\[m\]\[n\](k) = Σ_p w_p h_m(p) [(a0 + i a1 k) s_n(p) + (i b1 k − b2 k²) h_n(p)],
+///   Q_gs\[m\](k)     = Σ_p w_p h_m(p) g0 e^{−i k (x_p − x_ref)/b_ref},
+/// a quasi-steady strip-like model: stiffness from slopes, damping and apparent mass from motion.
+pub mod fake {
+    use gustkit_core::{
+        check_reduced_frequencies, AeroError, AeroSurface, Aerodynamics, FlightCondition,
+        GafGradient, GafTable, ModalSurface,
+    };
+    use num_complex::Complex64 as C;
+
+    /// See the module documentation.
+    pub struct FakeAero {
+        pub surface: AeroSurface,
+        pub weights: Vec<f64>,
+        pub a0: f64,
+        pub a1: f64,
+        pub b1: f64,
+        pub b2: f64,
+        pub g0: f64,
+    }
+
+    fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+        a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    }
+
+    impl FakeAero {
+        fn terms(&self, k: f64, x: f64, f: &FlightCondition) -> (C, C, C) {
+            let i = C::new(0.0, 1.0);
+            (
+                C::new(self.a0, 0.0) + i * (self.a1 * k),
+                i * (self.b1 * k) - self.b2 * k * k,
+                self.g0 * (-i * k * (x - f.x_ref) / f.b_ref).exp(),
+            )
+        }
+    }
+
+    impl Aerodynamics for FakeAero {
+        fn surface(&self) -> &AeroSurface {
+            &self.surface
+        }
+        fn geometry_names(&self) -> Vec<String> {
+            Vec::new()
+        }
+        fn gafs(
+            &self,
+            f: &FlightCondition,
+            modes: &ModalSurface,
+            k: &[f64],
+        ) -> Result<GafTable, AeroError> {
+            check_reduced_frequencies(k)?;
+            modes.check(self.surface.points.len())?;
+            let nm = modes.n_modes();
+            let mut t = GafTable::zeros(f, k, nm);
+            for (ik, &kk) in k.iter().enumerate() {
+                for (p, (&w, nrm)) in self.weights.iter().zip(&self.surface.normals).enumerate() {
+                    let (cs, ch, cg) = self.terms(kk, self.surface.points[p][0], f);
+                    for m in 0..nm {
+                        let hm = dot(*nrm, modes.disp[m][p]) * w;
+                        for n in 0..nm {
+                            let (hn, sn) =
+                                (dot(*nrm, modes.disp[n][p]), dot(*nrm, modes.disp_x[n][p]));
+                            t.q_ss[ik][m][n] += hm * (cs * sn + ch * hn);
+                        }
+                        t.q_gs[ik][m] += hm * cg;
+                    }
+                }
+            }
+            Ok(t)
+        }
+        fn gafs_vjp(
+            &self,
+            f: &FlightCondition,
+            modes: &ModalSurface,
+            k: &[f64],
+            seed: &GafTable,
+        ) -> Result<GafGradient, AeroError> {
+            check_reduced_frequencies(k)?;
+            modes.check(self.surface.points.len())?;
+            let nm = modes.n_modes();
+            let mut g = GafGradient {
+                modes: ModalSurface::zeros(nm, self.surface.points.len()),
+                geometry: Vec::new(),
+            };
+            for (ik, &kk) in k.iter().enumerate() {
+                for (p, (&w, nrm)) in self.weights.iter().zip(&self.surface.normals).enumerate() {
+                    let (cs, ch, cg) = self.terms(kk, self.surface.points[p][0], f);
+                    for m in 0..nm {
+                        let hm = dot(*nrm, modes.disp[m][p]);
+                        // ∂J/∂h_m: Re Σ_n conj(Q̄_mn) w (cs s_n + ch h_n) + Re conj(Q̄_gs,m) w cg
+                        let mut dhm = (seed.q_gs[ik][m].conj() * cg).re * w;
+                        for n in 0..nm {
+                            let (hn, sn) =
+                                (dot(*nrm, modes.disp[n][p]), dot(*nrm, modes.disp_x[n][p]));
+                            let qb = seed.q_ss[ik][m][n].conj();
+                            dhm += (qb * (cs * sn + ch * hn)).re * w;
+                            // ∂J/∂h_n and ∂J/∂s_n from this (m, n) term
+                            let dhn = (qb * ch).re * w * hm;
+                            let dsn = (qb * cs).re * w * hm;
+                            for a in 0..3 {
+                                g.modes.disp[n][p][a] += dhn * nrm[a];
+                                g.modes.disp_x[n][p][a] += dsn * nrm[a];
+                            }
+                        }
+                        for a in 0..3 {
+                            g.modes.disp[m][p][a] += dhm * nrm[a];
+                        }
+                    }
+                }
+            }
+            Ok(g)
+        }
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+        use crate::rand_vec;
+
+        /// The fake model's reverse mode against its exact forward product: GAFs are bilinear in
+        /// the shapes, so the central difference with a unit step is exact.
+        #[test]
+        fn fake_model_dot_product_test() {
+            let np = 7;
+            let r = rand_vec(10 * np, 4);
+            let surface = AeroSurface {
+                points: (0..np).map(|p| [r[p], r[np + p], 0.0]).collect(),
+                normals: (0..np).map(|_| [0.0, 0.0, 1.0]).collect(),
+            };
+            let fake = FakeAero {
+                surface,
+                weights: r[2 * np..3 * np].to_vec(),
+                a0: 6.0,
+                a1: 1.5,
+                b1: 3.0,
+                b2: 0.7,
+                g0: 5.0,
+            };
+            let f = FlightCondition {
+                mach: 0.3,
+                velocity: 50.0,
+                density: 1.2,
+                b_ref: 0.4,
+                x_ref: 0.1,
+            };
+            let k = [0.0, 0.4, 1.3];
+            let shapes = |s: u64| {
+                let v = rand_vec(2 * 3 * np * 3, s);
+                let mut m = ModalSurface::zeros(3, np);
+                for (i, x) in m
+                    .disp
+                    .iter_mut()
+                    .chain(m.disp_x.iter_mut())
+                    .flatten()
+                    .flatten()
+                    .enumerate()
+                {
+                    *x = v[i];
+                }
+                m
+            };
+            let (m0, dm) = (shapes(1), shapes(2));
+            let mut seed = GafTable::zeros(&f, &k, 3);
+            let sv = rand_vec(2 * 3 * 12, 3);
+            let mut it = sv.chunks(2).map(|c| C::new(c[0], c[1]));
+            for ik in 0..3 {
+                for m in 0..3 {
+                    for n in 0..3 {
+                        seed.q_ss[ik][m][n] = it.next().unwrap();
+                    }
+                    seed.q_gs[ik][m] = it.next().unwrap();
+                }
+            }
+            let pair = |t: &GafTable| -> f64 {
+                let mut s = 0.0;
+                for ik in 0..3 {
+                    for m in 0..3 {
+                        for n in 0..3 {
+                            s += (seed.q_ss[ik][m][n].conj() * t.q_ss[ik][m][n]).re;
+                        }
+                        s += (seed.q_gs[ik][m].conj() * t.q_gs[ik][m]).re;
+                    }
+                }
+                s
+            };
+            let shift = |s: f64| {
+                let mut m = m0.clone();
+                for (a, b) in m
+                    .disp
+                    .iter_mut()
+                    .chain(m.disp_x.iter_mut())
+                    .flatten()
+                    .flatten()
+                    .zip(dm.disp.iter().chain(&dm.disp_x).flatten().flatten())
+                {
+                    *a += s * b;
+                }
+                m
+            };
+            let forward = 0.5
+                * (pair(&fake.gafs(&f, &shift(1.0), &k).unwrap())
+                    - pair(&fake.gafs(&f, &shift(-1.0), &k).unwrap()));
+            let g = fake.gafs_vjp(&f, &m0, &k, &seed).unwrap();
+            let reverse: f64 = g
+                .modes
+                .disp
+                .iter()
+                .chain(&g.modes.disp_x)
+                .flatten()
+                .flatten()
+                .zip(dm.disp.iter().chain(&dm.disp_x).flatten().flatten())
+                .map(|(a, b)| a * b)
+                .sum();
+            assert!(
+                (forward - reverse).abs() < 1e-12 * forward.abs(),
+                "{forward} {reverse}"
+            );
+        }
+    }
+}
