@@ -1,0 +1,11 @@
+//! Stochastic gust response: turbulence spectra, GAF interpolation in k, the modal frequency
+//! response of paper Eq. 16, PSD (Eq. 17), RMS and zero-crossing rate (Eq. 18), and their adjoint.
+
+pub mod interp;
+pub mod psd;
+pub mod response;
+
+pub use psd::Turbulence;
+pub use response::{
+    rms_vjp, solve, FrequencyGrid, GustError, GustGradient, GustProblem, GustResponse,
+};

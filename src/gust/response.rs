@@ -1,0 +1,335 @@
+//! Stochastic gust response, paper Eqs. 16–18, and its reverse mode.
+//!
+//! For each ω of a grid: k = ω b_ref / U, GAFs spline-interpolated in k, and
+//!   [−ω² M̄ + iω C̄ + K̄ − q_inf Q_ss(ik)] η = q_inf Q_gs(ik)               (Eq. 16, per unit w_g/U)
+//!   H_y(ω) = Sᵀ η / U  (response per unit gust velocity),   PSD_y = |H_y|² Φ_w(ω)   (Eq. 17)
+//!   RMS_y = √(∫ PSD_y dω),   N0_y = (1/2π) √(∫ ω² PSD_y dω / ∫ PSD_y dω)          (Eq. 18)
+//! with mass-normalized modes (M̄ = I, K̄ = diag ω_n², C̄ = diag 2ζω_n) and the trapezoidal rule on
+//! the grid.
+//!
+//! Reverse mode (conjugate convention of gustkit_core::aero): for J = Σ_y RMS̄_y RMS_y,
+//!   H̄_j = RMS̄ w_j Φ_j H_j / RMS,  η̄ = S H̄ / U,  solve Aᴴ λ = η̄,
+//!   Q̄_gs(ω) = q λ,  Q̄_ss(ω) = q λ ηᴴ,  ω̄²_n,m = Re(−conj(λ_m) η_m (1 + iω ζ/ω_n,m)),
+//!   S̄ = Re(conj(H̄) η) / U,
+//! and the table seeds are the transposed spline weights applied to Q̄(ω).
+
+use super::interp::SplineWeights;
+use super::psd::Turbulence;
+use faer::linalg::solvers::Solve;
+use faer::{c64, Mat};
+use gustkit_core::GafTable;
+use rayon::prelude::*;
+
+/// Why a gust response cannot be computed.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum GustError {
+    #[error("{0}")]
+    Input(String),
+    #[error(
+        "the frequency grid ends at {omega_max:.3} rad/s and leaves {fraction:.2e} of the gust variance out (limit {limit:.0e}): extend the GAF reduced frequencies or the grid"
+    )]
+    GridTooShort {
+        omega_max: f64,
+        fraction: f64,
+        limit: f64,
+    },
+    #[error("the aeroelastic system is singular at {omega:.4} rad/s")]
+    Singular { omega: f64 },
+}
+
+/// A frequency grid with trapezoidal weights: ω = 0 followed by `n` log-spaced points on
+/// [ω_min, ω_max].
+#[derive(Clone, Debug)]
+pub struct FrequencyGrid {
+    pub omega: Vec<f64>,
+    pub weights: Vec<f64>,
+}
+
+impl FrequencyGrid {
+    pub fn log(omega_min: f64, omega_max: f64, n: usize) -> Result<Self, GustError> {
+        if !(omega_min > 0.0 && omega_max > omega_min && n >= 2) {
+            return Err(GustError::Input(format!(
+                "frequency grid: need 0 < omega_min < omega_max and at least 2 points (got {omega_min}, {omega_max}, {n})"
+            )));
+        }
+        let r = (omega_max / omega_min).ln();
+        let mut omega = vec![0.0];
+        omega.extend((0..n).map(|i| omega_min * (r * i as f64 / (n - 1) as f64).exp()));
+        let m = omega.len();
+        let mut weights = vec![0.0; m];
+        for i in 0..m - 1 {
+            let h = omega[i + 1] - omega[i];
+            weights[i] += 0.5 * h;
+            weights[i + 1] += 0.5 * h;
+        }
+        Ok(Self { omega, weights })
+    }
+}
+
+/// Everything Eq. 16–18 needs, in SI.
+#[derive(Clone, Debug)]
+pub struct GustProblem<'a> {
+    /// Natural circular frequencies ω_n of the retained (mass-normalized) modes.
+    pub omega_n: Vec<f64>,
+    pub damping_ratio: f64,
+    pub table: &'a GafTable,
+    pub q_inf: f64,
+    pub velocity: f64,
+    pub turbulence: Turbulence,
+    pub grid: FrequencyGrid,
+    /// Output vectors S (one row an output, one column a mode): y = S η.
+    pub outputs: Vec<Vec<f64>>,
+    /// Largest fraction of σ_w² the grid may leave out above its last frequency.
+    pub max_tail: f64,
+}
+
+/// The response: per output, RMS, N0 and the PSD on the grid; per ω, η.
+#[derive(Clone, Debug)]
+pub struct GustResponse {
+    pub rms: Vec<f64>,
+    pub n0: Vec<f64>,
+    pub psd: Vec<Vec<f64>>,
+    pub eta: Vec<Vec<c64>>,
+    h: Vec<Vec<c64>>,
+    lus: Vec<faer::linalg::solvers::PartialPivLu<c64>>,
+}
+
+/// Reverse-mode result of [`rms_vjp`].
+#[derive(Clone, Debug)]
+pub struct GustGradient {
+    /// Seeds on the GAF table (conjugate convention).
+    pub table: GafTable,
+    /// ∂J/∂(ω_n²) per mode.
+    pub lambda: Vec<f64>,
+    /// ∂J/∂S.
+    pub outputs: Vec<Vec<f64>>,
+}
+
+impl<'a> GustProblem<'a> {
+    fn check(&self) -> Result<SplineWeights, GustError> {
+        let nm = self.omega_n.len();
+        if self.table.n_modes() != nm {
+            return Err(GustError::Input(format!(
+                "the GAF table has {} modes, the structure {nm}",
+                self.table.n_modes()
+            )));
+        }
+        if !(self.damping_ratio >= 0.0 && self.damping_ratio < 1.0) {
+            return Err(GustError::Input(format!(
+                "damping_ratio: must lie in [0, 1) (got {})",
+                self.damping_ratio
+            )));
+        }
+        self.turbulence.validate().map_err(GustError::Input)?;
+        if self.outputs.iter().any(|s| s.len() != nm) {
+            return Err(GustError::Input(
+                "outputs: every S vector needs one entry a mode".into(),
+            ));
+        }
+        let omega_max = *self.grid.omega.last().expect("grid has points");
+        let fraction = self.turbulence.tail_fraction(omega_max, self.velocity);
+        if fraction > self.max_tail {
+            return Err(GustError::GridTooShort {
+                omega_max,
+                fraction,
+                limit: self.max_tail,
+            });
+        }
+        let ks: Vec<f64> = self
+            .grid
+            .omega
+            .iter()
+            .map(|w| w * self.table.b_ref / self.velocity)
+            .collect();
+        SplineWeights::new(&self.table.k, &ks).map_err(GustError::Input)
+    }
+
+    /// The aeroelastic matrix A(ω) and right-hand side q Q_gs at grid point j.
+    fn system(&self, w: &[f64], omega: f64) -> (Mat<c64>, Vec<c64>) {
+        let nm = self.omega_n.len();
+        let interp = |f: &dyn Fn(usize) -> c64| -> c64 {
+            w.iter().enumerate().map(|(i, wi)| f(i) * *wi).sum()
+        };
+        let a = Mat::<c64>::from_fn(nm, nm, |m, n| {
+            let q = interp(&|i| self.table.q_ss[i][m][n]);
+            let mut v = -q * self.q_inf;
+            if m == n {
+                let wn = self.omega_n[m];
+                v += c64::new(
+                    wn * wn - omega * omega,
+                    2.0 * self.damping_ratio * wn * omega,
+                );
+            }
+            v
+        });
+        let g = (0..nm)
+            .map(|m| interp(&|i| self.table.q_gs[i][m]) * self.q_inf)
+            .collect();
+        (a, g)
+    }
+}
+
+/// Solves Eqs. 16–18 on the grid.
+pub fn solve(p: &GustProblem) -> Result<GustResponse, GustError> {
+    let weights = p.check()?;
+    let nm = p.omega_n.len();
+    let per: Vec<(Vec<c64>, faer::linalg::solvers::PartialPivLu<c64>)> = p
+        .grid
+        .omega
+        .par_iter()
+        .zip(&weights.weights)
+        .map(|(&omega, w)| {
+            let (a, g) = p.system(w, omega);
+            let lu = a.partial_piv_lu();
+            let rhs = Mat::<c64>::from_fn(nm, 1, |i, _| g[i]);
+            let eta = lu.solve(&rhs);
+            let eta: Vec<c64> = (0..nm).map(|i| eta[(i, 0)]).collect();
+            if eta.iter().any(|v| !(v.re.is_finite() && v.im.is_finite())) {
+                return Err(GustError::Singular { omega });
+            }
+            Ok((eta, lu))
+        })
+        .collect::<Result<_, _>>()?;
+    let (eta, lus): (Vec<_>, Vec<_>) = per.into_iter().unzip();
+    let mut rms = Vec::new();
+    let mut n0 = Vec::new();
+    let mut psd = Vec::new();
+    let mut h = Vec::new();
+    for s in &p.outputs {
+        let hy: Vec<c64> = eta
+            .iter()
+            .map(|e| e.iter().zip(s).map(|(a, b)| a * b).sum::<c64>() / p.velocity)
+            .collect();
+        let py: Vec<f64> = hy
+            .iter()
+            .zip(&p.grid.omega)
+            .map(|(hv, &w)| hv.norm_sqr() * p.turbulence.psd(w, p.velocity))
+            .collect();
+        let m0: f64 = py.iter().zip(&p.grid.weights).map(|(a, b)| a * b).sum();
+        let m2: f64 = py
+            .iter()
+            .zip(&p.grid.weights)
+            .zip(&p.grid.omega)
+            .map(|((a, b), w)| a * b * w * w)
+            .sum();
+        rms.push(m0.sqrt());
+        n0.push((m2 / m0).sqrt() / (2.0 * std::f64::consts::PI));
+        psd.push(py);
+        h.push(hy);
+    }
+    Ok(GustResponse {
+        rms,
+        n0,
+        psd,
+        eta,
+        h,
+        lus,
+    })
+}
+
+/// Reverse mode of the RMS values: seeds `rms_bar` (one per output).
+pub fn rms_vjp(
+    p: &GustProblem,
+    r: &GustResponse,
+    rms_bar: &[f64],
+) -> Result<GustGradient, GustError> {
+    let weights = p.check()?;
+    let nm = p.omega_n.len();
+    let nk = p.table.k.len();
+    let flight_like = gustkit_core::FlightCondition {
+        mach: p.table.mach,
+        velocity: p.velocity,
+        density: 1.0,
+        b_ref: p.table.b_ref,
+        x_ref: p.table.x_ref,
+    };
+    let mut table = GafTable::zeros(&flight_like, &p.table.k, nm);
+    let mut lambda = vec![0.0; nm];
+    let mut outputs = vec![vec![0.0; nm]; p.outputs.len()];
+    for (j, &omega) in p.grid.omega.iter().enumerate() {
+        let phi = p.turbulence.psd(omega, p.velocity);
+        // η̄ = Σ_y S_y H̄_y / U
+        let mut eta_bar = vec![c64::new(0.0, 0.0); nm];
+        for (y, s) in p.outputs.iter().enumerate() {
+            if rms_bar[y] == 0.0 || r.rms[y] == 0.0 {
+                continue;
+            }
+            let hbar = r.h[y][j] * (rms_bar[y] * p.grid.weights[j] * phi / r.rms[y]);
+            for m in 0..nm {
+                eta_bar[m] += hbar * (s[m] / p.velocity);
+                outputs[y][m] += (hbar.conj() * r.eta[j][m]).re / p.velocity;
+            }
+        }
+        let mut lam = Mat::<c64>::from_fn(nm, 1, |i, _| eta_bar[i]);
+        r.lus[j].solve_adjoint_in_place(lam.as_mut());
+        let eta = &r.eta[j];
+        for m in 0..nm {
+            let l = lam[(m, 0)];
+            // Ā_mn = −λ_m conj(η_n); Q̄_ss = −q Ā = q λ_m conj(η_n); Q̄_gs = q λ
+            let wn = p.omega_n[m];
+            let dadl = c64::new(1.0, omega * p.damping_ratio / wn);
+            lambda[m] += (-(l * eta[m].conj()).conj() * dadl).re;
+            for (i, wi) in weights.weights[j].iter().enumerate() {
+                if *wi == 0.0 {
+                    continue;
+                }
+                table.q_gs[i][m] += l * (p.q_inf * wi);
+                for n in 0..nm {
+                    table.q_ss[i][m][n] += l * eta[n].conj() * (p.q_inf * wi);
+                }
+            }
+        }
+    }
+    debug_assert_eq!(table.k.len(), nk);
+    Ok(GustGradient {
+        table,
+        lambda,
+        outputs,
+    })
+}
+
+/// Forward mode of the RMS values along perturbations of the GAF table, of ω_n² and of S.
+pub fn rms_jvp(
+    p: &GustProblem,
+    r: &GustResponse,
+    d_table: &GafTable,
+    d_lambda: &[f64],
+    d_outputs: &[Vec<f64>],
+) -> Result<Vec<f64>, GustError> {
+    let weights = p.check()?;
+    let nm = p.omega_n.len();
+    let mut d_ms = vec![0.0; p.outputs.len()];
+    for (j, &omega) in p.grid.omega.iter().enumerate() {
+        let w = &weights.weights[j];
+        let interp = |f: &dyn Fn(usize) -> c64| -> c64 {
+            w.iter().enumerate().map(|(i, wi)| f(i) * *wi).sum()
+        };
+        let eta = &r.eta[j];
+        // dA η and q dQ_gs
+        let rhs = Mat::<c64>::from_fn(nm, 1, |m, _| {
+            let mut v = interp(&|i| d_table.q_gs[i][m]) * p.q_inf;
+            for n in 0..nm {
+                v += interp(&|i| d_table.q_ss[i][m][n]) * p.q_inf * eta[n];
+            }
+            let wn = p.omega_n[m];
+            v - c64::new(1.0, omega * p.damping_ratio / wn) * d_lambda[m] * eta[m]
+        });
+        let deta = r.lus[j].solve(&rhs);
+        let phi = p.turbulence.psd(omega, p.velocity);
+        for (y, s) in p.outputs.iter().enumerate() {
+            let dh: c64 = (0..nm)
+                .map(|m| deta[(m, 0)] * s[m] + eta[m] * d_outputs[y][m])
+                .sum::<c64>()
+                / p.velocity;
+            d_ms[y] += p.grid.weights[j] * phi * 2.0 * (r.h[y][j].conj() * dh).re;
+        }
+    }
+    Ok(d_ms
+        .iter()
+        .zip(&r.rms)
+        .map(|(d, rms)| d / (2.0 * rms))
+        .collect())
+}
+
+#[cfg(test)]
+mod tests;
