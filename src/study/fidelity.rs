@@ -75,8 +75,13 @@ impl AeroModel {
             match &aero.fidelity {
                 FidelitySpec::Dlm(spec) => {
                     let (surface, jac) = dlm_surface(planform, spec);
-                    let dlm = Dlm::new(vec![surface], spec.symmetry)
+                    let mut dlm = Dlm::new(vec![surface], spec.symmetry)
                         .map_err(|e| study.err("aero.fidelity.dlm", e.to_string()))?;
+                    // only the parameters the planform moves need reverse-mode work
+                    let active: Vec<usize> = (0..jac.len())
+                        .filter(|&i| jac[i].iter().any(|v| *v != 0.0))
+                        .collect();
+                    dlm.set_active_geometry(0, &active);
                     let pts = dlm
                         .parametric_points()
                         .into_iter()

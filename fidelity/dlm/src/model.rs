@@ -53,6 +53,8 @@ pub struct Dlm {
     /// Boxes of all surfaces in order.
     pub boxes: Vec<AeroBox<f64>>,
     surface: AeroSurface,
+    /// Geometry parameters differentiated by the reverse mode, per surface.
+    active: Vec<Vec<usize>>,
 }
 
 /// Number of geometry parameters of one surface.
@@ -86,6 +88,7 @@ impl Dlm {
         }
         debug_assert_eq!(surface.points.len(), 2 * n);
         Ok(Self {
+            active: vec![(0..NQ).collect(); surfaces.len()],
             surfaces,
             symmetry,
             boxes,
@@ -234,7 +237,74 @@ impl Dlm {
     }
 }
 
+/// Quantities held fixed while ℒ is differentiated with respect to the geometry.
+struct Frozen<'a> {
+    c: &'a Mat<c64>,
+    lam: &'a Mat<c64>,
+    lc: &'a Mat<c64>,
+    qbar: &'a Mat<c64>,
+    kd: f64,
+    flight: &'a FlightCondition,
+    modes: &'a ModalSurface,
+}
+
 impl Dlm {
+    /// Restricts the geometry gradient of surface `surface` to the listed parameters (indices into
+    /// [`crate::geometry::SURFACE_PARAMS`]); the others are reported as zero. Callers that chain
+    /// through a few design variables save most of the reverse-mode cost this way.
+    pub fn set_active_geometry(&mut self, surface: usize, params: &[usize]) {
+        self.active[surface] = params.iter().copied().filter(|&p| p < NQ).collect();
+    }
+
+    /// ∂ℒ/∂q for up to N parameters of surface `si`, ℒ = Re[Σ conj(Q̄) Hᵀ A c + Σ conj(λ)(W − D c)].
+    fn geometry_lagrangian<const N: usize>(
+        &self,
+        si: usize,
+        params: &[usize],
+        f: &Frozen,
+    ) -> [f64; N] {
+        let n = self.n_boxes();
+        let nm = f.modes.n_modes();
+        let boxes: Vec<AeroBox<Dual<N>>> = self
+            .surfaces
+            .iter()
+            .enumerate()
+            .flat_map(|(sj, s)| {
+                let q = s.params();
+                let qd: [Dual<N>; NQ] = std::array::from_fn(|i| {
+                    match params.iter().position(|&p| p == i).filter(|_| sj == si) {
+                        Some(lane) => Dual::var(q[i], lane),
+                        None => Dual::cst(q[i]),
+                    }
+                });
+                surface_boxes(s, qd)
+            })
+            .collect();
+        let d = self.influence_matrix(&boxes, f.flight.mach, f.kd);
+        let w = Self::normalwash(&boxes, f.modes, f.kd, f.flight.x_ref);
+        let hw = Self::force_weights(&boxes, f.modes);
+        let mut lag = Dual::<N>::cst(0.0);
+        for col in 0..=nm {
+            for j in 0..n {
+                let cj = f.c[(j, col)];
+                for m in 0..nm {
+                    lag += hw[m][j] * (f.qbar[(m, col)].conj() * cj).re;
+                }
+                let lj = f.lam[(j, col)];
+                lag += w[col][j].re * lj.re + w[col][j].im * lj.im;
+            }
+        }
+        // − Re Σ_ji conj(λ_j) D_ji c_i = − Re Σ_ji D_ji lc_ji
+        for j in 0..n {
+            for i in 0..n {
+                let dji = d[j * n + i];
+                let l = f.lc[(j, i)];
+                lag -= dji.re * l.re - dji.im * l.im;
+            }
+        }
+        lag.d
+    }
+
     /// Forward mode with respect to the geometry parameters ([`Aerodynamics::geometry_names`]):
     /// dQ along `dq`, from the tangent equation dc = D⁻¹ (dW − dD c) with dD, dW and the force
     /// weights differentiated by dual numbers through the box geometry.
@@ -426,46 +496,28 @@ impl Aerodynamics for Dlm {
                         }
                     }
                 }
-                // geometry: ℒ(q) = Re[Σ conj(Q̄) Hᵀ A c + Σ conj(λ)(W − D c)] with c, λ frozen
-                for (si, spec) in self.surfaces.iter().enumerate() {
-                    let q = spec.params();
-                    let qd: [Dual<NQ>; NQ] = std::array::from_fn(|i| Dual::var(q[i], i));
-                    let boxes: Vec<AeroBox<Dual<NQ>>> = self
-                        .surfaces
-                        .iter()
-                        .enumerate()
-                        .flat_map(|(sj, s)| {
-                            if sj == si {
-                                surface_boxes(s, qd)
-                            } else {
-                                surface_boxes(s, s.params().map(Dual::cst))
-                            }
-                        })
-                        .collect();
-                    let d = self.influence_matrix(&boxes, flight.mach, kd);
-                    let w = Self::normalwash(&boxes, modes, kd, flight.x_ref);
-                    let hw = Self::force_weights(&boxes, modes);
-                    let mut lag = Dual::<NQ>::cst(0.0);
-                    for col in 0..=nm {
-                        for j in 0..n {
-                            let cj = c[(j, col)];
-                            let lj = lam[(j, col)];
-                            // Re(conj(Q̄_m,col) h_jm A_j c_j,col) summed over m
-                            for m in 0..nm {
-                                lag += hw[m][j] * (qbar(m, col).conj() * cj).re;
-                            }
-                            // Re(conj(λ_j) (W_j − Σ_i D_ji c_i))
-                            let mut r = w[col][j];
-                            for i in 0..n {
-                                let ci =
-                                    Cplx::new(Dual::cst(c[(i, col)].re), Dual::cst(c[(i, col)].im));
-                                r = r - d[j * n + i] * ci;
-                            }
-                            lag += r.re * lj.re + r.im * lj.im;
+                // geometry: ℒ(q) = Re[Σ conj(Q̄) Hᵀ A c + Σ conj(λ)(W − D c)] with c, λ frozen,
+                // differentiated by duals along the active parameters, four at a time
+                let qbar_mat = Mat::<c64>::from_fn(nm, nm + 1, |m, col| qbar(m, col));
+                // Σ_col conj(λ_j,col) c_i,col: the weights of D_ji in ℒ
+                let lc = Mat::<c64>::from_fn(n, n, |j, i| {
+                    (0..=nm).map(|col| lam[(j, col)].conj() * c[(i, col)]).sum()
+                });
+                let frozen = Frozen {
+                    c: &c,
+                    lam: &lam,
+                    lc: &lc,
+                    qbar: &qbar_mat,
+                    kd,
+                    flight,
+                    modes,
+                };
+                for (si, active) in self.active.iter().enumerate() {
+                    for chunk in active.chunks(4) {
+                        let d = self.geometry_lagrangian::<4>(si, chunk, &frozen);
+                        for (p, &param) in chunk.iter().enumerate() {
+                            g.geometry[si * NQ + param] += d[p];
                         }
-                    }
-                    for p in 0..NQ {
-                        g.geometry[si * NQ + p] += lag.d[p];
                     }
                 }
                 Ok(g)
