@@ -498,7 +498,7 @@ impl Aerodynamics for Dlm {
                 }
                 // geometry: ℒ(q) = Re[Σ conj(Q̄) Hᵀ A c + Σ conj(λ)(W − D c)] with c, λ frozen,
                 // differentiated by duals along the active parameters, four at a time
-                let qbar_mat = Mat::<c64>::from_fn(nm, nm + 1, |m, col| qbar(m, col));
+                let qbar_mat = Mat::<c64>::from_fn(nm, nm + 1, qbar);
                 // Σ_col conj(λ_j,col) c_i,col: the weights of D_ji in ℒ
                 let lc = Mat::<c64>::from_fn(n, n, |j, i| {
                     (0..=nm).map(|col| lam[(j, col)].conj() * c[(i, col)]).sum()
