@@ -5,6 +5,7 @@
 
 pub mod cli;
 pub mod gust;
+pub mod pipeline;
 pub mod report;
 pub mod structure;
 pub mod study;

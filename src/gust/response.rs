@@ -84,7 +84,7 @@ pub struct GustProblem<'a> {
 }
 
 /// The response: per output, RMS, N0 and the PSD on the grid; per ω, η.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct GustResponse {
     pub rms: Vec<f64>,
     pub n0: Vec<f64>,

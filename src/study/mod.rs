@@ -10,8 +10,8 @@ mod schema;
 
 pub use fidelity::AeroModel;
 pub use schema::{
-    AeroSpec, AirfoilSpec, ClampSpec, DlmSpec, FidelitySpec, FlightSpec, LengthUnit, MaterialSpec,
-    MeshSpec, StructureSpec, StudyFile, WingSpec,
+    AeroSpec, AirfoilSpec, ClampSpec, DlmSpec, FidelitySpec, FlightSpec, GustSpec, LengthUnit,
+    MaterialSpec, MeshSpec, OutputSpec, StructureSpec, StudyFile, WingSpec,
 };
 
 use crate::structure::{airfoil_thickness, Clamp, Orthotropic, PlateMesh, PlateModel};
@@ -124,7 +124,78 @@ impl Study {
                 .map_err(|e| self.err("aero.reduced_frequencies", e.to_string()))?;
             AeroModel::new(self, &plate)?;
         }
+        if self.spec.gust.is_some() {
+            self.gust_settings()?;
+        }
         Ok(())
+    }
+
+    /// The gust settings in SI, checked.
+    pub fn gust_settings(&self) -> Result<crate::pipeline::GustSettings, StudyError> {
+        let g = self
+            .spec
+            .gust
+            .as_ref()
+            .ok_or_else(|| self.err("gust", "missing: the study has no gust analysis"))?;
+        if self.spec.aero.is_none() {
+            return Err(self.err(
+                "aero",
+                "missing: the gust analysis needs an aerodynamic model",
+            ));
+        }
+        g.turbulence.validate().map_err(|e| {
+            let (field, reason) = e.split_once(": ").unwrap_or(("", &e));
+            self.err(&format!("gust.turbulence.{field}"), reason)
+        })?;
+        if !(g.omega_min_rad_s > 0.0 && g.omega_min_rad_s.is_finite()) {
+            return Err(self.err(
+                "gust.omega_min_rad_s",
+                format!("must be positive (got {})", g.omega_min_rad_s),
+            ));
+        }
+        if g.points < 10 {
+            return Err(self.err(
+                "gust.points",
+                format!("need at least 10 grid points (got {})", g.points),
+            ));
+        }
+        if !(g.max_tail > 0.0 && g.max_tail <= 0.1) {
+            return Err(self.err(
+                "gust.max_tail",
+                format!("must lie in (0, 0.1] (got {})", g.max_tail),
+            ));
+        }
+        if g.outputs.is_empty() {
+            return Err(self.err("gust.outputs", "at least one output is needed"));
+        }
+        for (i, o) in g.outputs.iter().enumerate() {
+            if !o.point.iter().all(|v| (0.0..=1.0).contains(v)) {
+                return Err(self.err(
+                    &format!("gust.outputs[{i}].point"),
+                    format!("(ξ, η) must lie in [0, 1]² (got {:?})", o.point),
+                ));
+            }
+            if g.outputs[..i].iter().any(|p| p.name == o.name) {
+                return Err(self.err(
+                    &format!("gust.outputs[{i}].name"),
+                    format!("duplicate output name '{}'", o.name),
+                ));
+            }
+        }
+        Ok(crate::pipeline::GustSettings {
+            turbulence: g.turbulence,
+            omega_min: g.omega_min_rad_s,
+            points: g.points,
+            max_tail: g.max_tail,
+            outputs: g
+                .outputs
+                .iter()
+                .map(|o| crate::pipeline::Output {
+                    name: o.name.clone(),
+                    point: o.point,
+                })
+                .collect(),
+        })
     }
 
     /// The flight condition with the GAF reference values (SI); needs `flight` and `aero`.

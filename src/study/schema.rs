@@ -24,6 +24,47 @@ pub struct StudyFile {
     /// Flight condition.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub flight: Option<FlightSpec>,
+    /// Continuous-turbulence response settings.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gust: Option<GustSpec>,
+}
+
+/// Stochastic gust analysis (paper Eqs. 16–18).
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct GustSpec {
+    /// `{"model": "dryden" | "von_karman", "sigma_w_m_s", "scale_length_m"}` (MIL-F-8785C L_w).
+    pub turbulence: crate::gust::Turbulence,
+    /// Lowest non-zero frequency of the log-spaced grid (the grid also holds ω = 0), rad/s.
+    #[serde(default = "default_omega_min")]
+    pub omega_min_rad_s: f64,
+    /// Points of the log-spaced grid up to the highest reduced frequency of the GAF table.
+    #[serde(default = "default_points")]
+    pub points: usize,
+    /// Largest fraction of the gust variance the grid may leave out above its last frequency.
+    #[serde(default = "default_max_tail")]
+    pub max_tail: f64,
+    /// Response outputs: vertical displacement at plate points (ξ chord fraction, η span fraction).
+    pub outputs: Vec<OutputSpec>,
+}
+
+fn default_omega_min() -> f64 {
+    1e-3
+}
+fn default_points() -> usize {
+    2000
+}
+fn default_max_tail() -> f64 {
+    1e-3
+}
+
+/// A displacement output.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    pub name: String,
+    /// (ξ, η) in [0, 1]²: [1, 1] is the wing-tip trailing edge.
+    pub point: [f64; 2],
 }
 
 /// The aerodynamic model of a study.

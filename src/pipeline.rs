@@ -1,0 +1,208 @@
+//! The forward evaluation design vector → outputs, and its adjoint, stage by stage.
+//!
+//! Forward: x → plate model (mass, area) → modes → transfer → GAFs → gust response (RMS of each
+//! output). Reverse: one sweep back through the same stages; each stage offers the product of its
+//! own Jacobian transpose, and the chain rule lives here only.
+//!
+//! Complex-to-real derivatives (paper Sec. III): the RMS is real while the GAFs, η and H are
+//! complex; every complex seed Q̄ here is ∂J/∂Re Q + i ∂J/∂Im Q, so that dJ = Re(conj(Q̄) dQ).
+//! This is the "flip the sign of the imaginary part" of the paper: the linearization of J with
+//! respect to a complex state z is conj(Q̄)ᵀ, not Q̄ᵀ.
+
+use crate::gust::{self, FrequencyGrid, GustProblem, GustResponse, Turbulence};
+use crate::structure::modal::SAMPLED;
+use crate::structure::{mass_grad, modal, modes_vjp, ModalSeed, Modes, PlateModel, Sampler};
+use crate::study::{AeroModel, Study, StudyError};
+use crate::wing::{DesignVector, N_PLANFORM};
+use anyhow::{Context, Result};
+use gustkit_core::GafTable;
+
+/// A response output: vertical displacement at a point of the plate given in (ξ, η).
+#[derive(Clone, Debug)]
+pub struct Output {
+    pub name: String,
+    pub point: [f64; 2],
+}
+
+/// Gust settings of a study (SI).
+#[derive(Clone, Debug)]
+pub struct GustSettings {
+    pub turbulence: Turbulence,
+    pub omega_min: f64,
+    pub points: usize,
+    pub max_tail: f64,
+    pub outputs: Vec<Output>,
+}
+
+/// One evaluation of the design, with what the adjoint needs.
+pub struct Evaluation {
+    pub x: Vec<f64>,
+    pub mass_kg: f64,
+    pub area_m2: f64,
+    pub freq_hz: Vec<f64>,
+    /// RMS of each output, m.
+    pub rms_m: Vec<f64>,
+    /// Zero-crossing rate of each output, Hz.
+    pub n0_hz: Vec<f64>,
+    pub plate: PlateModel,
+    pub modes: Modes,
+    pub aero: AeroModel,
+    pub table: GafTable,
+    pub grid: FrequencyGrid,
+    pub response: GustResponse,
+    samplers: Vec<Sampler>,
+    outputs_s: Vec<Vec<f64>>,
+    settings: GustSettings,
+}
+
+impl Evaluation {
+    fn problem(&self) -> GustProblem<'_> {
+        GustProblem {
+            omega_n: self.modes.omega(),
+            damping_ratio: self.modes.damping_ratio,
+            table: &self.table,
+            q_inf: self.aero.flight.q_inf(),
+            velocity: self.aero.flight.velocity,
+            turbulence: self.settings.turbulence,
+            grid: self.grid.clone(),
+            outputs: self.outputs_s.clone(),
+            max_tail: self.settings.max_tail,
+        }
+    }
+}
+
+/// Seeds on the outputs for [`gradient`].
+#[derive(Clone, Debug, Default)]
+pub struct OutputSeeds {
+    pub mass: f64,
+    pub area: f64,
+    /// One per gust output (RMS in m).
+    pub rms: Vec<f64>,
+}
+
+/// Evaluates a design of the study.
+pub fn evaluate(study: &Study, settings: &GustSettings, x: &[f64]) -> Result<Evaluation> {
+    let plate = study
+        .model_at(DesignVector::from_slice(x))
+        .map_err(|e: StudyError| anyhow::anyhow!("design: {}", e.reason))?;
+    let st = &study.spec.structure;
+    let modes = modal::solve(&plate, st.modes, st.damping_ratio, &study.mode_fields())
+        .context("modal analysis")?;
+    let aero = AeroModel::new(study, &plate)?;
+    let table = aero
+        .gafs(&plate, &modes)
+        .map_err(|e| anyhow::anyhow!("aerodynamics: {e}"))?;
+    let f = &aero.flight;
+    let omega_max = table.k.last().copied().unwrap_or(0.0) * f.velocity / f.b_ref;
+    let grid = FrequencyGrid::log(settings.omega_min, omega_max, settings.points)?;
+    let samplers: Vec<Sampler> = settings
+        .outputs
+        .iter()
+        .map(|o| Sampler::new(&plate, &[o.point]))
+        .collect();
+    let outputs_s: Vec<Vec<f64>> = samplers
+        .iter()
+        .map(|s| {
+            modes
+                .modes
+                .iter()
+                .map(|m| s.sample(&plate, &m.shape)[0][0])
+                .collect()
+        })
+        .collect();
+    let mut ev = Evaluation {
+        x: x.to_vec(),
+        mass_kg: plate.mass(),
+        area_m2: plate.planform().area(),
+        freq_hz: modes.freq_hz(),
+        rms_m: Vec::new(),
+        n0_hz: Vec::new(),
+        plate,
+        modes,
+        aero,
+        table,
+        grid,
+        response: GustResponse::default(),
+        samplers,
+        outputs_s,
+        settings: settings.clone(),
+    };
+    let response = gust::solve(&ev.problem())?;
+    ev.rms_m = response.rms.clone();
+    ev.n0_hz = response.n0.clone();
+    ev.response = response;
+    Ok(ev)
+}
+
+/// Gradient of Σ seeds · outputs with respect to the design vector, in one reverse sweep.
+pub fn gradient(ev: &Evaluation, seeds: &OutputSeeds) -> Result<Vec<f64>> {
+    let n = ev.x.len();
+    let mut g = vec![0.0; n];
+    // mass and area
+    if seeds.mass != 0.0 {
+        for (gi, mi) in g.iter_mut().zip(mass_grad(&ev.plate)) {
+            *gi += seeds.mass * mi;
+        }
+    }
+    if seeds.area != 0.0 {
+        for (k, a) in ev.plate.planform().area_grad().iter().enumerate() {
+            g[n - N_PLANFORM + k] += seeds.area * a;
+        }
+    }
+    if seeds.rms.iter().all(|s| *s == 0.0) {
+        return Ok(g);
+    }
+    // gust response → GAF table, ω_n², S
+    let gg = gust::rms_vjp(&ev.problem(), &ev.response, &seeds.rms)?;
+    let mut modal_seed = ModalSeed::zeros(&ev.modes);
+    modal_seed.lambda = gg.lambda.clone();
+    let mut p_bar = [0.0; N_PLANFORM];
+    // S = mode deflection at each output point
+    for (y, sampler) in ev.samplers.iter().enumerate() {
+        for (m, mode) in ev.modes.modes.iter().enumerate() {
+            let s = gg.outputs[y][m];
+            if s == 0.0 {
+                continue;
+            }
+            let mut seed = [0.0; SAMPLED];
+            seed[0] = s;
+            let (nodal, pb) = sampler.sample_vjp(&ev.plate, &mode.shape, &[seed]);
+            add_into(&mut modal_seed.shape[m], &nodal);
+            for k in 0..N_PLANFORM {
+                p_bar[k] += pb[k];
+            }
+        }
+    }
+    // GAFs → mode shapes on the aerodynamic surface, aerodynamic geometry, transfer
+    let (shapes, pb) = ev
+        .aero
+        .gafs_vjp(&ev.plate, &ev.modes, &gg.table)
+        .map_err(|e| anyhow::anyhow!("aerodynamics reverse mode: {e}"))?;
+    for (m, s) in shapes.iter().enumerate() {
+        add_into(&mut modal_seed.shape[m], s);
+    }
+    for k in 0..N_PLANFORM {
+        p_bar[k] += pb[k];
+    }
+    // modes → design
+    for (gi, v) in g
+        .iter_mut()
+        .zip(modes_vjp(&ev.plate, &ev.modes, &modal_seed))
+    {
+        *gi += v;
+    }
+    for k in 0..N_PLANFORM {
+        g[n - N_PLANFORM + k] += p_bar[k];
+    }
+    Ok(g)
+}
+
+fn add_into(acc: &mut Vec<f64>, v: &[f64]) {
+    if acc.is_empty() {
+        acc.extend_from_slice(v);
+    } else {
+        for (a, b) in acc.iter_mut().zip(v) {
+            *a += b;
+        }
+    }
+}
