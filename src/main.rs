@@ -55,6 +55,16 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Adjoint gradient of the gust RMS against finite differences (like paper Table 4).
+    CheckGradient {
+        study: PathBuf,
+        /// Design variables to check (t[i], span, sweep_c4, root_chord, tip_chord).
+        #[arg(long = "dv", default_values_t = ["t[9]".to_string(), "sweep_c4".to_string()])]
+        dv: Vec<String>,
+        /// Print the rows as JSON (dv, adjoint, fd, fd_best, rel_error).
+        #[arg(long)]
+        json: bool,
+    },
     /// Time the structural chain (assembly, modes, all sensitivities) of a study.
     Bench {
         study: PathBuf,
@@ -80,6 +90,7 @@ fn main() -> Result<()> {
             k,
             out,
         } => cli::aic(&input, mach, &k, &out),
+        Command::CheckGradient { study, dv, json } => cli::check_gradient(&study, &dv, json),
         Command::Bench { study, repeat } => cli::bench(&study, repeat),
     }
 }

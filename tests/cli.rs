@@ -255,3 +255,46 @@ fn bad_aero_section_names_field() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `gustkit check-gradient --json` prints rows with dv, adjoint, fd_best and rel_error; on a
+/// coarse version of the AGARD study the best step agrees to 6 digits.
+#[test]
+fn check_gradient_json_rows() {
+    let dir = scratch("checkgrad");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(study()).unwrap()).unwrap();
+    v["aero"]["fidelity"]["dlm"]["n_chord"] = 3.into();
+    v["aero"]["fidelity"]["dlm"]["n_span"] = 4.into();
+    v["structure"]["modes"] = 3.into();
+    v["gust"]["points"] = 300.into();
+    let file = dir.join("coarse.json");
+    std::fs::write(&file, v.to_string()).unwrap();
+    let o = gustkit()
+        .args([
+            "check-gradient",
+            file.to_str().unwrap(),
+            "--json",
+            "--dv",
+            "t[0]",
+            "--dv",
+            "span",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let rows = r["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    for row in rows {
+        assert!(row["adjoint"].as_f64().unwrap().is_finite());
+        assert!(row["fd_best"].as_f64().is_some());
+        assert!(row["rel_error"].as_f64().unwrap() < 1e-6, "{row}");
+    }
+    let o = gustkit()
+        .args(["check-gradient", file.to_str().unwrap(), "--dv", "t[999]"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown design variable"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
