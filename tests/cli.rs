@@ -257,7 +257,8 @@ fn bad_aero_section_names_field() {
 }
 
 /// `gustkit check-gradient --json` prints rows with dv, adjoint, fd_best and rel_error; on a
-/// coarse version of the AGARD study the best step agrees to 6 digits.
+/// coarse version of the AGARD study the best plain central difference of the decade steps
+/// agrees to 5 digits (the Richardson-extrapolated check of tests/pipeline_gradient.rs gets 6+).
 #[test]
 fn check_gradient_json_rows() {
     let dir = scratch("checkgrad");
@@ -288,7 +289,7 @@ fn check_gradient_json_rows() {
     for row in rows {
         assert!(row["adjoint"].as_f64().unwrap().is_finite());
         assert!(row["fd_best"].as_f64().is_some());
-        assert!(row["rel_error"].as_f64().unwrap() < 1e-6, "{row}");
+        assert!(row["rel_error"].as_f64().unwrap() < 1e-5, "{row}");
     }
     let o = gustkit()
         .args(["check-gradient", file.to_str().unwrap(), "--dv", "t[999]"])
