@@ -4,6 +4,7 @@
 //! and back again for gradients. See README.md for the architecture.
 
 pub mod cli;
+pub mod flutter;
 pub mod gust;
 pub mod pipeline;
 pub mod report;

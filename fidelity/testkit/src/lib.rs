@@ -161,7 +161,7 @@ pub mod bessel {
             |t| ((n as f64 * t).exp() + sign * (-(n as f64) * t).exp()) * (-x * t.sinh()).exp(),
             0.0,
             upper,
-            200_000,
+            20_000,
         ) / PI;
         a - b
     }

@@ -1,0 +1,266 @@
+//! p-k flutter analysis (as Nastran's PK) from a GAF table.
+//!
+//! At speed V (Mach and density fixed) the modal equations with the aerodynamic matrix split into
+//! its real and imaginary parts at k = ω b_ref / V,
+//!   [p² I + p (C̄ − q (b_ref/V) Q_I(k)/k) + (K̄ − q Q_R(k))] η = 0,   q = ½ ρ V²,
+//! are solved as a real 2n × 2n eigenproblem; for each mode the root whose frequency matches the
+//! k it was evaluated at is found by fixed-point iteration on k. Damping g = 2 Re p / Im p, frequency
+//! Im p / 2π. Flutter is the lowest speed where a mode's g crosses zero upward, refined by the
+//! secant method. Beyond the table's largest k the GAFs are held at that k (only low speeds reach
+//! it, where q is small) and the curve point is flagged.
+
+use crate::gust::interp::SplineWeights;
+use faer::Mat;
+use gustkit_core::GafTable;
+use num_complex::Complex64;
+use serde::Serialize;
+
+/// Why a flutter analysis failed.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum FlutterError {
+    #[error("{0}")]
+    Input(String),
+    #[error("p-k iteration for mode {mode} at V = {velocity:.3} m/s did not converge; k history {history:?}")]
+    NoConvergence {
+        mode: usize,
+        velocity: f64,
+        history: Vec<f64>,
+    },
+    #[error("the eigensolver failed at V = {velocity:.3} m/s")]
+    Eigen { velocity: f64 },
+}
+
+/// Damping and frequency of one mode against speed.
+#[derive(Clone, Debug, Serialize)]
+pub struct ModeCurve {
+    pub mode: usize,
+    pub velocity_m_s: Vec<f64>,
+    pub damping_g: Vec<f64>,
+    pub frequency_hz: Vec<f64>,
+    pub k: Vec<f64>,
+    /// Whether k exceeded the GAF table (aerodynamics held at the largest k).
+    pub extrapolated: Vec<bool>,
+}
+
+/// The result of a p-k sweep.
+#[derive(Clone, Debug, Serialize)]
+pub struct FlutterResult {
+    pub flutter_speed_m_s: Option<f64>,
+    pub flutter_frequency_hz: Option<f64>,
+    pub flutter_mode: Option<usize>,
+    pub curves: Vec<ModeCurve>,
+}
+
+/// The structural and aerodynamic data of a p-k analysis.
+pub struct PkProblem<'a> {
+    pub omega_n: Vec<f64>,
+    pub damping_ratio: f64,
+    pub table: &'a GafTable,
+    pub density: f64,
+}
+
+struct Root {
+    g: f64,
+    omega: f64,
+    k: f64,
+    extrapolated: bool,
+}
+
+impl PkProblem<'_> {
+    fn check(&self) -> Result<(), FlutterError> {
+        if self.table.n_modes() != self.omega_n.len() {
+            return Err(FlutterError::Input(format!(
+                "the GAF table has {} modes, the structure {}",
+                self.table.n_modes(),
+                self.omega_n.len()
+            )));
+        }
+        if !(self.density > 0.0) {
+            return Err(FlutterError::Input(format!(
+                "density: must be positive (got {})",
+                self.density
+            )));
+        }
+        if !(self.damping_ratio >= 0.0) {
+            return Err(FlutterError::Input(format!(
+                "damping_ratio: must be non-negative (got {})",
+                self.damping_ratio
+            )));
+        }
+        Ok(())
+    }
+
+    /// Q(k) by the table's spline (clamped to its range) as (real part, imaginary part).
+    fn q_at(&self, k: f64) -> Result<(Mat<f64>, Mat<f64>), FlutterError> {
+        let kmax = *self.table.k.last().expect("table has k");
+        let kk = k.clamp(self.table.k[0], kmax);
+        let w = SplineWeights::new(&self.table.k, &[kk]).map_err(FlutterError::Input)?;
+        let w = &w.weights[0];
+        let n = self.omega_n.len();
+        let q = |m: usize, j: usize| -> Complex64 {
+            w.iter()
+                .enumerate()
+                .map(|(i, wi)| self.table.q_ss[i][m][j] * *wi)
+                .sum()
+        };
+        Ok((
+            Mat::from_fn(n, n, |m, j| q(m, j).re),
+            Mat::from_fn(n, n, |m, j| q(m, j).im),
+        ))
+    }
+
+    /// Roots p of the p-k equation at speed `v` with the aerodynamics evaluated at `k`.
+    fn roots(&self, v: f64, k: f64) -> Result<Vec<Complex64>, FlutterError> {
+        let n = self.omega_n.len();
+        let b = self.table.b_ref;
+        let qd = 0.5 * self.density * v * v;
+        let (qr, qi) = self.q_at(k)?;
+        let kk = k.max(1e-6);
+        let mut a = Mat::<f64>::zeros(2 * n, 2 * n);
+        for i in 0..n {
+            a[(i, n + i)] = 1.0;
+            for j in 0..n {
+                let kstiff = if i == j { self.omega_n[i].powi(2) } else { 0.0 } - qd * qr[(i, j)];
+                let cdamp = if i == j {
+                    2.0 * self.damping_ratio * self.omega_n[i]
+                } else {
+                    0.0
+                } - qd * (b / v) * qi[(i, j)] / kk;
+                a[(n + i, j)] = -kstiff;
+                a[(n + i, n + j)] = -cdamp;
+            }
+        }
+        a.eigenvalues()
+            .map_err(|_| FlutterError::Eigen { velocity: v })
+    }
+
+    /// Converges mode `mode`'s root at speed `v` starting from `k0`.
+    fn track(&self, mode: usize, v: f64, k0: f64) -> Result<Root, FlutterError> {
+        let b = self.table.b_ref;
+        let kmax = *self.table.k.last().expect("table has k");
+        let mut k = k0;
+        let mut history = vec![k];
+        for _ in 0..100 {
+            let roots = self.roots(v, k)?;
+            let target = k * v / b;
+            let p = roots
+                .iter()
+                .filter(|p| p.im > 0.0)
+                .min_by(|a, c| (a.im - target).abs().total_cmp(&(c.im - target).abs()))
+                .copied()
+                .ok_or(FlutterError::NoConvergence {
+                    mode,
+                    velocity: v,
+                    history: history.clone(),
+                })?;
+            let k_new = p.im * b / v;
+            history.push(k_new);
+            if (k_new - k).abs() <= 1e-10 * k.max(1e-8) {
+                return Ok(Root {
+                    g: 2.0 * p.re / p.im,
+                    omega: p.im,
+                    k: k_new,
+                    extrapolated: k_new > kmax,
+                });
+            }
+            k = k_new;
+        }
+        Err(FlutterError::NoConvergence {
+            mode,
+            velocity: v,
+            history,
+        })
+    }
+
+    /// p-k sweep over `velocities` (increasing) with the flutter crossing refined.
+    pub fn sweep(&self, velocities: &[f64]) -> Result<FlutterResult, FlutterError> {
+        self.check()?;
+        if velocities.is_empty()
+            || velocities.iter().any(|v| !(*v > 0.0))
+            || velocities.windows(2).any(|w| !(w[1] > w[0]))
+        {
+            return Err(FlutterError::Input(
+                "velocities: must be positive and increasing".into(),
+            ));
+        }
+        let b = self.table.b_ref;
+        let n = self.omega_n.len();
+        let mut curves: Vec<ModeCurve> = (0..n)
+            .map(|m| ModeCurve {
+                mode: m + 1,
+                velocity_m_s: Vec::new(),
+                damping_g: Vec::new(),
+                frequency_hz: Vec::new(),
+                k: Vec::new(),
+                extrapolated: Vec::new(),
+            })
+            .collect();
+        let mut k_prev: Vec<f64> = self.omega_n.iter().map(|w| w * b / velocities[0]).collect();
+        let mut flutter: Option<(f64, f64, usize)> = None;
+        for (iv, &v) in velocities.iter().enumerate() {
+            for m in 0..n {
+                // start from the previous speed's frequency
+                let k0 = if iv == 0 {
+                    k_prev[m]
+                } else {
+                    k_prev[m] * velocities[iv - 1] / v
+                };
+                let r = self.track(m, v, k0)?;
+                k_prev[m] = r.k;
+                let c = &mut curves[m];
+                if iv > 0 && flutter.is_none() {
+                    let (g0, v0) = (
+                        *c.damping_g.last().expect("previous point"),
+                        velocities[iv - 1],
+                    );
+                    if g0 < 0.0 && r.g >= 0.0 {
+                        flutter = Some(self.refine(m, (v0, g0), (v, r.g), r.k)?);
+                    }
+                }
+                c.velocity_m_s.push(v);
+                c.damping_g.push(r.g);
+                c.frequency_hz.push(r.omega / (2.0 * std::f64::consts::PI));
+                c.k.push(r.k);
+                c.extrapolated.push(r.extrapolated);
+            }
+        }
+        Ok(FlutterResult {
+            flutter_speed_m_s: flutter.map(|f| f.0),
+            flutter_frequency_hz: flutter.map(|f| f.1),
+            flutter_mode: flutter.map(|f| f.2 + 1),
+            curves,
+        })
+    }
+
+    /// Secant refinement of g(V) = 0 between two bracketing speeds.
+    fn refine(
+        &self,
+        mode: usize,
+        lo: (f64, f64),
+        hi: (f64, f64),
+        k_hint: f64,
+    ) -> Result<(f64, f64, usize), FlutterError> {
+        let (mut a, mut b) = (lo, hi);
+        let mut k = k_hint;
+        let mut best = (b.0, 0.0);
+        for _ in 0..60 {
+            let v = a.0 - a.1 * (b.0 - a.0) / (b.1 - a.1);
+            let r = self.track(mode, v, k * hi.0 / v)?;
+            k = r.k;
+            best = (v, r.omega / (2.0 * std::f64::consts::PI));
+            if r.g.abs() < 1e-10 || (b.0 - a.0).abs() < 1e-10 * v {
+                break;
+            }
+            // keep the bracket (Illinois-free regula falsi is fine for this smooth g)
+            if r.g < 0.0 {
+                a = (v, r.g);
+            } else {
+                b = (v, r.g);
+            }
+        }
+        Ok((best.0, best.1, mode))
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,160 @@
+//! p-k flutter of the classic 2-DOF typical section with Theodorsen aerodynamics.
+
+use super::*;
+use gustkit_testkit::bessel::theodorsen;
+use num_complex::Complex64 as C;
+use std::f64::consts::PI;
+
+/// Hodges & Pierce's typical section: a = −1/5, x_α = 1/10, μ = 20, r_α² = 6/25, ω_h/ω_α = 2/5,
+/// b = 1, ω_α = 1, ρ = 1.
+struct Section {
+    m: [[f64; 2]; 2],
+    k: [[f64; 2]; 2],
+    a: f64,
+}
+
+fn section() -> Section {
+    let (a, xa, mu, r2, sigma): (f64, f64, f64, f64, f64) = (-0.2, 0.1, 20.0, 0.24, 0.4);
+    let m = mu * PI; // ρ = b = 1
+    Section {
+        m: [[m, m * xa], [m * xa, m * r2]],
+        k: [[m * sigma * sigma, 0.0], [0.0, m * r2]],
+        a,
+    }
+}
+
+/// Theodorsen generalized forces / q for η = (h/b, α), h down, b = 1.
+fn theodorsen_q(k: f64, a: f64) -> [[C; 2]; 2] {
+    let (cr, ci) = if k == 0.0 { (1.0, 0.0) } else { theodorsen(k) };
+    let c = C::new(cr, ci);
+    let i = C::new(0.0, 1.0);
+    let l1 = 2.0 * PI * (-k * k) + 4.0 * PI * c * (i * k);
+    let l2 = 2.0 * PI * (i * k + a * k * k) + 4.0 * PI * c * (1.0 + i * k * (0.5 - a));
+    let m1 = 2.0 * PI * (-a * k * k) + 4.0 * PI * (a + 0.5) * c * (i * k);
+    let m2 = 2.0 * PI * (-(0.5 - a) * i * k + (0.125 + a * a) * k * k)
+        + 4.0 * PI * (a + 0.5) * c * (1.0 + i * k * (0.5 - a));
+    [[-l1, -l2], [m1, m2]]
+}
+
+/// Mass-normalized modes Φ of (K, M) (2 × 2) and their ω_n.
+fn modes(s: &Section) -> ([[f64; 2]; 2], [f64; 2]) {
+    // det(K − λ M) = 0
+    let (m, k) = (s.m, s.k);
+    let a = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+    let b = -(k[0][0] * m[1][1] + k[1][1] * m[0][0] - k[0][1] * m[1][0] - k[1][0] * m[0][1]);
+    let c = k[0][0] * k[1][1] - k[0][1] * k[1][0];
+    let d = (b * b - 4.0 * a * c).sqrt();
+    let lam = [(-b - d) / (2.0 * a), (-b + d) / (2.0 * a)];
+    let mut phi = [[0.0; 2]; 2];
+    for (j, l) in lam.iter().enumerate() {
+        // (k00 − l m00) x0 + (k01 − l m01) x1 = 0
+        let v = [-(k[0][1] - l * m[0][1]), k[0][0] - l * m[0][0]];
+        let nrm = (0..2)
+            .map(|r| (0..2).map(|q| v[r] * m[r][q] * v[q]).sum::<f64>())
+            .sum::<f64>()
+            .sqrt();
+        phi[0][j] = v[0] / nrm;
+        phi[1][j] = v[1] / nrm;
+    }
+    (phi, [lam[0].sqrt(), lam[1].sqrt()])
+}
+
+fn table(s: &Section, ks: &[f64]) -> (GafTable, [f64; 2]) {
+    let (phi, wn) = modes(s);
+    let modal = |q: [[C; 2]; 2]| -> Vec<Vec<C>> {
+        (0..2)
+            .map(|i| {
+                (0..2)
+                    .map(|j| {
+                        (0..2)
+                            .map(|r| (0..2).map(|c| phi[r][i] * q[r][c] * phi[c][j]).sum::<C>())
+                            .sum()
+                    })
+                    .collect()
+            })
+            .collect()
+    };
+    let t = GafTable {
+        mach: 0.0,
+        b_ref: 1.0,
+        x_ref: 0.0,
+        k: ks.to_vec(),
+        q_ss: ks.iter().map(|&k| modal(theodorsen_q(k, s.a))).collect(),
+        q_gs: ks.iter().map(|_| vec![C::new(0.0, 0.0); 2]).collect(),
+    };
+    (t, wn)
+}
+
+/// Independent reference by the k-method with exact C(k): (M + ½ρ(b/k)² Q) η = λ K η,
+/// λ = (1 + i g)/ω²; flutter where g of the critical branch crosses zero (bisection in k).
+fn k_method_flutter(s: &Section) -> (f64, f64) {
+    let g_of = |k: f64| -> Vec<(f64, f64)> {
+        let q = theodorsen_q(k, s.a);
+        let f = 0.5 * (1.0 / k).powi(2);
+        let am = |r: usize, c: usize| C::new(s.m[r][c], 0.0) + q[r][c] * f;
+        let (k0, k1) = (s.k[0][0], s.k[1][1]);
+        let qa = k0 * k1;
+        let qb = -(am(0, 0) * k1 + am(1, 1) * k0);
+        let qc = am(0, 0) * am(1, 1) - am(0, 1) * am(1, 0);
+        let d = (qb * qb - 4.0 * qa * qc).sqrt();
+        [(-qb + d) / (2.0 * qa), (-qb - d) / (2.0 * qa)]
+            .iter()
+            .map(|l| (l.im / l.re, 1.0 / l.re.sqrt()))
+            .collect()
+    };
+    // scan k downward (speed upward) for a sign change of g on either branch
+    let ks: Vec<f64> = (1..400).map(|i| 2.0 - i as f64 * 0.0049).collect();
+    for w in ks.windows(2) {
+        for br in 0..2 {
+            let (g0, g1) = (g_of(w[0])[br].0, g_of(w[1])[br].0);
+            if g0 < 0.0 && g1 >= 0.0 {
+                let (mut lo, mut hi) = (w[1], w[0]);
+                for _ in 0..200 {
+                    let mid = 0.5 * (lo + hi);
+                    if g_of(mid)[br].0 >= 0.0 {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                let k = 0.5 * (lo + hi);
+                let omega = g_of(k)[br].1;
+                return (omega / k, omega);
+            }
+        }
+    }
+    panic!("no flutter found by the k-method");
+}
+
+/// The p-k flutter speed and frequency equal the k-method's at the neutral point (both methods are
+/// exact for harmonic motion there) to the accuracy of the GAF spline (41 frequencies on [0, 2]):
+/// 1e-4. Hodges & Pierce quote U_F/(b ω_α) ≈ 2.17 for this section.
+#[test]
+fn typical_section_flutter_matches_k_method() {
+    let s = section();
+    let ks: Vec<f64> = (0..=40).map(|i| 0.05 * i as f64).collect();
+    let (t, wn) = table(&s, &ks);
+    let pk = PkProblem {
+        omega_n: wn.to_vec(),
+        damping_ratio: 0.0,
+        table: &t,
+        density: 1.0,
+    };
+    let v: Vec<f64> = (1..=60).map(|i| 0.05 * i as f64).collect();
+    let r = pk.sweep(&v).unwrap();
+    let (vf, wf) = k_method_flutter(&s);
+    let vpk = r.flutter_speed_m_s.expect("flutter in range");
+    let fpk = r.flutter_frequency_hz.unwrap() * 2.0 * PI;
+    println!("p-k: V_F = {vpk:.5}, ω_F = {fpk:.5}; k-method: V_F = {vf:.5}, ω_F = {wf:.5}");
+    assert!((vpk - vf).abs() < 1e-4 * vf, "{vpk} vs {vf}");
+    assert!((fpk - wf).abs() < 1e-4 * wf, "{fpk} vs {wf}");
+    assert!((vf - 2.17).abs() < 0.05 * 2.17, "{vf}");
+    // below flutter all modes are damped, above it one is not
+    for c in &r.curves {
+        for (vv, g) in c.velocity_m_s.iter().zip(&c.damping_g) {
+            if *vv < 0.95 * vpk {
+                assert!(*g < 0.0, "mode {} V {vv} g {g}", c.mode);
+            }
+        }
+    }
+}
