@@ -639,3 +639,85 @@ pub fn check_gradient(file: &Path, dvs: &[String], json: bool) -> Result<()> {
     }
     Ok(())
 }
+
+/// `gustkit flutter`: p-k sweep of a study at its flight Mach number and density.
+pub fn flutter(file: &Path, json: bool, reports: &Path) -> Result<()> {
+    let study = Study::load(file)?;
+    let velocities = study.flutter_velocities()?;
+    let (plate, modes, _) = analyze(&study)?;
+    let aero = crate::study::AeroModel::new(&study, &plate)?;
+    let table = aero
+        .gafs(&plate, &modes)
+        .map_err(|e| anyhow::anyhow!("{}: aero: {e}", file.display()))?;
+    let pk = crate::flutter::PkProblem {
+        omega_n: modes.omega(),
+        damping_ratio: modes.damping_ratio,
+        table: &table,
+        density: aero.flight.density,
+    };
+    let r = pk
+        .sweep(&velocities)
+        .map_err(|e| anyhow::anyhow!("{}: flutter: {e}", file.display()))?;
+    let dir = study.report_dir(reports);
+    save_figure(
+        &dir,
+        "flutter_vg",
+        &report::figures::VgVf {
+            result: &r,
+            title: format!(
+                "{}: p-k, M = {}, rho = {} kg/m3",
+                study.spec.name, aero.flight.mach, aero.flight.density
+            ),
+        },
+    )?;
+    let doc = serde_json::json!({
+        "study": study.spec.name,
+        "mach": aero.flight.mach,
+        "density_kg_m3": aero.flight.density,
+        "flutter_speed_m_s": r.flutter_speed_m_s,
+        "flutter_frequency_hz": r.flutter_frequency_hz,
+        "flutter_mode": r.flutter_mode,
+        "curves": r.curves,
+    });
+    write_atomic(
+        &dir.join("flutter.json"),
+        serde_json::to_string_pretty(&doc)?.as_bytes(),
+    )?;
+    if json {
+        println!("{}", serde_json::to_string_pretty(&doc)?);
+        return Ok(());
+    }
+    println!(
+        "{}: p-k at M = {}, ρ = {} kg/m³",
+        study.spec.name, aero.flight.mach, aero.flight.density
+    );
+    print!("{:>10}", "V [m/s]");
+    for c in &r.curves {
+        print!("{:>22}", format!("mode {} g / f [Hz]", c.mode));
+    }
+    println!();
+    for i in 0..velocities.len() {
+        print!("{:>10.2}", velocities[i]);
+        for c in &r.curves {
+            print!("{:>12.4} {:>9.3}", c.damping_g[i], c.frequency_hz[i]);
+        }
+        println!();
+    }
+    match (r.flutter_speed_m_s, r.flutter_frequency_hz) {
+        (Some(v), Some(f)) => println!(
+            "flutter: V = {v:.2} m/s ({:.1} ft/s), f = {f:.2} Hz, mode {}",
+            v / 0.3048,
+            r.flutter_mode.unwrap_or(0)
+        ),
+        _ => println!(
+            "no flutter between {} and {} m/s",
+            velocities[0],
+            velocities[velocities.len() - 1]
+        ),
+    }
+    println!(
+        "V-g/V-f figures and flutter.json written to {}",
+        dir.display()
+    );
+    Ok(())
+}

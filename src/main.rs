@@ -55,6 +55,16 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// p-k flutter sweep at the study's Mach number and density, with V-g and V-f figures.
+    Flutter {
+        study: PathBuf,
+        /// Print JSON (flutter_speed_m_s, flutter_frequency_hz, per-mode curves).
+        #[arg(long)]
+        json: bool,
+        /// Folder that holds the per-study report folders.
+        #[arg(long, default_value = "reports")]
+        reports: PathBuf,
+    },
     /// Adjoint gradient of the gust RMS against finite differences (like paper Table 4).
     CheckGradient {
         study: PathBuf,
@@ -90,6 +100,11 @@ fn main() -> Result<()> {
             k,
             out,
         } => cli::aic(&input, mach, &k, &out),
+        Command::Flutter {
+            study,
+            json,
+            reports,
+        } => cli::flutter(&study, json, &reports),
         Command::CheckGradient { study, dv, json } => cli::check_gradient(&study, &dv, json),
         Command::Bench { study, repeat } => cli::bench(&study, repeat),
     }

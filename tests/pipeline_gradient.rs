@@ -80,3 +80,25 @@ fn rms_gradient_matches_finite_differences() {
         assert!(rep.best_rel_error < 1e-6, "mass/area dv {k}: {rep:?}");
     }
 }
+
+/// A flight condition beyond flutter is a clear error, never an RMS.
+#[test]
+fn unstable_flight_condition_is_an_error() {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/studies/agard445_dlm.json"
+    ))
+    .unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["aero"]["fidelity"]["dlm"]["n_chord"] = 4.into();
+    v["aero"]["fidelity"]["dlm"]["n_span"] = 6.into();
+    v["flight"]["density_kg_m3"] = 0.8.into();
+    let study = Study::from_str(Path::new("dense.json"), &v.to_string()).unwrap();
+    let settings = study.gust_settings().unwrap();
+    let x0 = study.initial_design().unwrap().to_vec();
+    let e = evaluate(&study, &settings, &x0)
+        .err()
+        .expect("must fail")
+        .to_string();
+    assert!(e.contains("unstable") && e.contains("flutters"), "{e}");
+}

@@ -61,7 +61,7 @@ pub struct PkProblem<'a> {
 
 struct Root {
     g: f64,
-    omega: f64,
+    p: Complex64,
     k: f64,
     extrapolated: bool,
 }
@@ -134,19 +134,21 @@ impl PkProblem<'_> {
             .map_err(|_| FlutterError::Eigen { velocity: v })
     }
 
-    /// Converges mode `mode`'s root at speed `v` starting from `k0`.
-    fn track(&self, mode: usize, v: f64, k0: f64) -> Result<Root, FlutterError> {
+    /// Converges mode `mode`'s root at speed `v` starting from the root `p0` (rad/s): at each step
+    /// the root nearest in the complex plane to the previous one is followed, so modes that
+    /// coalesce in frequency stay apart by their damping.
+    fn track(&self, mode: usize, v: f64, p0: Complex64) -> Result<Root, FlutterError> {
         let b = self.table.b_ref;
         let kmax = *self.table.k.last().expect("table has k");
-        let mut k = k0;
+        let mut p_prev = p0;
+        let mut k = p0.im * b / v;
         let mut history = vec![k];
         for _ in 0..100 {
             let roots = self.roots(v, k)?;
-            let target = k * v / b;
             let p = roots
                 .iter()
                 .filter(|p| p.im > 0.0)
-                .min_by(|a, c| (a.im - target).abs().total_cmp(&(c.im - target).abs()))
+                .min_by(|a, c| (**a - p_prev).norm().total_cmp(&(**c - p_prev).norm()))
                 .copied()
                 .ok_or(FlutterError::NoConvergence {
                     mode,
@@ -155,10 +157,11 @@ impl PkProblem<'_> {
                 })?;
             let k_new = p.im * b / v;
             history.push(k_new);
+            p_prev = p;
             if (k_new - k).abs() <= 1e-10 * k.max(1e-8) {
                 return Ok(Root {
                     g: 2.0 * p.re / p.im,
-                    omega: p.im,
+                    p,
                     k: k_new,
                     extrapolated: k_new > kmax,
                 });
@@ -172,6 +175,22 @@ impl PkProblem<'_> {
         })
     }
 
+    /// The largest damping g over every consistent p-k root at speed `v`: for each k at which a
+    /// mode converged, any root whose own k matches the one it was computed at. Positive means the
+    /// system is unstable at `v`, whichever branch the tracking followed.
+    pub fn max_damping(&self, v: f64, ks: &[f64]) -> Result<f64, FlutterError> {
+        let b = self.table.b_ref;
+        let mut gmax = f64::NEG_INFINITY;
+        for &k in ks {
+            for p in self.roots(v, k)? {
+                if p.im > 0.0 && ((p.im * b / v) - k).abs() <= 1e-6 * k.max(1e-8) {
+                    gmax = gmax.max(2.0 * p.re / p.im);
+                }
+            }
+        }
+        Ok(gmax)
+    }
+
     /// p-k sweep over `velocities` (increasing) with the flutter crossing refined.
     pub fn sweep(&self, velocities: &[f64]) -> Result<FlutterResult, FlutterError> {
         self.check()?;
@@ -183,7 +202,6 @@ impl PkProblem<'_> {
                 "velocities: must be positive and increasing".into(),
             ));
         }
-        let b = self.table.b_ref;
         let n = self.omega_n.len();
         let mut curves: Vec<ModeCurve> = (0..n)
             .map(|m| ModeCurve {
@@ -195,18 +213,17 @@ impl PkProblem<'_> {
                 extrapolated: Vec::new(),
             })
             .collect();
-        let mut k_prev: Vec<f64> = self.omega_n.iter().map(|w| w * b / velocities[0]).collect();
+        let mut p_prev: Vec<Complex64> = self
+            .omega_n
+            .iter()
+            .map(|w| Complex64::new(0.0, *w))
+            .collect();
         let mut flutter: Option<(f64, f64, usize)> = None;
         for (iv, &v) in velocities.iter().enumerate() {
             for m in 0..n {
-                // start from the previous speed's frequency
-                let k0 = if iv == 0 {
-                    k_prev[m]
-                } else {
-                    k_prev[m] * velocities[iv - 1] / v
-                };
-                let r = self.track(m, v, k0)?;
-                k_prev[m] = r.k;
+                // start from the previous speed's root
+                let r = self.track(m, v, p_prev[m])?;
+                p_prev[m] = r.p;
                 let c = &mut curves[m];
                 if iv > 0 && flutter.is_none() {
                     let (g0, v0) = (
@@ -214,12 +231,12 @@ impl PkProblem<'_> {
                         velocities[iv - 1],
                     );
                     if g0 < 0.0 && r.g >= 0.0 {
-                        flutter = Some(self.refine(m, (v0, g0), (v, r.g), r.k)?);
+                        flutter = Some(self.refine(m, (v0, g0), (v, r.g), r.p)?);
                     }
                 }
                 c.velocity_m_s.push(v);
                 c.damping_g.push(r.g);
-                c.frequency_hz.push(r.omega / (2.0 * std::f64::consts::PI));
+                c.frequency_hz.push(r.p.im / (2.0 * std::f64::consts::PI));
                 c.k.push(r.k);
                 c.extrapolated.push(r.extrapolated);
             }
@@ -238,16 +255,16 @@ impl PkProblem<'_> {
         mode: usize,
         lo: (f64, f64),
         hi: (f64, f64),
-        k_hint: f64,
+        p_hint: Complex64,
     ) -> Result<(f64, f64, usize), FlutterError> {
         let (mut a, mut b) = (lo, hi);
-        let mut k = k_hint;
+        let mut p = p_hint;
         let mut best = (b.0, 0.0);
         for _ in 0..60 {
             let v = a.0 - a.1 * (b.0 - a.0) / (b.1 - a.1);
-            let r = self.track(mode, v, k * hi.0 / v)?;
-            k = r.k;
-            best = (v, r.omega / (2.0 * std::f64::consts::PI));
+            let r = self.track(mode, v, p)?;
+            p = r.p;
+            best = (v, r.p.im / (2.0 * std::f64::consts::PI));
             if r.g.abs() < 1e-10 || (b.0 - a.0).abs() < 1e-10 * v {
                 break;
             }

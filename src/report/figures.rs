@@ -131,3 +131,108 @@ impl Figure for ModeShapes {
         Ok(())
     }
 }
+
+/// V-g and V-f diagrams of a p-k sweep, with the flutter point marked.
+pub struct VgVf<'a> {
+    pub result: &'a crate::flutter::FlutterResult,
+    pub title: String,
+}
+
+impl Figure for VgVf<'_> {
+    fn size(&self) -> (u32, u32) {
+        (1100, 850)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing V-g/V-f: {e}");
+        area.fill(&WHITE).map_err(err)?;
+        let (top, bottom) = area.split_vertically(425);
+        let curves = &self.result.curves;
+        let vmin = curves
+            .iter()
+            .flat_map(|c| c.velocity_m_s.iter())
+            .cloned()
+            .fold(f64::MAX, f64::min);
+        let vmax = curves
+            .iter()
+            .flat_map(|c| c.velocity_m_s.iter())
+            .cloned()
+            .fold(f64::MIN, f64::max);
+        let gmin = curves
+            .iter()
+            .flat_map(|c| c.damping_g.iter())
+            .cloned()
+            .fold(0.0, f64::min)
+            .max(-1.0);
+        let gmax = curves
+            .iter()
+            .flat_map(|c| c.damping_g.iter())
+            .cloned()
+            .fold(0.0, f64::max)
+            .min(1.0);
+        let fmax = curves
+            .iter()
+            .flat_map(|c| c.frequency_hz.iter())
+            .cloned()
+            .fold(0.0, f64::max);
+        let pad = 0.05 * (gmax - gmin).max(1e-3);
+        for (panel, (ylo, yhi), ylabel, is_g) in [
+            (&top, (gmin - pad, gmax + pad), "damping g", true),
+            (&bottom, (0.0, 1.05 * fmax), "frequency [Hz]", false),
+        ] {
+            let mut chart = ChartBuilder::on(panel)
+                .caption(
+                    if is_g { self.title.as_str() } else { "" },
+                    ("sans-serif", 20),
+                )
+                .margin(10)
+                .x_label_area_size(35)
+                .y_label_area_size(60)
+                .build_cartesian_2d(vmin..vmax, ylo..yhi)
+                .map_err(err)?;
+            chart
+                .configure_mesh()
+                .x_desc("velocity [m/s]")
+                .y_desc(ylabel)
+                .label_style(("sans-serif", 13))
+                .draw()
+                .map_err(err)?;
+            for (i, c) in curves.iter().enumerate() {
+                let color = Palette99::pick(i).to_rgba();
+                let ys = if is_g { &c.damping_g } else { &c.frequency_hz };
+                chart
+                    .draw_series(LineSeries::new(
+                        c.velocity_m_s.iter().cloned().zip(ys.iter().cloned()),
+                        color.stroke_width(2),
+                    ))
+                    .map_err(err)?
+                    .label(format!("mode {}", c.mode))
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+                    });
+            }
+            if let (Some(v), Some(f)) = (
+                self.result.flutter_speed_m_s,
+                self.result.flutter_frequency_hz,
+            ) {
+                let y = if is_g { 0.0 } else { f };
+                chart
+                    .draw_series(std::iter::once(Circle::new((v, y), 6, BLACK.filled())))
+                    .map_err(err)?;
+            }
+            if is_g {
+                chart
+                    .configure_series_labels()
+                    .background_style(WHITE.mix(0.8))
+                    .border_style(BLACK)
+                    .label_font(("sans-serif", 13))
+                    .draw()
+                    .map_err(err)?;
+            }
+        }
+        Ok(())
+    }
+}

@@ -10,8 +10,8 @@ mod schema;
 
 pub use fidelity::AeroModel;
 pub use schema::{
-    AeroSpec, AirfoilSpec, ClampSpec, DlmSpec, FidelitySpec, FlightSpec, GustSpec, LengthUnit,
-    MaterialSpec, MeshSpec, OutputSpec, StructureSpec, StudyFile, WingSpec,
+    AeroSpec, AirfoilSpec, ClampSpec, DlmSpec, FidelitySpec, FlightSpec, FlutterSpec, GustSpec,
+    LengthUnit, MaterialSpec, MeshSpec, OutputSpec, StructureSpec, StudyFile, WingSpec,
 };
 
 use crate::structure::{airfoil_thickness, Clamp, Orthotropic, PlateMesh, PlateModel};
@@ -127,7 +127,49 @@ impl Study {
         if self.spec.gust.is_some() {
             self.gust_settings()?;
         }
+        if self.spec.flutter.is_some() {
+            self.flutter_velocities()?;
+        }
         Ok(())
+    }
+
+    /// The velocities of the study's p-k sweep, checked.
+    pub fn flutter_velocities(&self) -> Result<Vec<f64>, StudyError> {
+        let f = self
+            .spec
+            .flutter
+            .as_ref()
+            .ok_or_else(|| self.err("flutter", "missing: the study has no flutter sweep"))?;
+        if self.spec.aero.is_none() {
+            return Err(self.err(
+                "aero",
+                "missing: the flutter sweep needs an aerodynamic model",
+            ));
+        }
+        if !(f.velocity_min_m_s > 0.0
+            && f.velocity_max_m_s > f.velocity_min_m_s
+            && f.velocity_max_m_s.is_finite())
+        {
+            return Err(self.err(
+                "flutter.velocity_max_m_s",
+                format!(
+                    "need 0 < velocity_min_m_s < velocity_max_m_s (got {} and {})",
+                    f.velocity_min_m_s, f.velocity_max_m_s
+                ),
+            ));
+        }
+        if f.points < 2 {
+            return Err(self.err(
+                "flutter.points",
+                format!("need at least 2 speeds (got {})", f.points),
+            ));
+        }
+        Ok((0..f.points)
+            .map(|i| {
+                f.velocity_min_m_s
+                    + (f.velocity_max_m_s - f.velocity_min_m_s) * i as f64 / (f.points - 1) as f64
+            })
+            .collect())
     }
 
     /// The gust settings in SI, checked.

@@ -27,6 +27,23 @@ pub struct StudyFile {
     /// Continuous-turbulence response settings.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gust: Option<GustSpec>,
+    /// p-k flutter sweep at the flight Mach number and density.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flutter: Option<FlutterSpec>,
+}
+
+/// Velocity range of a p-k sweep (SI).
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct FlutterSpec {
+    pub velocity_min_m_s: f64,
+    pub velocity_max_m_s: f64,
+    #[serde(default = "default_flutter_points")]
+    pub points: usize,
+}
+
+fn default_flutter_points() -> usize {
+    60
 }
 
 /// Stochastic gust analysis (paper Eqs. 16–18).

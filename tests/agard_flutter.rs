@@ -1,0 +1,49 @@
+//! p-k flutter of the AGARD 445.6 weakened wing with the DLM against the wind-tunnel flutter points
+//! (Yates, AGARD R-765): M = 0.499, ρ = 0.000830 slug/ft³: V_f = 565.5 ft/s (172.4 m/s), flutter
+//! frequency ratio 0.5353 of the 38.17 Hz torsion mode (20.4 Hz); M = 0.901, ρ = 0.000193 slug/ft³:
+//! V_f = 947.5 ft/s (288.8 m/s), 16.4 Hz. Linear potential flow with a plate model is expected
+//! within several percent at M = 0.5 and to lie above experiment near M = 0.9 (no transonic dip).
+
+use std::path::Path;
+use std::process::Command;
+
+fn flutter(study: &str) -> serde_json::Value {
+    let dir = std::env::temp_dir().join(format!("gustkit-flutter-{}-{study}", std::process::id()));
+    let o = Command::new(env!("CARGO_BIN_EXE_gustkit"))
+        .args([
+            "flutter",
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("studies")
+                .join(study)
+                .to_str()
+                .unwrap(),
+            "--json",
+            "--reports",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(dir
+        .join(study.trim_end_matches(".json"))
+        .join("flutter_vg.png")
+        .exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+#[test]
+fn agard_flutter_m0499_and_m0901() {
+    for (study, v_exp, f_exp, tol_v, tol_f) in [
+        ("agard445_flutter_m0499.json", 172.4, 20.4, 0.06, 0.15),
+        ("agard445_flutter_m0901.json", 288.8, 16.4, 0.08, 0.10),
+    ] {
+        let r = flutter(study);
+        let v = r["flutter_speed_m_s"].as_f64().expect("flutter found");
+        let f = r["flutter_frequency_hz"].as_f64().unwrap();
+        println!("{study}: V_f {v:.1} m/s (exp {v_exp}), f {f:.2} Hz (exp {f_exp})");
+        assert!((v - v_exp).abs() < tol_v * v_exp, "{study}: {v}");
+        assert!((f - f_exp).abs() < tol_f * f_exp, "{study}: {f}");
+        assert_eq!(r["curves"].as_array().unwrap().len(), 6);
+    }
+}
