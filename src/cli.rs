@@ -240,6 +240,21 @@ pub fn bench(file: &Path, repeat: usize) -> Result<()> {
             1e3 * a.gafs_vjp_s
         );
     }
+    if study.spec.gust.is_some() {
+        let (f, g) = bench_pipeline(&study)?;
+        println!(
+            "gust pipeline (all {} design variables):",
+            study.initial_design()?.len()
+        );
+        println!(
+            "  function (modes, GAFs, stability, RMS)  {:8.1} ms",
+            1e3 * f
+        );
+        println!(
+            "  gradient (one reverse sweep)            {:8.1} ms",
+            1e3 * g
+        );
+    }
     Ok(())
 }
 
@@ -720,4 +735,21 @@ pub fn flutter(file: &Path, json: bool, reports: &Path) -> Result<()> {
         dir.display()
     );
     Ok(())
+}
+
+/// Wall time of one function evaluation and one gradient of the gust pipeline at the initial
+/// design (the influence matrices are rebuilt, as when the planform changes), seconds.
+pub fn bench_pipeline(study: &Study) -> Result<(f64, f64)> {
+    let settings = study.gust_settings()?;
+    let x = study.initial_design()?.to_vec();
+    let t0 = Instant::now();
+    let ev = crate::pipeline::evaluate(study, &settings, &x)?;
+    let t1 = Instant::now();
+    let seeds = crate::pipeline::OutputSeeds {
+        mass: 1.0,
+        area: 1.0,
+        rms: vec![1.0; ev.rms_m.len()],
+    };
+    std::hint::black_box(crate::pipeline::gradient(&ev, &seeds)?);
+    Ok(((t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()))
 }

@@ -1,0 +1,14 @@
+//! `cargo bench --bench pipeline`: one function evaluation and one gradient of the AGARD 445.6 DLM
+//! gust problem (104 variables, 11 reduced frequencies, 6 modes, 400 boxes).
+
+fn main() -> anyhow::Result<()> {
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json");
+    let study = gustkit::study::Study::load(&file)?;
+    let (f, g) = gustkit::cli::bench_pipeline(&study)?;
+    println!(
+        "pipeline/agard445: function {:.1} ms, gradient {:.1} ms",
+        1e3 * f,
+        1e3 * g
+    );
+    Ok(())
+}
