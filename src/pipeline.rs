@@ -11,17 +11,29 @@
 
 use crate::gust::{self, FrequencyGrid, GustProblem, GustResponse, Turbulence};
 use crate::structure::modal::SAMPLED;
-use crate::structure::{mass_grad, modal, modes_vjp, ModalSeed, Modes, PlateModel, Sampler};
+use crate::structure::{
+    mass_grad, modal, modes_vjp, root_bending_moment, root_bending_moment_vjp, ModalSeed, Modes,
+    PlateModel, Sampler,
+};
 use crate::study::{AeroModel, Study, StudyError};
 use crate::wing::{DesignVector, N_PLANFORM};
 use anyhow::{Context, Result};
 use gustkit_core::GafTable;
 
-/// A response output: vertical displacement at a point of the plate given in (ξ, η).
+/// What a response output measures.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Quantity {
+    /// Vertical displacement at a point of the plate given in (ξ, η), m.
+    Displacement { point: [f64; 2] },
+    /// Root bending moment about the root line (mode-displacement method), N·m.
+    RootBendingMoment,
+}
+
+/// A response output.
 #[derive(Clone, Debug)]
 pub struct Output {
     pub name: String,
-    pub point: [f64; 2],
+    pub quantity: Quantity,
 }
 
 /// Gust settings of a study (SI).
@@ -50,7 +62,7 @@ pub struct Evaluation {
     pub table: GafTable,
     pub grid: FrequencyGrid,
     pub response: GustResponse,
-    samplers: Vec<Sampler>,
+    samplers: Vec<Option<Sampler>>,
     outputs_s: Vec<Vec<f64>>,
     settings: GustSettings,
 }
@@ -96,19 +108,23 @@ pub fn evaluate(study: &Study, settings: &GustSettings, x: &[f64]) -> Result<Eva
     check_stability(&modes, &table, f)?;
     let omega_max = table.k.last().copied().unwrap_or(0.0) * f.velocity / f.b_ref;
     let grid = FrequencyGrid::log(settings.omega_min, omega_max, settings.points)?;
-    let samplers: Vec<Sampler> = settings
+    let samplers: Vec<Option<Sampler>> = settings
         .outputs
         .iter()
-        .map(|o| Sampler::new(&plate, &[o.point]))
+        .map(|o| match o.quantity {
+            Quantity::Displacement { point } => Some(Sampler::new(&plate, &[point])),
+            Quantity::RootBendingMoment => None,
+        })
         .collect();
     let outputs_s: Vec<Vec<f64>> = samplers
         .iter()
-        .map(|s| {
-            modes
+        .map(|s| match s {
+            Some(s) => modes
                 .modes
                 .iter()
                 .map(|m| s.sample(&plate, &m.shape)[0][0])
-                .collect()
+                .collect(),
+            None => root_bending_moment(&plate, &modes),
         })
         .collect();
     let mut ev = Evaluation {
@@ -158,8 +174,21 @@ pub fn gradient(ev: &Evaluation, seeds: &OutputSeeds) -> Result<Vec<f64>> {
     let mut modal_seed = ModalSeed::zeros(&ev.modes);
     modal_seed.lambda = gg.lambda.clone();
     let mut p_bar = [0.0; N_PLANFORM];
-    // S = mode deflection at each output point
+    // S = mode deflection at each output point, or the modal root bending moment
     for (y, sampler) in ev.samplers.iter().enumerate() {
+        let Some(sampler) = sampler else {
+            let (seed, direct) = root_bending_moment_vjp(&ev.plate, &ev.modes, &gg.outputs[y]);
+            for m in 0..ev.modes.len() {
+                modal_seed.lambda[m] += seed.lambda[m];
+                if !seed.shape[m].is_empty() {
+                    add_into(&mut modal_seed.shape[m], &seed.shape[m]);
+                }
+            }
+            for (gi, v) in g.iter_mut().zip(direct) {
+                *gi += v;
+            }
+            continue;
+        };
         for (m, mode) in ev.modes.modes.iter().enumerate() {
             let s = gg.outputs[y][m];
             if s == 0.0 {

@@ -143,3 +143,45 @@ fn generalized_matrices_are_consistent() {
         assert!((gc[(i, i)] - 2.0 * 0.02 * modes.modes[i].omega()).abs() < 1e-12 * gc[(i, i)]);
     }
 }
+
+/// Root bending moment by the mode-displacement method: with the complete set of bending modes, a
+/// static load F gives η_m = φ_mᵀF/ω_m² and Σ_m S_m η_m equals the moment of the load about the root
+/// line, Σ (F_z y + F_{w_y}), to round-off (equilibrium of the clamped plate).
+#[test]
+fn root_bending_moment_mode_displacement_is_exact_with_all_modes() {
+    use gustkit::structure::{modal::field_dofs, root_bending_moment};
+    let model = agard_model(1, Clamp::Interior);
+    let n = model.n_dofs(Field::Bending);
+    let modes = modal::solve(&model, n, 0.0, &[Field::Bending]).unwrap();
+    let s = root_bending_moment(&model, &modes);
+    // a load: pressure-like nodal forces growing toward the tip, plus nodal moments
+    let xy = model.node_xy();
+    let nodal_len = 5 * xy.len();
+    let mut f = vec![0.0; nodal_len];
+    for (i, p) in xy.iter().enumerate() {
+        if model.mesh.clamped[i] {
+            continue;
+        }
+        f[5 * i] = 1.0 + 3.0 * p[1] - 0.5 * p[0];
+        f[5 * i + 2] = 0.2 * p[0];
+    }
+    let direct: f64 = xy
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !model.mesh.clamped[*i])
+        .map(|(i, p)| f[5 * i] * p[1] + f[5 * i + 2])
+        .sum();
+    let ff = field_dofs(&model, Field::Bending, &f);
+    let modal_sum: f64 = modes
+        .modes
+        .iter()
+        .zip(&s)
+        .map(|(m, sm)| {
+            let phi = field_dofs(&model, Field::Bending, &m.shape);
+            let eta: f64 = phi.iter().zip(&ff).map(|(a, b)| a * b).sum::<f64>() / m.lambda;
+            sm * eta
+        })
+        .sum();
+    println!("direct {direct:.12e} modal {modal_sum:.12e}");
+    assert!((modal_sum - direct).abs() < 1e-8 * direct.abs());
+}

@@ -234,6 +234,13 @@ pub fn rms_vjp(
     rms_bar: &[f64],
 ) -> Result<GustGradient, GustError> {
     let weights = p.check()?;
+    if rms_bar.len() != p.outputs.len() {
+        return Err(GustError::Input(format!(
+            "seeds: {} RMS seeds for {} outputs",
+            rms_bar.len(),
+            p.outputs.len()
+        )));
+    }
     let nm = p.omega_n.len();
     let nk = p.table.k.len();
     let flight_like = gustkit_core::FlightCondition {

@@ -12,4 +12,6 @@ pub use material::{MaterialError, Orthotropic};
 pub use mesh::{Clamp, PlateMesh};
 pub use modal::{Mode, Modes, Sampler};
 pub use model::{airfoil_thickness, Field, PlateModel};
-pub use sensitivity::{mass_grad, modes_jvp, modes_vjp, ModalSeed};
+pub use sensitivity::{
+    mass_grad, modes_jvp, modes_vjp, root_bending_moment, root_bending_moment_vjp, ModalSeed,
+};

@@ -246,3 +246,112 @@ fn matvec(m: &Mat<f64>, v: &[f64]) -> Vec<f64> {
     }
     out
 }
+
+/// Root bending moment per unit modal displacement, by the mode-displacement method: the moment
+/// about the root line (the x axis) of the elastic forces K φ_m = ω_m² M φ_m over the free DOFs,
+/// S_m = ω_m² rᵀ M φ_m with r the rigid rotation about the x axis (w = y, ∂w/∂y = 1). Positive when
+/// the loads bend the wing up. N·m per unit η.
+pub fn root_bending_moment(model: &PlateModel, modes: &Modes) -> Vec<f64> {
+    modes
+        .modes
+        .iter()
+        .map(|m| {
+            if m.field != Field::Bending {
+                return 0.0;
+            }
+            let mut b = 0.0;
+            for (e, (_, me)) in model.element_duals(Field::Bending).iter().enumerate() {
+                let (r, _) = root_rotation(model, e);
+                let phi = element_nodal(model, e, &m.shape);
+                for a in 0..12 {
+                    for c in 0..12 {
+                        b += r[a] * me[a * 12 + c].v * phi[c];
+                    }
+                }
+            }
+            m.lambda * b
+        })
+        .collect()
+}
+
+/// Reverse mode of [`root_bending_moment`]: for seeds `s_bar` (one per mode), the seeds on λ and on
+/// the nodal shapes, and the direct gradient with respect to x (mass matrix and root-line geometry).
+pub fn root_bending_moment_vjp(
+    model: &PlateModel,
+    modes: &Modes,
+    s_bar: &[f64],
+) -> (ModalSeed, Vec<f64>) {
+    let n_dv = model.mesh.n_dv();
+    let mut seed = ModalSeed::zeros(modes);
+    let mut g = vec![0.0; n_dv + N_PLANFORM];
+    for (i, m) in modes.modes.iter().enumerate() {
+        if m.field != Field::Bending || s_bar[i] == 0.0 {
+            continue;
+        }
+        let mut shape_bar = vec![0.0; m.shape.len()];
+        let mut b = 0.0;
+        let w = s_bar[i] * m.lambda;
+        for (e, (_, me)) in model.element_duals(Field::Bending).iter().enumerate() {
+            let (r, dr_dspan) = root_rotation(model, e);
+            let phi = element_nodal(model, e, &m.shape);
+            let nodes = model.mesh.elements[e];
+            let (mut rmphi, mut drmphi) = (0.0, 0.0);
+            let mut dmk = [0.0; N_PLANFORM];
+            for a in 0..12 {
+                for c in 0..12 {
+                    let mv = me[a * 12 + c];
+                    rmphi += r[a] * mv.v * phi[c];
+                    drmphi += dr_dspan[a] * mv.v * phi[c];
+                    for k in 0..N_PLANFORM {
+                        dmk[k] += r[a] * mv.d[k] * phi[c];
+                    }
+                    // φ̄ = M r (free DOFs only: clamped entries of φ are fixed at zero)
+                    let node = nodes[c / 3];
+                    if !model.mesh.clamped[node] {
+                        shape_bar[NODAL * node + c % 3] += w * mv.v * r[a];
+                    }
+                }
+            }
+            b += rmphi;
+            // M_e ∝ t: ∂/∂t = M_e / t
+            g[model.mesh.element_dv[e]] += w * rmphi / model.element_thickness(e);
+            for k in 0..N_PLANFORM {
+                g[n_dv + k] += w * dmk[k];
+            }
+            // r's w entries are η s: ∂r/∂span
+            g[n_dv] += w * drmphi;
+        }
+        seed.lambda[i] = s_bar[i] * b;
+        seed.shape[i] = shape_bar;
+    }
+    (seed, g)
+}
+
+/// The rigid rotation r about the x axis on element e's bending DOFs (w = y, ∂w/∂x = 0,
+/// ∂w/∂y = 1), zero at clamped nodes, and its derivative with respect to the span (y = η s).
+fn root_rotation(model: &PlateModel, e: usize) -> ([f64; 12], [f64; 12]) {
+    let span = model.planform().span;
+    let mut r = [0.0; 12];
+    let mut d = [0.0; 12];
+    for (a, &n) in model.mesh.elements[e].iter().enumerate() {
+        if model.mesh.clamped[n] {
+            continue;
+        }
+        let eta = model.mesh.nodes[n][1];
+        r[3 * a] = eta * span;
+        r[3 * a + 2] = 1.0;
+        d[3 * a] = eta;
+    }
+    (r, d)
+}
+
+/// Element e's bending DOF values from a nodal field.
+fn element_nodal(model: &PlateModel, e: usize, nodal: &[f64]) -> [f64; 12] {
+    let mut v = [0.0; 12];
+    for (a, &n) in model.mesh.elements[e].iter().enumerate() {
+        for d in 0..3 {
+            v[3 * a + d] = nodal[NODAL * n + d];
+        }
+    }
+    v
+}

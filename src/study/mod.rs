@@ -210,13 +210,45 @@ impl Study {
         if g.outputs.is_empty() {
             return Err(self.err("gust.outputs", "at least one output is needed"));
         }
+        let mut outputs = Vec::new();
         for (i, o) in g.outputs.iter().enumerate() {
-            if !o.point.iter().all(|v| (0.0..=1.0).contains(v)) {
-                return Err(self.err(
-                    &format!("gust.outputs[{i}].point"),
-                    format!("(ξ, η) must lie in [0, 1]² (got {:?})", o.point),
-                ));
-            }
+            let quantity = match (
+                o.quantity.as_deref().unwrap_or("vertical_displacement"),
+                o.point,
+            ) {
+                ("vertical_displacement", Some(point)) => {
+                    if !point.iter().all(|v| (0.0..=1.0).contains(v)) {
+                        return Err(self.err(
+                            &format!("gust.outputs[{i}].point"),
+                            format!("(ξ, η) must lie in [0, 1]² (got {point:?})"),
+                        ));
+                    }
+                    crate::pipeline::Quantity::Displacement { point }
+                }
+                ("vertical_displacement", None) => {
+                    return Err(self.err(
+                        &format!("gust.outputs[{i}].point"),
+                        "missing: a displacement output needs a point [ξ, η]",
+                    ))
+                }
+                ("root_bending_moment", None) => crate::pipeline::Quantity::RootBendingMoment,
+                ("root_bending_moment", Some(_)) => {
+                    return Err(self.err(
+                        &format!("gust.outputs[{i}].point"),
+                        "a root bending moment takes no point",
+                    ))
+                }
+                (other, _) => return Err(self.err(
+                    &format!("gust.outputs[{i}].quantity"),
+                    format!(
+                        "unknown quantity '{other}' (vertical_displacement or root_bending_moment)"
+                    ),
+                )),
+            };
+            outputs.push(crate::pipeline::Output {
+                name: o.name.clone(),
+                quantity,
+            });
             if g.outputs[..i].iter().any(|p| p.name == o.name) {
                 return Err(self.err(
                     &format!("gust.outputs[{i}].name"),
@@ -229,14 +261,7 @@ impl Study {
             omega_min: g.omega_min_rad_s,
             points: g.points,
             max_tail: g.max_tail,
-            outputs: g
-                .outputs
-                .iter()
-                .map(|o| crate::pipeline::Output {
-                    name: o.name.clone(),
-                    point: o.point,
-                })
-                .collect(),
+            outputs,
         })
     }
 

@@ -75,13 +75,18 @@ fn default_max_tail() -> f64 {
     1e-3
 }
 
-/// A displacement output.
+/// A response output: `{"name", "point": [ξ, η]}` for a vertical displacement (the default
+/// quantity), or `{"name", "quantity": "root_bending_moment"}`.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct OutputSpec {
     pub name: String,
-    /// (ξ, η) in [0, 1]²: [1, 1] is the wing-tip trailing edge.
-    pub point: [f64; 2],
+    /// `"vertical_displacement"` (default) or `"root_bending_moment"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub quantity: Option<String>,
+    /// (ξ, η) in [0, 1]² of a displacement output: [1, 1] is the wing-tip trailing edge.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub point: Option<[f64; 2]>,
 }
 
 /// The aerodynamic model of a study.
