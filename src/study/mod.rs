@@ -238,12 +238,14 @@ impl Study {
                         "a root bending moment takes no point",
                     ))
                 }
-                (other, _) => return Err(self.err(
-                    &format!("gust.outputs[{i}].quantity"),
-                    format!(
+                (other, _) => {
+                    return Err(self.err(
+                        &format!("gust.outputs[{i}].quantity"),
+                        format!(
                         "unknown quantity '{other}' (vertical_displacement or root_bending_moment)"
                     ),
-                )),
+                    ))
+                }
             };
             outputs.push(crate::pipeline::Output {
                 name: o.name.clone(),
