@@ -117,22 +117,105 @@ pub fn run(file: &Path, reports: &Path) -> Result<()> {
     let (model, modes, summary) = analyze(&study)?;
     let dir = study.report_dir(reports);
     write_modal_files(&study, &model, &modes, &dir)?;
-    write_atomic(
-        &dir.join("results.json"),
-        serde_json::to_string_pretty(&summary)?.as_bytes(),
-    )?;
-    let md = format!(
-        "# {}\n\n{}\n\n## Structure\n\nMass {:.4} kg, planform area {:.4} m², {} design variables.\n\n{}\n![modes](modes.png)\n\nVTK: `modes.vtk`. Run time {:.2} s.\n",
+    let mut md = format!(
+        "# {}\n\n{}\n\n## Structure\n\nMass {:.4} kg, planform area {:.4} m², {} design variables.\n\n{}\n![modes](modes.png)\n\nVTK: `modes.vtk`.\n",
         study.spec.name,
         study.spec.description,
         summary.mass_kg,
         summary.area_m2,
         model.design.len(),
         frequency_table(&summary),
-        t0.elapsed().as_secs_f64()
     );
-    write_atomic(&dir.join("summary.md"), md.as_bytes())?;
     println!("{}", frequency_table(&summary));
+    let mut gust = None;
+    if study.spec.gust.is_some() {
+        let settings = study.gust_settings()?;
+        let x = study.initial_design()?.to_vec();
+        let ev = crate::pipeline::evaluate(&study, &settings, &x)
+            .with_context(|| format!("{}: gust analysis", file.display()))?;
+        let f = ev.aero.flight;
+        let rows: Vec<serde_json::Value> = settings
+            .outputs
+            .iter()
+            .enumerate()
+            .map(|(i, o)| {
+                let unit = match o.quantity {
+                    crate::pipeline::Quantity::Displacement { .. } => "m",
+                    crate::pipeline::Quantity::RootBendingMoment => "N m",
+                };
+                serde_json::json!({"name": o.name, "rms": ev.rms_m[i], "unit": unit, "n0_hz": ev.n0_hz[i]})
+            })
+            .collect();
+        md += &format!(
+            "\n## Gust response\n\nM = {}, V = {} m/s, ρ = {} kg/m³, q = {:.1} Pa; {:?}; {} frequencies on a log grid up to {:.1} rad/s.\n\n| output | RMS | unit | N0 [Hz] |\n|---|---:|---|---:|\n",
+            f.mach,
+            f.velocity,
+            f.density,
+            f.q_inf(),
+            settings.turbulence,
+            ev.grid.omega.len(),
+            ev.grid.omega.last().copied().unwrap_or(0.0)
+        );
+        for r in &rows {
+            md += &format!(
+                "| {} | {:.6e} | {} | {:.3} |\n",
+                r["name"].as_str().unwrap_or(""),
+                r["rms"].as_f64().unwrap_or(0.0),
+                r["unit"].as_str().unwrap_or(""),
+                r["n0_hz"].as_f64().unwrap_or(0.0)
+            );
+            println!(
+                "RMS {}: {:.6e} {}",
+                r["name"].as_str().unwrap_or(""),
+                r["rms"].as_f64().unwrap_or(0.0),
+                r["unit"].as_str().unwrap_or("")
+            );
+        }
+        md += "\n![PSD](psd.png)\n";
+        let curves = settings
+            .outputs
+            .iter()
+            .enumerate()
+            .map(|(i, o)| {
+                let unit = match o.quantity {
+                    crate::pipeline::Quantity::Displacement { .. } => "m",
+                    crate::pipeline::Quantity::RootBendingMoment => "N m",
+                };
+                (
+                    o.name.clone(),
+                    unit.to_string(),
+                    ev.grid
+                        .omega
+                        .iter()
+                        .copied()
+                        .zip(ev.response.psd[i].iter().copied())
+                        .collect(),
+                )
+            })
+            .collect();
+        save_figure(
+            &dir,
+            "psd",
+            &report::figures::PsdPlot {
+                title: format!("{}: gust response PSD", study.spec.name),
+                curves,
+            },
+        )?;
+        gust = Some(serde_json::json!({
+            "mach": f.mach, "velocity_m_s": f.velocity, "density_kg_m3": f.density,
+            "turbulence": settings.turbulence, "outputs": rows,
+        }));
+    }
+    md += &format!("\nRun time {:.2} s.\n", t0.elapsed().as_secs_f64());
+    let mut results = serde_json::to_value(&summary)?;
+    if let Some(g) = gust {
+        results["gust"] = g;
+    }
+    write_atomic(
+        &dir.join("results.json"),
+        serde_json::to_string_pretty(&results)?.as_bytes(),
+    )?;
+    write_atomic(&dir.join("summary.md"), md.as_bytes())?;
     println!("report written to {}", dir.display());
     Ok(())
 }

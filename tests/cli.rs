@@ -75,6 +75,13 @@ fn run_writes_results_and_summary() {
     assert!(r["mass_kg"].as_f64().unwrap() > 1.6);
     let md = std::fs::read_to_string(dir.join("agard445_dlm/summary.md")).unwrap();
     assert!(md.contains("| 1 | bending |"));
+    // the gust analysis: RMS of each output, in SI, and the PSD figure
+    let outs = r["gust"]["outputs"].as_array().unwrap();
+    assert_eq!(outs[0]["name"], "tip_te_w");
+    assert!(outs[0]["rms"].as_f64().unwrap() > 0.0);
+    assert_eq!(outs[1]["unit"], "N m");
+    assert!(md.contains("## Gust response"));
+    assert!(dir.join("agard445_dlm/psd.png").exists() && dir.join("agard445_dlm/psd.svg").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -297,5 +304,71 @@ fn check_gradient_json_rows() {
         .unwrap();
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("unknown design variable"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Bad gust and flutter input: σ_w ≤ 0, a frequency grid that leaves turbulence out, an unknown
+/// output quantity; and a flutter sweep below the flutter speed reports null.
+#[test]
+fn gust_and_flutter_inputs() {
+    let dir = scratch("gustbad");
+    let base: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(study()).unwrap()).unwrap();
+    let cases: Vec<(Box<dyn Fn(&mut serde_json::Value)>, &str)> = vec![
+        (
+            Box::new(|v| v["gust"]["turbulence"]["sigma_w_m_s"] = 0.0.into()),
+            "gust.turbulence.sigma_w_m_s",
+        ),
+        (
+            Box::new(|v| v["gust"]["outputs"][1]["quantity"] = "torque".into()),
+            "gust.outputs[1].quantity",
+        ),
+        (
+            Box::new(|v| v["structure"]["damping_ratio"] = (-0.1).into()),
+            "structure.damping_ratio",
+        ),
+        (
+            Box::new(|v| {
+                v["aero"]["reduced_frequencies"] = serde_json::json!([0.0, 1e-4, 2e-4, 3e-4])
+            }),
+            "frequency grid ends",
+        ),
+    ];
+    for (edit, needle) in cases {
+        let mut v = base.clone();
+        edit(&mut v);
+        let f = dir.join("bad.json");
+        std::fs::write(&f, v.to_string()).unwrap();
+        let o = gustkit()
+            .args(["run", f.to_str().unwrap(), "--reports"])
+            .arg(&dir)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains(needle),
+            "{needle}: {err}"
+        );
+    }
+    let mut v: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_flutter_m0499.json"),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    v["flutter"]["velocity_max_m_s"] = 150.0.into();
+    v["aero"]["fidelity"]["dlm"]["n_chord"] = 4.into();
+    v["aero"]["fidelity"]["dlm"]["n_span"] = 6.into();
+    let f = dir.join("slow.json");
+    std::fs::write(&f, v.to_string()).unwrap();
+    let o = gustkit()
+        .args(["flutter", f.to_str().unwrap(), "--json", "--reports"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(r["flutter_speed_m_s"].is_null() && r["flutter_frequency_hz"].is_null());
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -236,3 +236,64 @@ impl Figure for VgVf<'_> {
         Ok(())
     }
 }
+
+/// Power spectral densities of the gust response outputs on log-log axes.
+pub struct PsdPlot {
+    pub title: String,
+    /// (label, unit, (ω rad/s, PSD) points) per curve.
+    pub curves: Vec<(String, String, Vec<(f64, f64)>)>,
+}
+
+impl Figure for PsdPlot {
+    fn size(&self) -> (u32, u32) {
+        (1000, 420 * self.curves.len().max(1) as u32)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing PSD: {e}");
+        area.fill(&WHITE).map_err(err)?;
+        let panels = area.split_evenly((self.curves.len().max(1), 1));
+        for (i, (panel, (label, unit, pts))) in panels.iter().zip(&self.curves).enumerate() {
+            let pts: Vec<(f64, f64)> = pts
+                .iter()
+                .copied()
+                .filter(|(w, p)| *w > 0.0 && *p > 0.0)
+                .collect();
+            if pts.is_empty() {
+                continue;
+            }
+            let (w0, w1) = (pts[0].0, pts[pts.len() - 1].0);
+            let pmax = pts.iter().map(|p| p.1).fold(0.0, f64::max);
+            let pmin = (pmax * 1e-10).max(pts.iter().map(|p| p.1).fold(f64::MAX, f64::min));
+            let mut chart = ChartBuilder::on(panel)
+                .caption(
+                    if i == 0 { self.title.as_str() } else { "" },
+                    ("sans-serif", 18),
+                )
+                .margin(10)
+                .x_label_area_size(35)
+                .y_label_area_size(70)
+                .build_cartesian_2d((w0..w1).log_scale(), (pmin..pmax * 2.0).log_scale())
+                .map_err(err)?;
+            chart
+                .configure_mesh()
+                .x_desc("circular frequency [rad/s]")
+                .y_desc(format!("PSD of {label} [{unit}² s/rad]"))
+                .x_label_formatter(&|v| format!("{v:.0e}"))
+                .y_label_formatter(&|v| format!("{v:.0e}"))
+                .label_style(("sans-serif", 12))
+                .draw()
+                .map_err(err)?;
+            chart
+                .draw_series(LineSeries::new(
+                    pts.iter().map(|p| (p.0, p.1.max(pmin))),
+                    BLUE.stroke_width(2),
+                ))
+                .map_err(err)?;
+        }
+        Ok(())
+    }
+}
