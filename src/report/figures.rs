@@ -237,11 +237,13 @@ impl Figure for VgVf<'_> {
     }
 }
 
+/// One PSD curve: label, unit, (ω rad/s, PSD) points.
+pub type PsdCurve = (String, String, Vec<(f64, f64)>);
+
 /// Power spectral densities of the gust response outputs on log-log axes.
 pub struct PsdPlot {
     pub title: String,
-    /// (label, unit, (ω rad/s, PSD) points) per curve.
-    pub curves: Vec<(String, String, Vec<(f64, f64)>)>,
+    pub curves: Vec<PsdCurve>,
 }
 
 impl Figure for PsdPlot {
