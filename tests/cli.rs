@@ -314,7 +314,8 @@ fn gust_and_flutter_inputs() {
     let dir = scratch("gustbad");
     let base: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(study()).unwrap()).unwrap();
-    let cases: Vec<(Box<dyn Fn(&mut serde_json::Value)>, &str)> = vec![
+    type Edit = Box<dyn Fn(&mut serde_json::Value)>;
+    let cases: Vec<(Edit, &str)> = vec![
         (
             Box::new(|v| v["gust"]["turbulence"]["sigma_w_m_s"] = 0.0.into()),
             "gust.turbulence.sigma_w_m_s",
