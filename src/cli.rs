@@ -139,10 +139,7 @@ pub fn run(file: &Path, reports: &Path) -> Result<()> {
             .iter()
             .enumerate()
             .map(|(i, o)| {
-                let unit = match o.quantity {
-                    crate::pipeline::Quantity::Displacement { .. } => "m",
-                    crate::pipeline::Quantity::RootBendingMoment => "N m",
-                };
+                let unit = o.quantity.unit();
                 serde_json::json!({"name": o.name, "rms": ev.rms_m[i], "unit": unit, "n0_hz": ev.n0_hz[i]})
             })
             .collect();
@@ -177,10 +174,7 @@ pub fn run(file: &Path, reports: &Path) -> Result<()> {
             .iter()
             .enumerate()
             .map(|(i, o)| {
-                let unit = match o.quantity {
-                    crate::pipeline::Quantity::Displacement { .. } => "m",
-                    crate::pipeline::Quantity::RootBendingMoment => "N m",
-                };
+                let unit = o.quantity.unit();
                 (
                     o.name.clone(),
                     unit.to_string(),

@@ -29,6 +29,16 @@ pub enum Quantity {
     RootBendingMoment,
 }
 
+impl Quantity {
+    /// SI unit of the quantity.
+    pub fn unit(&self) -> &'static str {
+        match self {
+            Quantity::Displacement { .. } => "m",
+            Quantity::RootBendingMoment => "N m",
+        }
+    }
+}
+
 /// A response output.
 #[derive(Clone, Debug)]
 pub struct Output {

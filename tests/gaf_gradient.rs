@@ -51,16 +51,7 @@ fn functional(study: &Study, seed: &GafTable, x: &[f64]) -> f64 {
     let modes = modal::solve(&plate, st.modes, 0.0, &study.mode_fields()).unwrap();
     let aero = AeroModel::new(study, &plate).unwrap();
     let q = aero.gafs(&plate, &modes).unwrap();
-    let mut s = 0.0;
-    for ik in 0..q.k.len() {
-        for m in 0..q.n_modes() {
-            for n in 0..q.n_modes() {
-                s += (seed.q_ss[ik][m][n].conj() * q.q_ss[ik][m][n]).re;
-            }
-            s += (seed.q_gs[ik][m].conj() * q.q_gs[ik][m]).re;
-        }
-    }
-    s
+    seed.pair(&q)
 }
 
 /// Thicknesses at the root trailing edge, mid-wing and tip, and every planform variable: the

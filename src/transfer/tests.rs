@@ -50,15 +50,8 @@ fn transfer_vjp_dot_product_test() {
     let t = ModeTransfer::new(&p, &pts);
     let mut seed = ModalSurface::zeros(modes.len(), pts.len());
     let r = rand_vec(modes.len() * pts.len() * 6, 4);
-    for (i, v) in seed
-        .disp
-        .iter_mut()
-        .chain(seed.disp_x.iter_mut())
-        .flatten()
-        .flatten()
-        .enumerate()
-    {
-        *v = r[i];
+    for (v, ri) in seed.values_mut().zip(&r) {
+        *v = *ri;
     }
     let (shape_bar, _) = t.modes_on_surface_vjp(&p, &modes, &seed);
     // perturb the nodal shapes: the transfer is linear in them
@@ -73,15 +66,7 @@ fn transfer_vjp_dot_product_test() {
     }
     let s0 = t.modes_on_surface(&p, &modes);
     let s1 = t.modes_on_surface(&p, &pert);
-    let flat = |m: &ModalSurface| -> Vec<f64> {
-        m.disp
-            .iter()
-            .chain(&m.disp_x)
-            .flatten()
-            .flatten()
-            .copied()
-            .collect()
-    };
+    let flat = |m: &ModalSurface| -> Vec<f64> { m.values().copied().collect() };
     let jv: Vec<f64> = flat(&s1)
         .iter()
         .zip(flat(&s0))

@@ -92,6 +92,19 @@ impl ModalSurface {
     pub fn n_modes(&self) -> usize {
         self.disp.len()
     }
+    /// Every value (displacements, then slopes) in a fixed order, for dot products in tests and
+    /// checkers.
+    pub fn values(&self) -> impl Iterator<Item = &f64> {
+        self.disp.iter().chain(&self.disp_x).flatten().flatten()
+    }
+    /// Mutable access to every value in the order of [`ModalSurface::values`].
+    pub fn values_mut(&mut self) -> impl Iterator<Item = &mut f64> {
+        self.disp
+            .iter_mut()
+            .chain(self.disp_x.iter_mut())
+            .flatten()
+            .flatten()
+    }
     /// Checks the shapes fit a surface of `n_points` points.
     pub fn check(&self, n_points: usize) -> Result<(), AeroError> {
         if self.disp.len() != self.disp_x.len() {
@@ -148,6 +161,44 @@ impl GafTable {
     }
     pub fn n_modes(&self) -> usize {
         self.q_gs.first().map_or(0, Vec::len)
+    }
+
+    /// A table from its per-frequency parts (Q_ss, Q_gs), in the order of `k`.
+    pub fn from_parts(
+        flight: &FlightCondition,
+        k: &[f64],
+        parts: Vec<(Vec<Vec<Complex64>>, Vec<Complex64>)>,
+    ) -> Self {
+        let (q_ss, q_gs) = parts.into_iter().unzip();
+        Self {
+            mach: flight.mach,
+            b_ref: flight.b_ref,
+            x_ref: flight.x_ref,
+            k: k.to_vec(),
+            q_ss,
+            q_gs,
+        }
+    }
+
+    /// Re Σ conj(self) · other over every entry: the real pairing of a seed table with a GAF table
+    /// (dJ = seed.pair(dQ) in the conjugate convention).
+    pub fn pair(&self, other: &GafTable) -> f64 {
+        let ss: f64 = self
+            .q_ss
+            .iter()
+            .flatten()
+            .flatten()
+            .zip(other.q_ss.iter().flatten().flatten())
+            .map(|(a, b)| (a.conj() * b).re)
+            .sum();
+        let gs: f64 = self
+            .q_gs
+            .iter()
+            .flatten()
+            .zip(other.q_gs.iter().flatten())
+            .map(|(a, b)| (a.conj() * b).re)
+            .sum();
+        ss + gs
     }
 }
 

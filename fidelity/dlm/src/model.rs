@@ -365,15 +365,7 @@ impl Dlm {
                 Ok((q_ss, q_gs))
             })
             .collect::<Result<_, AeroError>>()?;
-        let (q_ss, q_gs) = per_k.into_iter().unzip();
-        Ok(GafTable {
-            mach: flight.mach,
-            b_ref: flight.b_ref,
-            x_ref: flight.x_ref,
-            k: k.to_vec(),
-            q_ss,
-            q_gs,
-        })
+        Ok(GafTable::from_parts(flight, k, per_k))
     }
 }
 
@@ -420,15 +412,7 @@ impl Aerodynamics for Dlm {
                 Ok((q_ss, q_gs))
             })
             .collect::<Result<_, AeroError>>()?;
-        let (q_ss, q_gs) = per_k.into_iter().unzip();
-        Ok(GafTable {
-            mach: flight.mach,
-            b_ref: flight.b_ref,
-            x_ref: flight.x_ref,
-            k: k.to_vec(),
-            q_ss,
-            q_gs,
-        })
+        Ok(GafTable::from_parts(flight, k, per_k))
     }
 
     fn gafs_vjp(

@@ -357,15 +357,8 @@ pub mod fake {
             let shapes = |s: u64| {
                 let v = rand_vec(2 * 3 * np * 3, s);
                 let mut m = ModalSurface::zeros(3, np);
-                for (i, x) in m
-                    .disp
-                    .iter_mut()
-                    .chain(m.disp_x.iter_mut())
-                    .flatten()
-                    .flatten()
-                    .enumerate()
-                {
-                    *x = v[i];
+                for (x, vi) in m.values_mut().zip(&v) {
+                    *x = *vi;
                 }
                 m
             };
@@ -381,28 +374,10 @@ pub mod fake {
                     seed.q_gs[ik][m] = it.next().unwrap();
                 }
             }
-            let pair = |t: &GafTable| -> f64 {
-                let mut s = 0.0;
-                for ik in 0..3 {
-                    for m in 0..3 {
-                        for n in 0..3 {
-                            s += (seed.q_ss[ik][m][n].conj() * t.q_ss[ik][m][n]).re;
-                        }
-                        s += (seed.q_gs[ik][m].conj() * t.q_gs[ik][m]).re;
-                    }
-                }
-                s
-            };
+            let pair = |t: &GafTable| seed.pair(t);
             let shift = |s: f64| {
                 let mut m = m0.clone();
-                for (a, b) in m
-                    .disp
-                    .iter_mut()
-                    .chain(m.disp_x.iter_mut())
-                    .flatten()
-                    .flatten()
-                    .zip(dm.disp.iter().chain(&dm.disp_x).flatten().flatten())
-                {
+                for (a, b) in m.values_mut().zip(dm.values()) {
                     *a += s * b;
                 }
                 m
@@ -411,16 +386,7 @@ pub mod fake {
                 * (pair(&fake.gafs(&f, &shift(1.0), &k).unwrap())
                     - pair(&fake.gafs(&f, &shift(-1.0), &k).unwrap()));
             let g = fake.gafs_vjp(&f, &m0, &k, &seed).unwrap();
-            let reverse: f64 = g
-                .modes
-                .disp
-                .iter()
-                .chain(&g.modes.disp_x)
-                .flatten()
-                .flatten()
-                .zip(dm.disp.iter().chain(&dm.disp_x).flatten().flatten())
-                .map(|(a, b)| a * b)
-                .sum();
+            let reverse: f64 = g.modes.values().zip(dm.values()).map(|(a, b)| a * b).sum();
             assert!(
                 (forward - reverse).abs() < 1e-12 * forward.abs(),
                 "{forward} {reverse}"
