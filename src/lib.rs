@@ -6,6 +6,7 @@
 pub mod cli;
 pub mod flutter;
 pub mod gust;
+pub mod optim;
 pub mod pipeline;
 pub mod report;
 pub mod structure;

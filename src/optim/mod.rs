@@ -1,0 +1,127 @@
+//! Sequential quadratic programming in the spirit of SLSQP for
+//!   min f(x)  s.t.  h(x) = 0,  c(x) ≤ 0,  lb ≤ x ≤ ub,
+//! with a damped-BFGS Hessian of the Lagrangian, elastic QP subproblems solved by clarabel (so an
+//! inconsistent linearization never stops the run), an L1 exact-penalty merit function with a
+//! backtracking Armijo line search, design-variable scaling by the bound ranges, and a KKT-based
+//! stopping test. Every iteration can be observed and checkpointed; a run resumes from its
+//! checkpoint to the same result.
+
+pub mod qp;
+
+use serde::{Deserialize, Serialize};
+
+/// Function values at a point.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Values {
+    pub f: f64,
+    pub eq: Vec<f64>,
+    /// Inequalities, feasible when ≤ 0.
+    pub ineq: Vec<f64>,
+}
+
+/// Gradients at a point (rows: constraints).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Gradients {
+    pub f: Vec<f64>,
+    pub eq: Vec<Vec<f64>>,
+    pub ineq: Vec<Vec<f64>>,
+}
+
+/// An optimization problem. Evaluations may fail (e.g. an unstable design): the line search then
+/// backtracks.
+pub trait Problem {
+    fn lower(&self) -> Vec<f64>;
+    fn upper(&self) -> Vec<f64>;
+    fn values(&mut self, x: &[f64]) -> Result<Values, String>;
+    /// Gradients at the point of the last successful `values` call with the same x.
+    fn gradients(&mut self, x: &[f64]) -> Result<Gradients, String>;
+}
+
+/// Settings of the SQP.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SqpParams {
+    pub max_iterations: usize,
+    /// KKT tolerance (scaled variables): |∇f·d| + Σ|λ_i c_i| and the constraint violation.
+    pub tolerance: f64,
+    /// Elastic penalty of the QP subproblem.
+    pub elastic_penalty: f64,
+    /// Smallest line-search step before the iteration is declared stalled.
+    pub min_step: f64,
+}
+
+impl Default for SqpParams {
+    fn default() -> Self {
+        Self {
+            max_iterations: 100,
+            tolerance: 1e-4,
+            elastic_penalty: 1e4,
+            min_step: 1e-8,
+        }
+    }
+}
+
+/// One iteration as recorded in the history and shown to observers.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Iterate {
+    pub iteration: usize,
+    pub x: Vec<f64>,
+    pub values: Values,
+    /// Largest constraint violation.
+    pub violation: f64,
+    /// KKT measure of the step taken from this point.
+    pub kkt: f64,
+    pub step: f64,
+    pub evaluations: usize,
+}
+
+/// How a run ended.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SqpInfo {
+    pub converged: bool,
+    pub iterations: usize,
+    pub evaluations: usize,
+    pub message: String,
+    pub x: Vec<f64>,
+    pub values: Values,
+    pub history: Vec<Iterate>,
+}
+
+/// Why the SQP could not run.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum SqpError {
+    #[error("bounds: lower bound {lower} exceeds upper bound {upper} for variable {index}")]
+    InfeasibleBounds {
+        index: usize,
+        lower: f64,
+        upper: f64,
+    },
+    #[error("the starting point cannot be evaluated: {0}")]
+    Start(String),
+    #[error("checkpoint: {0}")]
+    Checkpoint(String),
+    #[error("the QP subproblem failed at iteration {iteration} (clarabel could not solve it)")]
+    Subproblem { iteration: usize },
+    #[error("gradients failed at iteration {iteration}: {reason}")]
+    Gradient { iteration: usize, reason: String },
+}
+
+/// Everything needed to continue a run: written after every iteration.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Checkpoint {
+    /// Identifies the problem the checkpoint belongs to (checked on resume).
+    pub problem_id: String,
+    pub params: SqpParams,
+    pub iteration: usize,
+    pub evaluations: usize,
+    /// Scaled iterate.
+    pub z: Vec<f64>,
+    pub hessian: Vec<Vec<f64>>,
+    pub penalty: f64,
+    pub history: Vec<Iterate>,
+}
+
+mod sqp;
+pub use sqp::{minimize, Observer};
+
+#[cfg(test)]
+mod tests;

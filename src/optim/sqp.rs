@@ -1,0 +1,321 @@
+//! The SQP iteration (see the module documentation of `optim`).
+
+use super::qp::{self, QpData};
+use super::{Checkpoint, Gradients, Iterate, Problem, SqpError, SqpInfo, SqpParams, Values};
+
+/// Sees every iteration with the checkpoint to continue from it; returns false to stop the run.
+pub trait Observer {
+    fn iteration(&mut self, iterate: &Iterate, checkpoint: &Checkpoint) -> bool;
+}
+
+/// An observer that does nothing.
+impl Observer for () {
+    fn iteration(&mut self, _: &Iterate, _: &Checkpoint) -> bool {
+        true
+    }
+}
+
+/// Affine scaling x = offset + scale ∘ z: z ∈ [0, 1] for finite bounds.
+struct Scaling {
+    offset: Vec<f64>,
+    scale: Vec<f64>,
+}
+
+impl Scaling {
+    fn new(lb: &[f64], ub: &[f64], x0: &[f64]) -> Self {
+        let (mut offset, mut scale) = (Vec::new(), Vec::new());
+        for i in 0..x0.len() {
+            if lb[i].is_finite() && ub[i].is_finite() && ub[i] > lb[i] {
+                offset.push(lb[i]);
+                scale.push(ub[i] - lb[i]);
+            } else {
+                offset.push(0.0);
+                scale.push(x0[i].abs().max(1.0));
+            }
+        }
+        Self { offset, scale }
+    }
+    fn x(&self, z: &[f64]) -> Vec<f64> {
+        z.iter()
+            .zip(self.offset.iter().zip(&self.scale))
+            .map(|(z, (o, s))| o + s * z)
+            .collect()
+    }
+    fn z(&self, x: &[f64]) -> Vec<f64> {
+        x.iter()
+            .zip(self.offset.iter().zip(&self.scale))
+            .map(|(x, (o, s))| (x - o) / s)
+            .collect()
+    }
+    fn grad(&self, g: &[f64]) -> Vec<f64> {
+        g.iter().zip(&self.scale).map(|(g, s)| g * s).collect()
+    }
+}
+
+fn violation(v: &Values) -> f64 {
+    v.eq.iter()
+        .map(|h| h.abs())
+        .chain(v.ineq.iter().map(|c| c.max(0.0)))
+        .fold(0.0, f64::max)
+}
+
+fn infeasibility_sum(v: &Values) -> f64 {
+    v.eq.iter().map(|h| h.abs()).sum::<f64>() + v.ineq.iter().map(|c| c.max(0.0)).sum::<f64>()
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// ∇L in scaled variables for multipliers (λ_E, λ_I).
+fn lagrangian_grad(s: &Scaling, g: &Gradients, le: &[f64], li: &[f64]) -> Vec<f64> {
+    let mut out = s.grad(&g.f);
+    for (row, l) in g.eq.iter().zip(le).chain(g.ineq.iter().zip(li)) {
+        for (o, v) in out.iter_mut().zip(s.grad(row)) {
+            *o += l * v;
+        }
+    }
+    out
+}
+
+/// Runs the SQP from `x0`, or continues a checkpoint.
+pub fn minimize(
+    problem: &mut dyn Problem,
+    x0: &[f64],
+    params: &SqpParams,
+    problem_id: &str,
+    resume: Option<Checkpoint>,
+    observer: &mut dyn Observer,
+) -> Result<SqpInfo, SqpError> {
+    let (lb, ub) = (problem.lower(), problem.upper());
+    for i in 0..x0.len() {
+        if !(lb[i] <= ub[i]) {
+            return Err(SqpError::InfeasibleBounds {
+                index: i,
+                lower: lb[i],
+                upper: ub[i],
+            });
+        }
+    }
+    let n = x0.len();
+    let scaling = Scaling::new(&lb, &ub, x0);
+    let (mut z, mut hess, mut penalty, mut history, mut iteration, mut evaluations) = match resume {
+        Some(c) => {
+            if c.problem_id != problem_id || c.z.len() != n || c.hessian.len() != n {
+                return Err(SqpError::Checkpoint(format!(
+                    "it belongs to another problem ('{}' with {} variables, this is '{problem_id}' with {n})",
+                    c.problem_id,
+                    c.z.len()
+                )));
+            }
+            if c.params != *params {
+                return Err(SqpError::Checkpoint(
+                    "it was written with other optimizer settings".into(),
+                ));
+            }
+            (
+                c.z,
+                c.hessian,
+                c.penalty,
+                c.history,
+                c.iteration,
+                c.evaluations,
+            )
+        }
+        None => {
+            // start inside the bounds
+            let z0: Vec<f64> = scaling
+                .z(x0)
+                .iter()
+                .enumerate()
+                .map(|(i, v)| {
+                    if lb[i].is_finite() && ub[i].is_finite() {
+                        v.clamp(0.0, 1.0)
+                    } else {
+                        *v
+                    }
+                })
+                .collect();
+            let eye = (0..n)
+                .map(|i| (0..n).map(|j| if i == j { 1.0 } else { 0.0 }).collect())
+                .collect();
+            (z0, eye, 0.0, Vec::new(), 0, 0)
+        }
+    };
+    let mut values = problem.values(&scaling.x(&z)).map_err(SqpError::Start)?;
+    evaluations += 1;
+    let mut grads = problem
+        .gradients(&scaling.x(&z))
+        .map_err(|reason| SqpError::Gradient { iteration, reason })?;
+    loop {
+        let x = scaling.x(&z);
+        let g = scaling.grad(&grads.f);
+        let eq_jac: Vec<Vec<f64>> = grads.eq.iter().map(|r| scaling.grad(r)).collect();
+        let ineq_jac: Vec<Vec<f64>> = grads.ineq.iter().map(|r| scaling.grad(r)).collect();
+        let lower: Vec<f64> = (0..n)
+            .map(|i| {
+                if lb[i].is_finite() {
+                    (lb[i] - x[i]) / scaling.scale[i]
+                } else {
+                    f64::NEG_INFINITY
+                }
+            })
+            .collect();
+        let upper: Vec<f64> = (0..n)
+            .map(|i| {
+                if ub[i].is_finite() {
+                    (ub[i] - x[i]) / scaling.scale[i]
+                } else {
+                    f64::INFINITY
+                }
+            })
+            .collect();
+        let step = qp::solve(&QpData {
+            hessian: &hess,
+            grad: &g,
+            eq: &values.eq,
+            eq_jac: &eq_jac,
+            ineq: &values.ineq,
+            ineq_jac: &ineq_jac,
+            lower: &lower,
+            upper: &upper,
+            rho: params.elastic_penalty,
+        })
+        .ok_or(SqpError::Subproblem { iteration })?;
+        let viol = violation(&values);
+        let kkt = dot(&g, &step.d).abs()
+            + step
+                .lambda_eq
+                .iter()
+                .zip(&values.eq)
+                .map(|(l, h)| (l * h).abs())
+                .sum::<f64>()
+            + step
+                .lambda_ineq
+                .iter()
+                .zip(&values.ineq)
+                .map(|(l, c)| (l * c).abs())
+                .sum::<f64>();
+        let record = Iterate {
+            iteration,
+            x: x.clone(),
+            values: values.clone(),
+            violation: viol,
+            kkt,
+            step: step.d.iter().fold(0.0, |a, v| a.max(v.abs())),
+            evaluations,
+        };
+        history.push(record.clone());
+        let finish =
+            |converged: bool, message: String, history: Vec<Iterate>, evaluations: usize| SqpInfo {
+                converged,
+                iterations: iteration,
+                evaluations,
+                message,
+                x: x.clone(),
+                values: values.clone(),
+                history,
+            };
+        if kkt < params.tolerance && viol < params.tolerance {
+            return Ok(finish(
+                true,
+                "KKT conditions satisfied to the tolerance".into(),
+                history,
+                evaluations,
+            ));
+        }
+        if iteration >= params.max_iterations {
+            return Ok(finish(
+                false,
+                format!("iteration limit {} reached", params.max_iterations),
+                history,
+                evaluations,
+            ));
+        }
+        // merit penalty: above every multiplier
+        let lam_max = step
+            .lambda_eq
+            .iter()
+            .chain(&step.lambda_ineq)
+            .fold(0.0f64, |a, l| a.max(l.abs()));
+        penalty = penalty.max(1.1 * lam_max + 1e-8);
+        let phi = |v: &Values| v.f + penalty * infeasibility_sum(v);
+        let phi0 = phi(&values);
+        let deriv = dot(&g, &step.d) - penalty * (infeasibility_sum(&values) - step.elastic);
+        let mut alpha = 1.0;
+        let accepted = loop {
+            let zt: Vec<f64> = z.iter().zip(&step.d).map(|(a, b)| a + alpha * b).collect();
+            let trial = problem.values(&scaling.x(&zt));
+            evaluations += 1;
+            if let Ok(v) = trial {
+                if phi(&v) <= phi0 + 1e-4 * alpha * deriv.min(0.0) {
+                    break Some((zt, v));
+                }
+            }
+            alpha *= 0.5;
+            if alpha < params.min_step {
+                break None;
+            }
+        };
+        let Some((z_new, v_new)) = accepted else {
+            let converged = viol < params.tolerance && kkt < 10.0 * params.tolerance;
+            return Ok(finish(
+                converged,
+                "line search stalled".into(),
+                history,
+                evaluations,
+            ));
+        };
+        let grads_new = problem
+            .gradients(&scaling.x(&z_new))
+            .map_err(|reason| SqpError::Gradient { iteration, reason })?;
+        // damped BFGS (Powell) on the Lagrangian with the new multipliers
+        let s: Vec<f64> = z_new.iter().zip(&z).map(|(a, b)| a - b).collect();
+        let gl_new = lagrangian_grad(&scaling, &grads_new, &step.lambda_eq, &step.lambda_ineq);
+        let gl_old = lagrangian_grad(&scaling, &grads, &step.lambda_eq, &step.lambda_ineq);
+        let mut y: Vec<f64> = gl_new.iter().zip(&gl_old).map(|(a, b)| a - b).collect();
+        let bs: Vec<f64> = (0..n).map(|i| dot(&hess[i], &s)).collect();
+        let sbs = dot(&s, &bs);
+        let sy = dot(&s, &y);
+        if sbs > 1e-300 {
+            if sy < 0.2 * sbs {
+                let theta = 0.8 * sbs / (sbs - sy);
+                for i in 0..n {
+                    y[i] = theta * y[i] + (1.0 - theta) * bs[i];
+                }
+            }
+            let sy = dot(&s, &y);
+            for i in 0..n {
+                for j in 0..n {
+                    hess[i][j] += y[i] * y[j] / sy - bs[i] * bs[j] / sbs;
+                }
+            }
+        }
+        z = z_new;
+        values = v_new;
+        grads = grads_new;
+        iteration += 1;
+        let checkpoint = Checkpoint {
+            problem_id: problem_id.to_string(),
+            params: params.clone(),
+            iteration,
+            evaluations,
+            z: z.clone(),
+            hessian: hess.clone(),
+            penalty,
+            history: history.clone(),
+        };
+        if !observer.iteration(&record, &checkpoint) {
+            let x = scaling.x(&z);
+            return Ok(SqpInfo {
+                converged: false,
+                iterations: iteration,
+                evaluations,
+                message: "stopped by the observer".into(),
+                x,
+                values,
+                history,
+            });
+        }
+    }
+}

@@ -1,0 +1,261 @@
+//! The SQP on standard problems with known optima, checkpoint/resume, and bad input.
+
+use super::*;
+
+/// A problem from closures.
+struct Fns<F, G> {
+    lb: Vec<f64>,
+    ub: Vec<f64>,
+    values: F,
+    grads: G,
+}
+
+impl<F, G> Problem for Fns<F, G>
+where
+    F: FnMut(&[f64]) -> Result<Values, String>,
+    G: FnMut(&[f64]) -> Gradients,
+{
+    fn lower(&self) -> Vec<f64> {
+        self.lb.clone()
+    }
+    fn upper(&self) -> Vec<f64> {
+        self.ub.clone()
+    }
+    fn values(&mut self, x: &[f64]) -> Result<Values, String> {
+        (self.values)(x)
+    }
+    fn gradients(&mut self, x: &[f64]) -> Result<Gradients, String> {
+        Ok((self.grads)(x))
+    }
+}
+
+fn hs71() -> impl Problem {
+    Fns {
+        lb: vec![1.0; 4],
+        ub: vec![5.0; 4],
+        values: |x: &[f64]| {
+            Ok(Values {
+                f: x[0] * x[3] * (x[0] + x[1] + x[2]) + x[2],
+                eq: vec![x.iter().map(|v| v * v).sum::<f64>() - 40.0],
+                ineq: vec![25.0 - x[0] * x[1] * x[2] * x[3]],
+            })
+        },
+        grads: |x: &[f64]| Gradients {
+            f: vec![
+                x[3] * (2.0 * x[0] + x[1] + x[2]),
+                x[0] * x[3],
+                x[0] * x[3] + 1.0,
+                x[0] * (x[0] + x[1] + x[2]),
+            ],
+            eq: vec![x.iter().map(|v| 2.0 * v).collect()],
+            ineq: vec![vec![
+                -x[1] * x[2] * x[3],
+                -x[0] * x[2] * x[3],
+                -x[0] * x[1] * x[3],
+                -x[0] * x[1] * x[2],
+            ]],
+        },
+    }
+}
+
+/// Hock–Schittkowski 71: f* = 17.0140173 at (1, 4.7429994, 3.8211503, 1.3794082) from (1, 5, 5, 1),
+/// with an equality, an inequality and bounds all active or nearly so.
+#[test]
+fn hock_schittkowski_71() {
+    let mut p = hs71();
+    let params = SqpParams {
+        tolerance: 1e-8,
+        ..Default::default()
+    };
+    let r = minimize(
+        &mut p,
+        &[1.0, 5.0, 5.0, 1.0],
+        &params,
+        "hs71",
+        None,
+        &mut (),
+    )
+    .unwrap();
+    println!(
+        "HS71: {} iterations, {} evaluations, f = {:.10}, x = {:.7?}",
+        r.iterations, r.evaluations, r.values.f, r.x
+    );
+    assert!(r.converged, "{}", r.message);
+    assert!((r.values.f - 17.0140173).abs() < 1e-6);
+    for (a, b) in r.x.iter().zip([1.0, 4.7429994, 3.8211503, 1.3794082]) {
+        assert!((a - b).abs() < 1e-5, "{:?}", r.x);
+    }
+    assert!(r.iterations < 30);
+}
+
+/// Rosenbrock with the bound x ≤ 0.8 active: optimum (0.8, 0.64), f = 0.04, from (−1.2, 1).
+#[test]
+fn bounded_rosenbrock() {
+    let mut p = Fns {
+        lb: vec![-1.5, -1.0],
+        ub: vec![0.8, 3.0],
+        values: |x: &[f64]| {
+            Ok(Values {
+                f: (1.0 - x[0]).powi(2) + 100.0 * (x[1] - x[0] * x[0]).powi(2),
+                eq: vec![],
+                ineq: vec![],
+            })
+        },
+        grads: |x: &[f64]| Gradients {
+            f: vec![
+                -2.0 * (1.0 - x[0]) - 400.0 * x[0] * (x[1] - x[0] * x[0]),
+                200.0 * (x[1] - x[0] * x[0]),
+            ],
+            eq: vec![],
+            ineq: vec![],
+        },
+    };
+    let params = SqpParams {
+        tolerance: 1e-10,
+        max_iterations: 200,
+        ..Default::default()
+    };
+    let r = minimize(&mut p, &[-1.2, 1.0], &params, "rosen", None, &mut ()).unwrap();
+    println!(
+        "Rosenbrock: {} iterations, f = {:.3e}, x = {:?}",
+        r.iterations, r.values.f, r.x
+    );
+    assert!(r.converged, "{}", r.message);
+    assert!((r.x[0] - 0.8).abs() < 1e-7 && (r.x[1] - 0.64).abs() < 1e-6);
+    assert!((r.values.f - 0.04).abs() < 1e-8);
+}
+
+/// A convex QP: min (x−1)² + (y−2.5)² s.t. three linear inequalities, x, y ≥ 0; optimum (1.4, 1.7),
+/// f = 0.8, reached in a few iterations.
+#[test]
+fn convex_qp() {
+    let mut p = Fns {
+        lb: vec![0.0, 0.0],
+        ub: vec![f64::INFINITY, f64::INFINITY],
+        values: |x: &[f64]| {
+            Ok(Values {
+                f: (x[0] - 1.0).powi(2) + (x[1] - 2.5).powi(2),
+                eq: vec![],
+                ineq: vec![
+                    -(x[0] - 2.0 * x[1] + 2.0),
+                    -(-x[0] - 2.0 * x[1] + 6.0),
+                    -(-x[0] + 2.0 * x[1] + 2.0),
+                ],
+            })
+        },
+        grads: |x: &[f64]| Gradients {
+            f: vec![2.0 * (x[0] - 1.0), 2.0 * (x[1] - 2.5)],
+            eq: vec![],
+            ineq: vec![vec![-1.0, 2.0], vec![1.0, 2.0], vec![1.0, -2.0]],
+        },
+    };
+    let params = SqpParams {
+        tolerance: 1e-9,
+        ..Default::default()
+    };
+    let r = minimize(&mut p, &[2.0, 0.0], &params, "qp", None, &mut ()).unwrap();
+    println!("QP: {} iterations, x = {:?}", r.iterations, r.x);
+    assert!(r.converged);
+    assert!((r.x[0] - 1.4).abs() < 1e-6 && (r.x[1] - 1.7).abs() < 1e-6);
+    assert!(r.iterations <= 6);
+}
+
+/// Stopping after 3 iterations and resuming from the checkpoint gives the same final result as an
+/// uninterrupted run; a checkpoint of another problem is refused.
+#[test]
+fn resume_from_checkpoint_reproduces_the_run() {
+    let params = SqpParams {
+        tolerance: 1e-8,
+        ..Default::default()
+    };
+    let x0 = [1.0, 5.0, 5.0, 1.0];
+    let full = minimize(&mut hs71(), &x0, &params, "hs71", None, &mut ()).unwrap();
+    struct StopAt(usize, Option<Checkpoint>);
+    impl Observer for StopAt {
+        fn iteration(&mut self, _: &Iterate, c: &Checkpoint) -> bool {
+            // round-trip through JSON as the CLI does
+            let text = serde_json::to_string(c).unwrap();
+            self.1 = Some(serde_json::from_str(&text).unwrap());
+            c.iteration < self.0
+        }
+    }
+    let mut stop = StopAt(3, None);
+    let part = minimize(&mut hs71(), &x0, &params, "hs71", None, &mut stop).unwrap();
+    assert!(!part.converged && part.iterations == 3);
+    let resumed = minimize(&mut hs71(), &x0, &params, "hs71", stop.1.clone(), &mut ()).unwrap();
+    assert!(resumed.converged);
+    assert_eq!(resumed.iterations, full.iterations);
+    assert_eq!(resumed.x, full.x);
+    assert_eq!(resumed.history.len(), full.history.len());
+    let e = minimize(&mut hs71(), &x0, &params, "other", stop.1, &mut ()).unwrap_err();
+    assert!(matches!(e, SqpError::Checkpoint(_)), "{e}");
+}
+
+/// Crossed bounds and an unevaluable start are errors; points that fail to evaluate during the
+/// line search are backtracked over.
+#[test]
+fn bad_input_and_failed_evaluations() {
+    let mut p = Fns {
+        lb: vec![1.0, 0.0],
+        ub: vec![0.0, 1.0],
+        values: |_: &[f64]| {
+            Ok(Values {
+                f: 0.0,
+                eq: vec![],
+                ineq: vec![],
+            })
+        },
+        grads: |_: &[f64]| Gradients {
+            f: vec![0.0, 0.0],
+            eq: vec![],
+            ineq: vec![],
+        },
+    };
+    let e = minimize(
+        &mut p,
+        &[0.5, 0.5],
+        &SqpParams::default(),
+        "x",
+        None,
+        &mut (),
+    )
+    .unwrap_err();
+    assert!(matches!(e, SqpError::InfeasibleBounds { index: 0, .. }));
+    // f = (x − 3)² but evaluations fail for x > 2: the optimum on the usable region is at its edge
+    let mut p = Fns {
+        lb: vec![0.0],
+        ub: vec![10.0],
+        values: |x: &[f64]| {
+            if x[0] > 2.0 {
+                Err("unstable".into())
+            } else {
+                Ok(Values {
+                    f: (x[0] - 3.0).powi(2),
+                    eq: vec![],
+                    ineq: vec![],
+                })
+            }
+        },
+        grads: |x: &[f64]| Gradients {
+            f: vec![2.0 * (x[0] - 3.0)],
+            eq: vec![],
+            ineq: vec![],
+        },
+    };
+    let r = minimize(&mut p, &[0.0], &SqpParams::default(), "x", None, &mut ()).unwrap();
+    assert!(r.x[0] <= 2.0 && r.x[0] > 1.9, "{:?} {}", r.x, r.message);
+    let mut p = Fns {
+        lb: vec![0.0],
+        ub: vec![1.0],
+        values: |_: &[f64]| Err("cannot evaluate".to_string()),
+        grads: |_: &[f64]| Gradients {
+            f: vec![0.0],
+            eq: vec![],
+            ineq: vec![],
+        },
+    };
+    assert!(matches!(
+        minimize(&mut p, &[0.5], &SqpParams::default(), "x", None, &mut ()),
+        Err(SqpError::Start(_))
+    ));
+}
