@@ -5,6 +5,7 @@
 //! Lengths are given in `length_unit` (m, in or ft) and converted to SI here; angles in degrees;
 //! material constants in SI with the unit in the field name.
 
+pub mod design;
 pub mod fidelity;
 mod schema;
 

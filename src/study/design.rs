@@ -1,0 +1,88 @@
+//! The gust-constrained design problem of a study as an [`optim::Problem`]: minimize mass subject
+//! to RMS(output) ≤ limit and planform area = initial area, within the design bounds.
+//! Objective and constraints are normalized (mass/mass₀, RMS/limit − 1, area/area₀ − 1) so the
+//! SQP sees quantities of order one.
+
+use crate::optim::{Gradients, Problem, Values};
+use crate::pipeline::{evaluate, gradient, Evaluation, GustSettings, OutputSeeds};
+use crate::study::Study;
+
+/// Bounds and constraint settings (SI).
+#[derive(Clone, Debug)]
+pub struct DesignSpec {
+    pub lower: Vec<f64>,
+    pub upper: Vec<f64>,
+    /// Index of the constrained gust output and its RMS limit (SI).
+    pub output: usize,
+    pub rms_limit: f64,
+    pub mass0: f64,
+    pub area0: f64,
+}
+
+/// The study's design problem; caches the last evaluation for its gradient.
+pub struct DesignProblem<'a> {
+    pub study: &'a Study,
+    pub settings: GustSettings,
+    pub spec: DesignSpec,
+    last: Option<Evaluation>,
+}
+
+impl<'a> DesignProblem<'a> {
+    pub fn new(study: &'a Study, settings: GustSettings, spec: DesignSpec) -> Self {
+        Self {
+            study,
+            settings,
+            spec,
+            last: None,
+        }
+    }
+
+    /// The last evaluation (at the last point asked for).
+    pub fn last(&self) -> Option<&Evaluation> {
+        self.last.as_ref()
+    }
+}
+
+impl Problem for DesignProblem<'_> {
+    fn lower(&self) -> Vec<f64> {
+        self.spec.lower.clone()
+    }
+    fn upper(&self) -> Vec<f64> {
+        self.spec.upper.clone()
+    }
+    fn values(&mut self, x: &[f64]) -> Result<Values, String> {
+        let ev = evaluate(self.study, &self.settings, x).map_err(|e| format!("{e:#}"))?;
+        let v = Values {
+            f: ev.mass_kg / self.spec.mass0,
+            eq: vec![ev.area_m2 / self.spec.area0 - 1.0],
+            ineq: vec![ev.rms_m[self.spec.output] / self.spec.rms_limit - 1.0],
+        };
+        self.last = Some(ev);
+        Ok(v)
+    }
+    fn gradients(&mut self, x: &[f64]) -> Result<Gradients, String> {
+        if self.last.as_ref().is_none_or(|e| e.x != x) {
+            self.values(x)?;
+        }
+        let ev = self.last.as_ref().expect("evaluated");
+        let n_out = ev.rms_m.len();
+        let seeds = |mass: f64, area: f64, rms: f64| OutputSeeds {
+            mass,
+            area,
+            rms: (0..n_out)
+                .map(|i| if i == self.spec.output { rms } else { 0.0 })
+                .collect(),
+        };
+        let f =
+            gradient(ev, &seeds(1.0 / self.spec.mass0, 0.0, 0.0)).map_err(|e| format!("{e:#}"))?;
+        let h =
+            gradient(ev, &seeds(0.0, 1.0 / self.spec.area0, 0.0)).map_err(|e| format!("{e:#}"))?;
+        let c = gradient(ev, &seeds(0.0, 0.0, 1.0 / self.spec.rms_limit))
+            .map_err(|e| format!("{e:#}"))?;
+        Ok(Gradients {
+            f,
+            eq: vec![h],
+            ineq: vec![c],
+        })
+    }
+}
