@@ -111,7 +111,7 @@ pub fn modes(file: &Path, json: bool, reports: &Path) -> Result<()> {
 }
 
 /// `gustkit run`: every analysis the study defines, with its report.
-pub fn run(file: &Path, reports: &Path) -> Result<()> {
+pub fn run(file: &Path, reports: &Path, resume: bool) -> Result<()> {
     let study = Study::load(file)?;
     let t0 = Instant::now();
     let (model, modes, summary) = analyze(&study)?;
@@ -200,10 +200,35 @@ pub fn run(file: &Path, reports: &Path) -> Result<()> {
             "turbulence": settings.turbulence, "outputs": rows,
         }));
     }
+    let mut optimization = None;
+    if study.spec.optimization.is_some() {
+        let o = optimize(&study, &dir, resume)?;
+        md += &format!(
+            "\n## Optimization\n\n{} after {} iterations ({} evaluations).\n\n| | initial | final |\n|---|---:|---:|\n| mass [kg] | {:.4} | {:.4} |\n| RMS {} [{}] | {:.4} | {:.4} |\n| area [m²] | {:.5} | {:.5} |\n",
+            o["message"].as_str().unwrap_or(""),
+            o["iterations"],
+            o["evaluations"],
+            o["initial"]["mass_kg"].as_f64().unwrap_or(0.0),
+            o["final"]["mass_kg"].as_f64().unwrap_or(0.0),
+            o["output"].as_str().unwrap_or(""),
+            o["unit"].as_str().unwrap_or(""),
+            o["initial"]["rms_tip_in"].as_f64().unwrap_or(0.0),
+            o["final"]["rms_tip_in"].as_f64().unwrap_or(0.0),
+            o["initial"]["area_m2"].as_f64().unwrap_or(0.0),
+            o["final"]["area_m2"].as_f64().unwrap_or(0.0),
+        );
+        optimization = Some(o);
+    }
     md += &format!("\nRun time {:.2} s.\n", t0.elapsed().as_secs_f64());
     let mut results = serde_json::to_value(&summary)?;
     if let Some(g) = gust {
         results["gust"] = g;
+    }
+    if let Some(o) = optimization {
+        for key in ["converged", "iterations", "initial", "final", "history"] {
+            results[key] = o[key].clone();
+        }
+        results["optimization"] = o;
     }
     write_atomic(
         &dir.join("results.json"),
@@ -829,4 +854,184 @@ pub fn bench_pipeline(study: &Study) -> Result<(f64, f64)> {
     };
     std::hint::black_box(crate::pipeline::gradient(&ev, &seeds)?);
     Ok(((t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()))
+}
+
+/// Prints each SQP iteration and writes the checkpoint atomically.
+struct RunObserver {
+    dir: std::path::PathBuf,
+    mass0: f64,
+    rms_scale: f64,
+    rms_unit: &'static str,
+    rms_limit: f64,
+    error: Option<anyhow::Error>,
+}
+
+impl crate::optim::Observer for RunObserver {
+    fn iteration(&mut self, it: &crate::optim::Iterate, cp: &crate::optim::Checkpoint) -> bool {
+        let rms = (it.values.ineq[0] + 1.0) * self.rms_limit;
+        println!(
+            "iteration {:>3}: mass {:.5} kg ({:+.2} %), RMS {:.4} {} (limit {:.4}), violation {:.2e}, KKT {:.2e}",
+            it.iteration,
+            it.values.f * self.mass0,
+            100.0 * (it.values.f - 1.0),
+            rms * self.rms_scale,
+            self.rms_unit,
+            self.rms_limit * self.rms_scale,
+            it.violation,
+            it.kkt
+        );
+        match serde_json::to_vec(cp)
+            .map_err(anyhow::Error::from)
+            .and_then(|b| write_atomic(&self.dir.join("checkpoint.json"), &b))
+        {
+            Ok(()) => true,
+            Err(e) => {
+                self.error = Some(e);
+                false
+            }
+        }
+    }
+}
+
+/// FNV-1a hash of a string, to tie a checkpoint to the study that wrote it.
+fn fnv(text: &str) -> u64 {
+    text.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+/// The gust-constrained mass minimization of a study; returns the `optimization` part of
+/// results.json.
+pub fn optimize(study: &Study, dir: &Path, resume: bool) -> Result<serde_json::Value> {
+    use crate::study::design::{DesignProblem, DesignSpec};
+    let o = study.spec.optimization.as_ref().expect("caller checked");
+    let settings = study.gust_settings()?;
+    let (lower, upper) = study.design_bounds()?;
+    let x0 = study.initial_design()?.to_vec();
+    let output = settings
+        .outputs
+        .iter()
+        .position(|out| out.name == o.output)
+        .expect("checked");
+    let is_disp = matches!(
+        settings.outputs[output].quantity,
+        crate::pipeline::Quantity::Displacement { .. }
+    );
+    let to_m = study.spec.length_unit.to_m();
+    let (unit_scale, unit) = if is_disp {
+        (1.0 / 0.0254, "in")
+    } else {
+        (1.0, "N m")
+    };
+    let rms_limit = if is_disp { o.rms_max * to_m } else { o.rms_max };
+    let ev0 = crate::pipeline::evaluate(study, &settings, &x0).context("initial design")?;
+    let spec = DesignSpec {
+        lower,
+        upper,
+        output,
+        rms_limit,
+        mass0: ev0.mass_kg,
+        area0: ev0.area_m2,
+        fix_area: o.fix_area,
+    };
+    let params = crate::optim::SqpParams {
+        max_iterations: o.max_iterations,
+        tolerance: o.tolerance,
+        ..Default::default()
+    };
+    let problem_id = format!(
+        "{}:{:016x}",
+        study.spec.name,
+        fnv(&serde_json::to_string(&study.spec)?)
+    );
+    let checkpoint = if resume {
+        let path = dir.join("checkpoint.json");
+        let text = std::fs::read_to_string(&path)
+            .with_context(|| format!("--resume: cannot read {}", path.display()))?;
+        let cp: crate::optim::Checkpoint = serde_json::from_str(&text).with_context(|| {
+            format!(
+                "--resume: {} is not a gustkit checkpoint (corrupted?)",
+                path.display()
+            )
+        })?;
+        println!("resuming from iteration {}", cp.iteration);
+        Some(cp)
+    } else {
+        None
+    };
+    let mut observer = RunObserver {
+        dir: dir.to_path_buf(),
+        mass0: ev0.mass_kg,
+        rms_scale: unit_scale,
+        rms_unit: unit,
+        rms_limit,
+        error: None,
+    };
+    let mut problem = DesignProblem::new(study, settings.clone(), spec.clone());
+    let t0 = Instant::now();
+    let info = crate::optim::minimize(
+        &mut problem,
+        &x0,
+        &params,
+        &problem_id,
+        checkpoint,
+        &mut observer,
+    )
+    .map_err(|e| anyhow::anyhow!("optimization: {e}"))?;
+    if let Some(e) = observer.error {
+        return Err(e.context("cannot write the checkpoint"));
+    }
+    let ev = crate::pipeline::evaluate(study, &settings, &info.x).context("final design")?;
+    let snapshot = |ev: &crate::pipeline::Evaluation| {
+        serde_json::json!({
+            "mass_kg": ev.mass_kg,
+            "area_m2": ev.area_m2,
+            "rms_tip_in": ev.rms_m[output] * unit_scale,
+            "rms": ev.rms_m[output],
+            "frequencies_hz": ev.freq_hz,
+            "design_variables": ev.x,
+        })
+    };
+    let history: Vec<serde_json::Value> = info
+        .history
+        .iter()
+        .map(|it| {
+            serde_json::json!({
+                "iteration": it.iteration,
+                "mass_kg": it.values.f * ev0.mass_kg,
+                "rms_tip_in": (it.values.ineq[0] + 1.0) * rms_limit * unit_scale,
+                "area_m2": it.values.eq.first().map_or(f64::NAN, |h| (h + 1.0) * ev0.area_m2),
+                "violation": it.violation,
+                "kkt": it.kkt,
+                "evaluations": it.evaluations,
+            })
+        })
+        .collect();
+    println!(
+        "{} after {} iterations ({} evaluations, {:.1} s): mass {:.4} → {:.4} kg ({:+.1} %), RMS {:.4} → {:.4} {unit}",
+        info.message,
+        info.iterations,
+        info.evaluations,
+        t0.elapsed().as_secs_f64(),
+        ev0.mass_kg,
+        ev.mass_kg,
+        100.0 * (ev.mass_kg / ev0.mass_kg - 1.0),
+        ev0.rms_m[output] * unit_scale,
+        ev.rms_m[output] * unit_scale
+    );
+    Ok(serde_json::json!({
+        "converged": info.converged,
+        "message": info.message,
+        "iterations": info.iterations,
+        "evaluations": info.evaluations,
+        "output": o.output,
+        "rms_limit": o.rms_max,
+        "unit": unit,
+        "design_variable_names": (0..x0.len()).map(|i| study.initial_design().map(|d| d.name(i)).unwrap_or_default()).collect::<Vec<_>>(),
+        "lower": spec.lower,
+        "upper": spec.upper,
+        "initial": snapshot(&ev0),
+        "final": snapshot(&ev),
+        "history": history,
+    }))
 }

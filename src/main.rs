@@ -24,6 +24,9 @@ enum Command {
         /// Folder that holds the per-study report folders.
         #[arg(long, default_value = "reports")]
         reports: PathBuf,
+        /// Continue an interrupted optimization from its checkpoint in the report folder.
+        #[arg(long)]
+        resume: bool,
     },
     /// Modal analysis of a study's wing: frequency table, mode-shape figures and a VTK file.
     Modes {
@@ -87,7 +90,11 @@ enum Command {
 fn main() -> Result<()> {
     let cli = Cli::parse();
     match cli.command {
-        Command::Run { study, reports } => cli::run(&study, &reports),
+        Command::Run {
+            study,
+            reports,
+            resume,
+        } => cli::run(&study, &reports, resume),
         Command::Modes {
             study,
             json,

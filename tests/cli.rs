@@ -373,3 +373,72 @@ fn gust_and_flutter_inputs() {
     assert!(r["flutter_speed_m_s"].is_null() && r["flutter_frequency_hz"].is_null());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `gustkit run` with an optimization section (coarse model): results.json has converged,
+/// iterations, initial and final (mass_kg, rms_tip_in, area_m2, design variables) and the history;
+/// `--resume` continues from the checkpoint to the same result, and refuses a missing or corrupted
+/// checkpoint with a clear error.
+#[test]
+fn run_optimization_and_resume() {
+    let dir = scratch("opt");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(study()).unwrap()).unwrap();
+    v["name"] = "opt_small".into();
+    v["aero"]["fidelity"]["dlm"]["n_chord"] = 3.into();
+    v["aero"]["fidelity"]["dlm"]["n_span"] = 4.into();
+    v["structure"]["modes"] = 4.into();
+    v["structure"]["damping_ratio"] = 0.01.into();
+    v["gust"]["points"] = 300.into();
+    v["optimization"]["max_iterations"] = 8.into();
+    let file = dir.join("opt.json");
+    std::fs::write(&file, v.to_string()).unwrap();
+    let run = |extra: &[&str]| {
+        gustkit()
+            .args(["run", file.to_str().unwrap(), "--reports"])
+            .arg(&dir)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    // resume without a checkpoint is an error
+    let o = run(&["--resume"]);
+    assert!(!o.status.success());
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("cannot read"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let o = run(&[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let results = || -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.join("opt_small/results.json")).unwrap())
+            .unwrap()
+    };
+    let r = results();
+    for key in ["converged", "iterations", "initial", "final", "history"] {
+        assert!(!r[key].is_null(), "{key}");
+    }
+    for key in ["mass_kg", "rms_tip_in", "area_m2", "design_variables"] {
+        assert!(!r["final"][key].is_null(), "final.{key}");
+    }
+    assert!(r["final"]["mass_kg"].as_f64().unwrap() < r["initial"]["mass_kg"].as_f64().unwrap());
+    // the checkpoint of the last iteration resumes to the same final design
+    let o = run(&["--resume"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r2 = results();
+    assert_eq!(
+        r2["final"]["design_variables"],
+        r["final"]["design_variables"]
+    );
+    // a corrupted checkpoint
+    std::fs::write(dir.join("opt_small/checkpoint.json"), "{not json").unwrap();
+    let o = run(&["--resume"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("corrupted"));
+    // and the earlier results survive the failed run
+    assert_eq!(
+        results()["final"]["design_variables"],
+        r["final"]["design_variables"]
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

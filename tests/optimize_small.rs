@@ -46,6 +46,7 @@ fn small_mass_minimization() {
         rms_limit: 0.9 * ev0.rms_m[0],
         mass0: ev0.mass_kg,
         area0: ev0.area_m2,
+        fix_area: true,
     };
     let mut problem = DesignProblem::new(&study, settings, spec.clone());
     let params = SqpParams {

@@ -17,6 +17,8 @@ pub struct DesignSpec {
     pub rms_limit: f64,
     pub mass0: f64,
     pub area0: f64,
+    /// Keep the planform area at area0 (an equality constraint).
+    pub fix_area: bool,
 }
 
 /// The study's design problem; caches the last evaluation for its gradient.
@@ -54,7 +56,11 @@ impl Problem for DesignProblem<'_> {
         let ev = evaluate(self.study, &self.settings, x).map_err(|e| format!("{e:#}"))?;
         let v = Values {
             f: ev.mass_kg / self.spec.mass0,
-            eq: vec![ev.area_m2 / self.spec.area0 - 1.0],
+            eq: if self.spec.fix_area {
+                vec![ev.area_m2 / self.spec.area0 - 1.0]
+            } else {
+                Vec::new()
+            },
             ineq: vec![ev.rms_m[self.spec.output] / self.spec.rms_limit - 1.0],
         };
         self.last = Some(ev);

@@ -12,7 +12,8 @@ mod schema;
 pub use fidelity::AeroModel;
 pub use schema::{
     AeroSpec, AirfoilSpec, ClampSpec, DlmSpec, FidelitySpec, FlightSpec, FlutterSpec, GustSpec,
-    LengthUnit, MaterialSpec, MeshSpec, OutputSpec, StructureSpec, StudyFile, WingSpec,
+    LengthUnit, MaterialSpec, MeshSpec, OptimizationSpec, OutputSpec, StructureSpec, StudyFile,
+    WingSpec,
 };
 
 use crate::structure::{airfoil_thickness, Clamp, Orthotropic, PlateMesh, PlateModel};
@@ -131,7 +132,88 @@ impl Study {
         if self.spec.flutter.is_some() {
             self.flutter_velocities()?;
         }
+        if self.spec.optimization.is_some() {
+            self.design_bounds()?;
+        }
         Ok(())
+    }
+
+    /// Bounds of the design vector from the `optimization` section (SI), checked; the initial
+    /// design must lie inside them.
+    pub fn design_bounds(&self) -> Result<(Vec<f64>, Vec<f64>), StudyError> {
+        let o =
+            self.spec.optimization.as_ref().ok_or_else(|| {
+                self.err("optimization", "missing: the study has no optimization")
+            })?;
+        let settings = self.gust_settings()?;
+        if !settings.outputs.iter().any(|out| out.name == o.output) {
+            return Err(self.err(
+                "optimization.output",
+                format!("no gust output named '{}'", o.output),
+            ));
+        }
+        if !(o.rms_max > 0.0) {
+            return Err(self.err(
+                "optimization.rms_max",
+                format!("must be positive (got {})", o.rms_max),
+            ));
+        }
+        if !(o.tolerance > 0.0) || o.max_iterations == 0 {
+            return Err(self.err(
+                "optimization.tolerance",
+                "tolerance must be positive and max_iterations at least 1",
+            ));
+        }
+        let to_m = self.spec.length_unit.to_m();
+        if !(o.thickness_min > 0.0 && o.thickness_max >= o.thickness_min) {
+            return Err(self.err(
+                "optimization.thickness_min",
+                format!(
+                    "need 0 < thickness_min <= thickness_max (got {} and {})",
+                    o.thickness_min, o.thickness_max
+                ),
+            ));
+        }
+        let x0 = self.initial_design()?.to_vec();
+        let n = x0.len() - 4;
+        let mut lower = vec![o.thickness_min * to_m; n];
+        let mut upper = vec![o.thickness_max * to_m; n];
+        for (name, b, scale) in [
+            ("span", o.span, to_m),
+            ("sweep_c4_deg", o.sweep_c4_deg, std::f64::consts::PI / 180.0),
+            ("root_chord", o.root_chord, to_m),
+            ("tip_chord", o.tip_chord, to_m),
+        ] {
+            if !(b[0] <= b[1]) {
+                return Err(self.err(
+                    &format!("optimization.{name}"),
+                    format!("lower bound {} exceeds upper bound {}", b[0], b[1]),
+                ));
+            }
+            lower.push(b[0] * scale);
+            upper.push(b[1] * scale);
+        }
+        if let Some(i) = (0..x0.len())
+            .find(|&i| x0[i] < lower[i] * (1.0 - 1e-12) || x0[i] > upper[i] * (1.0 + 1e-12))
+        {
+            let field = if i < n {
+                if x0[i] < lower[i] {
+                    "optimization.thickness_min".to_string()
+                } else {
+                    "optimization.thickness_max".to_string()
+                }
+            } else {
+                format!(
+                    "optimization.{}",
+                    ["span", "sweep_c4_deg", "root_chord", "tip_chord"][i - n]
+                )
+            };
+            return Err(self.err(
+                &field,
+                format!("the initial design (variable {i}) lies outside the bounds"),
+            ));
+        }
+        Ok((lower, upper))
     }
 
     /// The velocities of the study's p-k sweep, checked.

@@ -30,6 +30,44 @@ pub struct StudyFile {
     /// p-k flutter sweep at the flight Mach number and density.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub flutter: Option<FlutterSpec>,
+    /// Gust-constrained mass minimization.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub optimization: Option<OptimizationSpec>,
+}
+
+/// Minimum mass subject to RMS(output) ≤ limit and (optionally) the initial planform area.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct OptimizationSpec {
+    /// Name of the constrained gust output.
+    pub output: String,
+    /// Largest RMS of that output (length unit for displacements, N·m for moments).
+    pub rms_max: f64,
+    /// Keep the planform area equal to the initial one.
+    #[serde(default = "default_true")]
+    pub fix_area: bool,
+    /// Thickness bounds (length unit).
+    pub thickness_min: f64,
+    pub thickness_max: f64,
+    /// [lower, upper] of the planform variables (length unit, degrees for the sweep).
+    pub span: [f64; 2],
+    pub sweep_c4_deg: [f64; 2],
+    pub root_chord: [f64; 2],
+    pub tip_chord: [f64; 2],
+    #[serde(default = "default_max_iterations")]
+    pub max_iterations: usize,
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+}
+
+fn default_true() -> bool {
+    true
+}
+fn default_max_iterations() -> usize {
+    100
+}
+fn default_tolerance() -> f64 {
+    1e-4
 }
 
 /// Velocity range of a p-k sweep (SI).
