@@ -1,23 +1,20 @@
 //! The DLM on the AGARD 445.6 wing: box convergence of the GAFs and consistency of rigid motions.
 
+mod common;
+
 use gustkit::structure::modal;
 use gustkit::study::{AeroModel, Study};
 use gustkit_core::ModalSurface;
 use num_complex::Complex64 as C;
-use std::path::Path;
 
 fn study_with(n_chord: usize, n_span: usize, k: &[f64]) -> Study {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/studies/agard445_dlm.json"
-    ))
-    .unwrap();
-    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
-    v["aero"]["fidelity"]["dlm"]["n_chord"] = n_chord.into();
-    v["aero"]["fidelity"]["dlm"]["n_span"] = n_span.into();
-    v["aero"]["reduced_frequencies"] = serde_json::json!(k);
-    v["structure"]["modes"] = 4.into();
-    Study::from_str(Path::new("agard.json"), &v.to_string()).unwrap()
+    common::agard_study(|v| {
+        common::set_boxes(v, n_chord, n_span);
+        v["aero"]["reduced_frequencies"] = serde_json::json!(k);
+        v["structure"]["modes"] = 4.into();
+        v.as_object_mut().unwrap().remove("gust");
+        v.as_object_mut().unwrap().remove("optimization");
+    })
 }
 
 /// GAFs of the first four modes at k = 0.5 and the gust GAFs converge as the box layout is doubled

@@ -1,23 +1,18 @@
 //! Gust response of the AGARD wing: GAF interpolation error at held-back frequencies and its effect
 //! on the RMS, and convergence of the RMS with the frequency grid.
 
+mod common;
+
 use gustkit::pipeline::evaluate;
 use gustkit::study::Study;
 use num_complex::Complex64 as C;
-use std::path::Path;
 
 fn study(k: &[f64], points: usize) -> Study {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/studies/agard445_dlm.json"
-    ))
-    .unwrap();
-    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
-    v["aero"]["fidelity"]["dlm"]["n_chord"] = 6.into();
-    v["aero"]["fidelity"]["dlm"]["n_span"] = 8.into();
-    v["aero"]["reduced_frequencies"] = serde_json::json!(k);
-    v["gust"]["points"] = points.into();
-    Study::from_str(Path::new("agard.json"), &v.to_string()).unwrap()
+    common::agard_study(|v| {
+        common::set_boxes(v, 6, 8);
+        v["aero"]["reduced_frequencies"] = serde_json::json!(k);
+        v["gust"]["points"] = points.into();
+    })
 }
 
 const K11: [f64; 11] = [

@@ -1,27 +1,24 @@
 //! The reverse sweep through modal analysis, transfer and DLM: the gradient of a real functional of
 //! the GAF table with respect to all 104 design variables against finite differences.
 
+mod common;
+
 use gustkit::structure::{modal, modes_vjp, ModalSeed};
 use gustkit::study::{AeroModel, Study};
 use gustkit::wing::DesignVector;
 use gustkit_core::GafTable;
 use gustkit_testkit::{fd_check, rand_vec};
 use num_complex::Complex64 as C;
-use std::path::Path;
 
 /// The AGARD study with a coarser box layout and fewer frequencies, to keep the test quick.
 fn study() -> Study {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/studies/agard445_dlm.json"
-    ))
-    .unwrap();
-    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
-    v["aero"]["fidelity"]["dlm"]["n_chord"] = 5.into();
-    v["aero"]["fidelity"]["dlm"]["n_span"] = 6.into();
-    v["aero"]["reduced_frequencies"] = serde_json::json!([0.0, 0.3, 1.0]);
-    v["structure"]["modes"] = 4.into();
-    Study::from_str(Path::new("agard_small.json"), &v.to_string()).unwrap()
+    common::agard_study(|v| {
+        common::set_boxes(v, 5, 6);
+        v["aero"]["reduced_frequencies"] = serde_json::json!([0.0, 0.3, 1.0]);
+        v["structure"]["modes"] = 4.into();
+        v.as_object_mut().unwrap().remove("gust");
+        v.as_object_mut().unwrap().remove("optimization");
+    })
 }
 
 fn seed(nk: usize, nm: usize) -> GafTable {

@@ -1,6 +1,8 @@
 //! The end-to-end adjoint gradient of the gust RMS (and mass, area) against finite differences,
 //! for every class of design variable.
 
+mod common;
+
 use gustkit::pipeline::{evaluate, gradient, OutputSeeds};
 use gustkit::study::Study;
 use gustkit::wing::DesignVector;
@@ -9,24 +11,19 @@ use std::path::Path;
 
 /// The AGARD study with a coarse box layout (the chain is the same, the test stays quick).
 fn study() -> Study {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/studies/agard445_dlm.json"
-    ))
-    .unwrap();
-    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
-    v["aero"]["fidelity"]["dlm"]["n_chord"] = 4.into();
-    v["aero"]["fidelity"]["dlm"]["n_span"] = 6.into();
-    v["aero"]["reduced_frequencies"] =
-        serde_json::json!([0.0, 0.02, 0.08, 0.18, 0.32, 0.5, 0.72, 1.0, 1.4, 2.0]);
-    v["structure"]["modes"] = 4.into();
-    v["structure"]["damping_ratio"] = 0.01.into();
-    v["gust"]["points"] = 600.into();
-    v["gust"]["outputs"] = serde_json::json!([
-        {"name": "tip_te_w", "point": [1.0, 1.0]},
-        {"name": "root_bm", "quantity": "root_bending_moment"}
-    ]);
-    Study::from_str(Path::new("agard_small.json"), &v.to_string()).unwrap()
+    common::agard_study(|v| {
+        common::set_boxes(v, 4, 6);
+        v["aero"]["reduced_frequencies"] =
+            serde_json::json!([0.0, 0.02, 0.08, 0.18, 0.32, 0.5, 0.72, 1.0, 1.4, 2.0]);
+        v["structure"]["modes"] = 4.into();
+        v["structure"]["damping_ratio"] = 0.01.into();
+        v["gust"]["points"] = 600.into();
+        v["gust"]["outputs"] = serde_json::json!([
+            {"name": "tip_te_w", "point": [1.0, 1.0]},
+            {"name": "root_bm", "quantity": "root_bending_moment"}
+        ]);
+        v.as_object_mut().unwrap().remove("optimization");
+    })
 }
 
 /// RMS of the tip trailing-edge deflection: adjoint against central differences (Richardson) to

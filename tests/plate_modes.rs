@@ -1,10 +1,10 @@
 //! Modal analysis against plate theory (Leissa) and the AGARD 445.6 reference frequencies.
 
+mod common;
+
 use faer::Mat;
-use gustkit::structure::{
-    airfoil_thickness, modal, Clamp, Field, Orthotropic, PlateMesh, PlateModel,
-};
-use gustkit::wing::{Airfoil, DesignVector, Planform};
+use gustkit::structure::{modal, Clamp, Field, Orthotropic, PlateMesh, PlateModel};
+use gustkit::wing::{DesignVector, Planform};
 
 /// Isotropic square cantilever (C-F-F-F) plate of side a, thickness h, n × n elements.
 fn square_plate(n: usize) -> (PlateModel, f64) {
@@ -56,31 +56,7 @@ fn cantilever_square_plate_matches_leissa() {
 }
 
 fn agard_model(refine: usize, clamp: Clamp) -> PlateModel {
-    let planform = Planform {
-        span: 0.762,
-        sweep_c4: 45f64.to_radians(),
-        root_chord: 0.5587,
-        tip_chord: 0.3682,
-    };
-    let mesh = PlateMesh::new(10, 10, refine, &clamp).unwrap();
-    let thickness = airfoil_thickness(&mesh, &planform, &Airfoil::naca65a004());
-    let material = Orthotropic {
-        e1: 3.151e9,
-        e2: 0.4162e9,
-        g12: 0.4392e9,
-        nu12: 0.31,
-        density: 381.98,
-        grain_angle: 45f64.to_radians(),
-    };
-    PlateModel::new(
-        mesh,
-        material,
-        DesignVector {
-            thickness,
-            planform,
-        },
-    )
-    .unwrap()
+    common::agard_plate(refine, clamp)
 }
 
 /// AGARD 445.6 weakened model 3 (Yates): 9.60, 38.17, 48.35, 91.54 Hz, mass about 1.69 kg.

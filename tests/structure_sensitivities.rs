@@ -1,22 +1,19 @@
 //! Exact structural sensitivities: dot-product tests (reverse against forward) and central finite
 //! differences, for frequencies, sampled mode shapes and mass, on the AGARD 445.6 plate model.
 
+mod common;
+
 use gustkit::structure::{
     airfoil_thickness, mass_grad, modal, modes_jvp, modes_vjp, Clamp, Field, ModalSeed, Modes,
     Orthotropic, PlateMesh, PlateModel, Sampler,
 };
-use gustkit::wing::{Airfoil, DesignVector, Planform};
+use gustkit::wing::{Airfoil, DesignVector};
 use gustkit_testkit::{dot_product_mismatch, fd_check, rand_vec};
 
 const N_MODES: usize = 6;
 
 fn base_design(mesh: &PlateMesh) -> DesignVector {
-    let planform = Planform {
-        span: 0.762,
-        sweep_c4: 45f64.to_radians(),
-        root_chord: 0.5587,
-        tip_chord: 0.3682,
-    };
+    let planform = common::agard_planform();
     let thickness = airfoil_thickness(mesh, &planform, &Airfoil::naca65a004());
     DesignVector {
         thickness,
@@ -25,14 +22,7 @@ fn base_design(mesh: &PlateMesh) -> DesignVector {
 }
 
 fn material() -> Orthotropic {
-    Orthotropic {
-        e1: 3.151e9,
-        e2: 0.4162e9,
-        g12: 0.4392e9,
-        nu12: 0.31,
-        density: 381.98,
-        grain_angle: 45f64.to_radians(),
-    }
+    common::mahogany()
 }
 
 fn model_at(x: &[f64]) -> PlateModel {

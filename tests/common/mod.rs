@@ -1,0 +1,68 @@
+//! Helpers shared by the integration tests: the AGARD study with edits, and its plate model.
+#![allow(dead_code)]
+
+use gustkit::structure::{airfoil_thickness, Clamp, Orthotropic, PlateMesh, PlateModel};
+use gustkit::study::Study;
+use gustkit::wing::{Airfoil, DesignVector, Planform};
+use std::path::{Path, PathBuf};
+
+/// Path of the shipped AGARD study.
+pub fn agard_path() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json")
+}
+
+/// The AGARD study as JSON.
+pub fn agard_json() -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(agard_path()).unwrap()).unwrap()
+}
+
+/// The AGARD study after `edit` (coarser boxes, fewer frequencies, …), loaded and validated.
+pub fn agard_study(edit: impl FnOnce(&mut serde_json::Value)) -> Study {
+    let mut v = agard_json();
+    edit(&mut v);
+    Study::from_str(Path::new("agard_edited.json"), &v.to_string()).unwrap()
+}
+
+/// Sets the DLM box layout of a study JSON.
+pub fn set_boxes(v: &mut serde_json::Value, n_chord: usize, n_span: usize) {
+    v["aero"]["fidelity"]["dlm"]["n_chord"] = n_chord.into();
+    v["aero"]["fidelity"]["dlm"]["n_span"] = n_span.into();
+}
+
+/// The AGARD 445.6 mahogany with the grain along the 45° quarter-chord line.
+pub fn mahogany() -> Orthotropic {
+    Orthotropic {
+        e1: 3.151e9,
+        e2: 0.4162e9,
+        g12: 0.4392e9,
+        nu12: 0.31,
+        density: 381.98,
+        grain_angle: 45f64.to_radians(),
+    }
+}
+
+/// The AGARD planform in SI.
+pub fn agard_planform() -> Planform {
+    Planform {
+        span: 0.762,
+        sweep_c4: 45f64.to_radians(),
+        root_chord: 0.5587,
+        tip_chord: 0.3682,
+    }
+}
+
+/// The AGARD plate: 10 × 10 design patches split into refine² elements, NACA 65A004 thickness.
+pub fn agard_plate(refine: usize, clamp: Clamp) -> PlateModel {
+    let planform = agard_planform();
+    let mesh = PlateMesh::new(10, 10, refine, &clamp).unwrap();
+    let thickness = airfoil_thickness(&mesh, &planform, &Airfoil::naca65a004());
+    PlateModel::new(
+        mesh,
+        mahogany(),
+        DesignVector {
+            thickness,
+            planform,
+        },
+    )
+    .unwrap()
+}
