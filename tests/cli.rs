@@ -381,8 +381,9 @@ fn gust_and_flutter_inputs() {
 #[test]
 fn run_optimization_and_resume() {
     let dir = scratch("opt");
+    let opt = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm_opt.json");
     let mut v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(study()).unwrap()).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(opt).unwrap()).unwrap();
     v["name"] = "opt_small".into();
     v["aero"]["fidelity"]["dlm"]["n_chord"] = 3.into();
     v["aero"]["fidelity"]["dlm"]["n_span"] = 4.into();
