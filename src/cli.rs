@@ -200,6 +200,30 @@ pub fn run(file: &Path, reports: &Path, resume: bool) -> Result<()> {
             "turbulence": settings.turbulence, "outputs": rows,
         }));
     }
+    let mut flutter = None;
+    if study.spec.flutter.is_some() {
+        let (doc, r, velocities) = flutter_analysis(&study, reports)?;
+        print_flutter(&study, &r, &velocities, &doc);
+        md += &match (r.flutter_speed_m_s, r.flutter_frequency_hz) {
+            (Some(v), Some(f)) => format!(
+                "\n## Flutter (p-k)\n\nM = {}, ρ = {} kg/m³: flutter at V = {v:.2} m/s ({:.1} ft/s), {f:.2} Hz, mode {}.\n\n![V-g, V-f](flutter_vg.png)\n",
+                doc["mach"],
+                doc["density_kg_m3"],
+                v / 0.3048,
+                r.flutter_mode.unwrap_or(0)
+            ),
+            _ => format!(
+                "\n## Flutter (p-k)\n\nNo flutter between {} and {} m/s.\n\n![V-g, V-f](flutter_vg.png)\n",
+                velocities[0],
+                velocities[velocities.len() - 1]
+            ),
+        };
+        flutter = Some(serde_json::json!({
+            "flutter_speed_m_s": r.flutter_speed_m_s,
+            "flutter_frequency_hz": r.flutter_frequency_hz,
+            "flutter_mode": r.flutter_mode,
+        }));
+    }
     let mut optimization = None;
     if study.spec.optimization.is_some() {
         let o = optimize(&study, &dir, resume)?;
@@ -223,6 +247,9 @@ pub fn run(file: &Path, reports: &Path, resume: bool) -> Result<()> {
     let mut results = serde_json::to_value(&summary)?;
     if let Some(g) = gust {
         results["gust"] = g;
+    }
+    if let Some(f) = flutter {
+        results["flutter"] = f;
     }
     if let Some(o) = optimization {
         for key in ["converged", "iterations", "initial", "final", "history"] {
@@ -760,9 +787,28 @@ pub fn check_gradient(file: &Path, dvs: &[String], json: bool) -> Result<()> {
 /// `gustkit flutter`: p-k sweep of a study at its flight Mach number and density.
 pub fn flutter(file: &Path, json: bool, reports: &Path) -> Result<()> {
     let study = Study::load(file)?;
+    let (doc, r, velocities) = flutter_analysis(&study, reports)?;
+    if json {
+        println!("{}", serde_json::to_string_pretty(&doc)?);
+        return Ok(());
+    }
+    print_flutter(&study, &r, &velocities, &doc);
+    println!(
+        "V-g/V-f figures and flutter.json written to {}",
+        study.report_dir(reports).display()
+    );
+    Ok(())
+}
+
+/// The p-k sweep of a study with its V-g/V-f figures and `flutter.json`.
+fn flutter_analysis(
+    study: &Study,
+    reports: &Path,
+) -> Result<(serde_json::Value, crate::flutter::FlutterResult, Vec<f64>)> {
+    let file = &study.file;
     let velocities = study.flutter_velocities()?;
-    let (plate, modes, _) = analyze(&study)?;
-    let aero = crate::study::AeroModel::new(&study, &plate)?;
+    let (plate, modes, _) = analyze(study)?;
+    let aero = crate::study::AeroModel::new(study, &plate)?;
     let table = aero
         .gafs(&plate, &modes)
         .map_err(|e| anyhow::anyhow!("{}: aero: {e}", file.display()))?;
@@ -800,13 +846,19 @@ pub fn flutter(file: &Path, json: bool, reports: &Path) -> Result<()> {
         &dir.join("flutter.json"),
         serde_json::to_string_pretty(&doc)?.as_bytes(),
     )?;
-    if json {
-        println!("{}", serde_json::to_string_pretty(&doc)?);
-        return Ok(());
-    }
+    Ok((doc, r, velocities))
+}
+
+/// The p-k table and the flutter point on stdout.
+fn print_flutter(
+    study: &Study,
+    r: &crate::flutter::FlutterResult,
+    velocities: &[f64],
+    doc: &serde_json::Value,
+) {
     println!(
         "{}: p-k at M = {}, ρ = {} kg/m³",
-        study.spec.name, aero.flight.mach, aero.flight.density
+        study.spec.name, doc["mach"], doc["density_kg_m3"]
     );
     print!("{:>10}", "V [m/s]");
     for c in &r.curves {
@@ -832,11 +884,6 @@ pub fn flutter(file: &Path, json: bool, reports: &Path) -> Result<()> {
             velocities[velocities.len() - 1]
         ),
     }
-    println!(
-        "V-g/V-f figures and flutter.json written to {}",
-        dir.display()
-    );
-    Ok(())
 }
 
 /// Wall time of one function evaluation and one gradient of the gust pipeline at the initial

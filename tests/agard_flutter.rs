@@ -47,3 +47,30 @@ fn agard_flutter_m0499_and_m0901() {
         assert_eq!(r["curves"].as_array().unwrap().len(), 6);
     }
 }
+
+/// `gustkit run` on a flutter study includes the p-k result in results.json and summary.md.
+#[test]
+fn run_includes_flutter() {
+    let dir = std::env::temp_dir().join(format!("gustkit-run-flutter-{}", std::process::id()));
+    let o = Command::new(env!("CARGO_BIN_EXE_gustkit"))
+        .args([
+            "run",
+            Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("studies/agard445_flutter_m0901.json")
+                .to_str()
+                .unwrap(),
+            "--reports",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("agard445_flutter_m0901/results.json")).unwrap(),
+    )
+    .unwrap();
+    assert!(r["flutter"]["flutter_speed_m_s"].as_f64().unwrap() > 250.0);
+    let md = std::fs::read_to_string(dir.join("agard445_flutter_m0901/summary.md")).unwrap();
+    assert!(md.contains("## Flutter (p-k)"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
