@@ -7,7 +7,7 @@
 
 use crate::cplx::Cplx;
 use crate::geometry::AeroBox;
-use crate::kernel::incremental_numerators;
+use crate::kernel::KernelPoint;
 use gustkit_core::scalar::Scalar;
 use std::f64::consts::PI;
 
@@ -73,6 +73,21 @@ pub fn oscillatory_influence<S: Scalar>(
     mach: f64,
     kd: f64,
 ) -> Cplx<S> {
+    let mut out = [Cplx::zero()];
+    oscillatory_influences(r, s, mach, &[kd], &mut out);
+    out[0]
+}
+
+/// Oscillatory increments of `s` at the control point of `r` for several kd = ω/U at once (the
+/// geometry, the kernel's frequency-independent parts and the quartic integrals' weights are
+/// computed once); kd = 0 gives zero.
+pub fn oscillatory_influences<S: Scalar>(
+    r: &AeroBox<S>,
+    s: &AeroBox<S>,
+    mach: f64,
+    kds: &[f64],
+    out: &mut [Cplx<S>],
+) {
     // receiving point relative to the doublet line's mid-point, in the sending box's frame
     let mid = [
         (s.line_a[0] + s.line_b[0]) * 0.5,
@@ -89,23 +104,27 @@ pub fn oscillatory_influence<S: Scalar>(
     let sin_rs = r.sin_g * s.cos_g - r.cos_g * s.sin_g;
     let e = s.e;
     let etas = [-1.0, -0.5, 0.0, 0.5, 1.0];
-    let mut p1 = [Cplx::<S>::zero(); 5];
-    let mut p2 = [Cplx::<S>::zero(); 5];
-    for (i, t) in etas.iter().enumerate() {
-        let eta = e * *t;
-        let (a, b) = incremental_numerators(
-            xs - eta * s.tan_sweep,
-            yb - eta,
-            zb,
-            cos_rs,
-            sin_rs,
-            kd,
-            mach,
-        );
-        p1[i] = a;
-        p2[i] = b;
+    let points: [KernelPoint<S>; 5] = std::array::from_fn(|i| {
+        let eta = e * etas[i];
+        KernelPoint::new(xs - eta * s.tan_sweep, yb - eta, zb, cos_rs, sin_rs, mach)
+    });
+    let weights = QuarticWeights::new(yb, zb, e);
+    for (o, &kd) in out.iter_mut().zip(kds) {
+        if kd == 0.0 {
+            *o = Cplx::zero();
+            continue;
+        }
+        let mut p1 = [Cplx::<S>::zero(); 5];
+        let mut p2 = [Cplx::<S>::zero(); 5];
+        for (i, pt) in points.iter().enumerate() {
+            let (a, b) = pt.numerators(kd);
+            p1[i] = a;
+            p2[i] = b;
+        }
+        *o = weights
+            .integrate(&quartic_fit(&p1, e), &quartic_fit(&p2, e), yb, zb, e)
+            .scale(s.chord);
     }
-    integrate_quartics(&quartic_fit(&p1, e), &quartic_fit(&p2, e), yb, zb, e).scale(s.chord)
 }
 
 /// Coefficients (A, B, C, D, E) of P(η) ≈ A η² + B η + C + D η³ + E η⁴ through the values at
@@ -134,38 +153,59 @@ pub fn integrate_quartics<S: Scalar>(
     zb: S,
     e: S,
 ) -> Cplx<S> {
-    let y2 = yb * yb;
-    let z2 = zb * zb;
-    let e2 = e * e;
-    let planar = zb.abs().re() <= 1e-3 * e.re();
-    // L = ln(((ȳ−e)² + z̄²)/((ȳ+e)² + z̄²)); F = ∫ dη / ((ȳ−η)² + z̄²) (finite part when planar)
-    let lg = (((yb - e) * (yb - e) + z2) / ((yb + e) * (yb + e) + z2)).ln();
-    let f = if planar {
-        e * 2.0 / (y2 - e2)
-    } else {
-        let za = zb.abs();
-        (za * e * 2.0).atan2(y2 + z2 - e2) / za
-    };
-    let (a1, b1, c1, d1, e1) = *q1;
-    let y4 = y2 * y2;
-    let z4 = z2 * z2;
-    let planar_part = (a1.scale(y2 - z2)
-        + b1.scale(yb)
-        + c1
-        + d1.scale(yb * (y2 - z2 * 3.0))
-        + e1.scale(y4 - y2 * z2 * 6.0 + z4))
-    .scale(f)
-        + (b1.scale_f(0.5)
-            + a1.scale(yb)
-            + d1.scale((y2 * 3.0 - z2) * 0.5)
-            + e1.scale(yb * (y2 - z2) * 2.0))
-        .scale(lg)
-        + (a1 + d1.scale(yb * 2.0) + e1.scale(y2 * 3.0 - z2 + e2 / 3.0)).scale(e * 2.0);
-    let mut total = planar_part.scale_f(1.0 / (8.0 * PI));
-    if !planar {
-        total = total + nonplanar_part(q2, yb, zb, e, f, lg);
+    QuarticWeights::new(yb, zb, e).integrate(q1, q2, yb, zb, e)
+}
+
+/// The frequency-independent transcendental parts of the quartic integrals of one pair:
+/// L = ln(((ȳ−e)² + z̄²)/((ȳ+e)² + z̄²)) and F = ∫ dη / ((ȳ−η)² + z̄²) (the finite part when
+/// planar, |z̄| ≤ 0.001 e).
+pub struct QuarticWeights<S> {
+    f: S,
+    lg: S,
+    planar: bool,
+}
+
+impl<S: Scalar> QuarticWeights<S> {
+    pub fn new(yb: S, zb: S, e: S) -> Self {
+        let (y2, z2, e2) = (yb * yb, zb * zb, e * e);
+        let planar = zb.abs().re() <= 1e-3 * e.re();
+        let lg = (((yb - e) * (yb - e) + z2) / ((yb + e) * (yb + e) + z2)).ln();
+        let f = if planar {
+            e * 2.0 / (y2 - e2)
+        } else {
+            let za = zb.abs();
+            (za * e * 2.0).atan2(y2 + z2 - e2) / za
+        };
+        Self { f, lg, planar }
     }
-    total
+
+    /// The integrals of [`integrate_quartics`] with these weights.
+    pub fn integrate(&self, q1: &Quartic<S>, q2: &Quartic<S>, yb: S, zb: S, e: S) -> Cplx<S> {
+        let y2 = yb * yb;
+        let z2 = zb * zb;
+        let e2 = e * e;
+        let (f, lg, planar) = (self.f, self.lg, self.planar);
+        let (a1, b1, c1, d1, e1) = *q1;
+        let y4 = y2 * y2;
+        let z4 = z2 * z2;
+        let planar_part = (a1.scale(y2 - z2)
+            + b1.scale(yb)
+            + c1
+            + d1.scale(yb * (y2 - z2 * 3.0))
+            + e1.scale(y4 - y2 * z2 * 6.0 + z4))
+        .scale(f)
+            + (b1.scale_f(0.5)
+                + a1.scale(yb)
+                + d1.scale((y2 * 3.0 - z2) * 0.5)
+                + e1.scale(yb * (y2 - z2) * 2.0))
+            .scale(lg)
+            + (a1 + d1.scale(yb * 2.0) + e1.scale(y2 * 3.0 - z2 + e2 / 3.0)).scale(e * 2.0);
+        let mut total = planar_part.scale_f(1.0 / (8.0 * PI));
+        if !planar {
+            total = total + nonplanar_part(q2, yb, zb, e, f, lg);
+        }
+        total
+    }
 }
 
 /// Non-planar part D2 / chord: ∫ P2(η)/r1⁴ dη / (8π) for the quartic P2 (Rodden et al. 1998,

@@ -85,6 +85,105 @@ pub fn integrals<S: Scalar>(u1: S, k1: S) -> (Cplx<S>, Cplx<S>) {
     }
 }
 
+/// The frequency-independent part of the incremental kernel at one point of a doublet line, so
+/// that a table of frequencies reuses the geometry (square roots, u1, the steady kernels).
+#[derive(Clone, Copy, Debug)]
+pub struct KernelPoint<S> {
+    x0: S,
+    cos_rs: S,
+    t2: S,
+    kind: PointKind<S>,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum PointKind<S> {
+    /// On the line's own streamwise axis (r1 → 0): downstream (K1, K2 → −2, 4) or upstream (0).
+    Axis { downstream: bool },
+    General {
+        r1: S,
+        u1: S,
+        su: S,
+        mr_r: S,
+        br: S,
+        k10: S,
+        k20: S,
+    },
+}
+
+impl<S: Scalar> KernelPoint<S> {
+    /// `x0`, `y0`, `z0`: receiving point minus line point in the sending box's frame; `cos_rs`,
+    /// `sin_rs`: of γr − γs.
+    pub fn new(x0: S, y0: S, z0: S, cos_rs: S, sin_rs: S, mach: f64) -> Self {
+        let r1sq = y0 * y0 + z0 * z0;
+        let t2 = z0 * (z0 * cos_rs - y0 * sin_rs);
+        let scale = x0.abs().re().max(1e-300);
+        let kind = if r1sq.re() <= (1e-12 * scale).powi(2) {
+            PointKind::Axis {
+                downstream: x0.re() >= 0.0,
+            }
+        } else {
+            let beta2 = 1.0 - mach * mach;
+            let r1 = r1sq.sqrt();
+            let big_r = (x0 * x0 + r1sq * beta2).sqrt();
+            let u1 = (big_r * mach - x0) / (r1 * beta2);
+            let xr = x0 / big_r;
+            let br = r1sq * beta2 / (big_r * big_r);
+            PointKind::General {
+                r1,
+                u1,
+                su: (u1 * u1 + 1.0).sqrt(),
+                mr_r: r1 * mach / big_r,
+                br,
+                k10: -xr - 1.0,
+                k20: xr * (br + 2.0) + 2.0,
+            }
+        };
+        Self {
+            x0,
+            cos_rs,
+            t2,
+            kind,
+        }
+    }
+
+    /// Numerators (P1, P2) at ω/U = `kd`.
+    pub fn numerators(&self, kd: f64) -> (Cplx<S>, Cplx<S>) {
+        let e = Cplx::expi_neg(self.x0 * kd);
+        let (k1v, k2v, k10, k20) = match self.kind {
+            PointKind::Axis { downstream: true } => (
+                Cplx::real(S::cst(-2.0)),
+                Cplx::real(S::cst(4.0)),
+                S::cst(-2.0),
+                S::cst(4.0),
+            ),
+            PointKind::Axis { downstream: false } => {
+                (Cplx::zero(), Cplx::zero(), S::zero(), S::zero())
+            }
+            PointKind::General {
+                r1,
+                u1,
+                su,
+                mr_r,
+                br,
+                k10,
+                k20,
+            } => {
+                let k1 = r1 * kd;
+                let (i1, i2) = integrals(u1, k1);
+                let ek = Cplx::expi_neg(k1 * u1);
+                let k1v = -i1 - ek.scale(mr_r / su);
+                let k2v = i2.scale_f(3.0)
+                    + (ek * Cplx::new(S::zero(), k1)).scale(mr_r * mr_r / su)
+                    + ek.scale(mr_r * ((u1 * u1 + 1.0) * br + 2.0 + mr_r * u1) / (su * su * su));
+                (k1v, k2v, k10, k20)
+            }
+        };
+        let p1 = -(k1v * e - Cplx::real(k10)).scale(self.cos_rs);
+        let p2 = -(k2v * e - Cplx::real(k20)).scale(self.t2);
+        (p1, p2)
+    }
+}
+
 /// Numerators (P1, P2) of the incremental kernel at one point of a doublet line.
 ///
 /// `x0`, `y0`, `z0`: receiving point minus line point, in the sending box's local frame (z̄ along
@@ -98,43 +197,7 @@ pub fn incremental_numerators<S: Scalar>(
     kd: f64,
     mach: f64,
 ) -> (Cplx<S>, Cplx<S>) {
-    let r1sq = y0 * y0 + z0 * z0;
-    let t2 = z0 * (z0 * cos_rs - y0 * sin_rs);
-    let e = Cplx::expi_neg(x0 * kd);
-    let scale = x0.abs().re().max(1e-300);
-    let (k1v, k2v, k10, k20) = if r1sq.re() <= (1e-12 * scale).powi(2) {
-        // on the line's own streamwise axis: limits r1 → 0
-        if x0.re() >= 0.0 {
-            (
-                Cplx::real(S::cst(-2.0)),
-                Cplx::real(S::cst(4.0)),
-                S::cst(-2.0),
-                S::cst(4.0),
-            )
-        } else {
-            (Cplx::zero(), Cplx::zero(), S::zero(), S::zero())
-        }
-    } else {
-        let beta2 = 1.0 - mach * mach;
-        let r1 = r1sq.sqrt();
-        let big_r = (x0 * x0 + r1sq * beta2).sqrt();
-        let u1 = (big_r * mach - x0) / (r1 * beta2);
-        let k1 = r1 * kd;
-        let (i1, i2) = integrals(u1, k1);
-        let ek = Cplx::expi_neg(k1 * u1);
-        let su = (u1 * u1 + 1.0).sqrt();
-        let mr_r = r1 * mach / big_r;
-        let k1v = -i1 - ek.scale(mr_r / su);
-        let br = r1sq * beta2 / (big_r * big_r);
-        let k2v = i2.scale_f(3.0)
-            + (ek * Cplx::new(S::zero(), k1)).scale(mr_r * mr_r / su)
-            + ek.scale(mr_r * ((u1 * u1 + 1.0) * br + 2.0 + mr_r * u1) / (su * su * su));
-        let xr = x0 / big_r;
-        (k1v, k2v, -xr - 1.0, xr * (br + 2.0) + 2.0)
-    };
-    let p1 = -(k1v * e - Cplx::real(k10)).scale(cos_rs);
-    let p2 = -(k2v * e - Cplx::real(k20)).scale(t2);
-    (p1, p2)
+    KernelPoint::new(x0, y0, z0, cos_rs, sin_rs, mach).numerators(kd)
 }
 
 #[cfg(test)]
