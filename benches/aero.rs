@@ -6,7 +6,7 @@ fn main() -> anyhow::Result<()> {
     let study = gustkit::study::Study::load(&file)?;
     let a = gustkit::cli::bench_aero(&study, 3)?;
     println!(
-        "aero/agard445 ({} boxes, {} k, {} modes): influence matrices {:.1} ms (1 thread), LU {:.1} ms (1 thread), GAFs {:.1} ms, reverse mode {:.1} ms",
+        "aero/agard445 ({} boxes, {} k, {} modes): influence matrices {:.1} ms (all k), LU {:.1} ms (1 thread), GAFs {:.1} ms, reverse mode {:.1} ms",
         a.n_boxes,
         a.n_k,
         a.n_modes,

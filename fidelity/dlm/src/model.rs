@@ -11,7 +11,7 @@ use crate::geometry::{
     box_parametric_points, check_strip_alignment, surface_boxes, AeroBox, SurfaceSpec,
     SURFACE_PARAMS,
 };
-use crate::influence::{oscillatory_influence, steady_influence};
+use crate::influence::{oscillatory_influences, steady_influence};
 use faer::linalg::solvers::Solve;
 use faer::{c64, Mat};
 use gustkit_core::scalar::{Dual, Scalar};
@@ -128,30 +128,68 @@ impl Dlm {
         mach: f64,
         kd: f64,
     ) -> Vec<Cplx<S>> {
+        self.influence_matrices(boxes, mach, &[kd])
+            .pop()
+            .expect("one frequency")
+    }
+
+    /// Influence matrices at several ω/U at once, `[k][r n + s]`: the steady lattice and the
+    /// frequency-independent kernel geometry are computed once per box pair, rows in parallel.
+    pub fn influence_matrices<S: Scalar>(
+        &self,
+        boxes: &[AeroBox<S>],
+        mach: f64,
+        kds: &[f64],
+    ) -> Vec<Vec<Cplx<S>>> {
         let n = boxes.len();
-        let images: Vec<AeroBox<S>> = match self.symmetry.sign() {
-            Some(_) => boxes.iter().map(AeroBox::mirrored).collect(),
-            None => Vec::new(),
-        };
-        let sign = self.symmetry.sign().unwrap_or(0.0);
-        let entry = |r: &AeroBox<S>, s: &AeroBox<S>| {
-            let mut d = Cplx::real(steady_influence(r, s, mach));
-            if kd != 0.0 {
-                d = d + oscillatory_influence(r, s, mach, kd);
-            }
-            d
-        };
-        let mut out = Vec::with_capacity(n * n);
-        for r in boxes {
-            for (j, s) in boxes.iter().enumerate() {
-                let mut d = entry(r, s);
-                if let Some(img) = images.get(j) {
-                    d = d + entry(r, img).scale_f(sign);
+        let nk = kds.len();
+        let mut out = vec![vec![Cplx::<S>::zero(); n * n]; nk];
+        let rows: Vec<Vec<Cplx<S>>> = (0..n)
+            .into_par_iter()
+            .map(|r| {
+                let mut row = vec![Cplx::<S>::zero(); n * nk];
+                self.influence_row(boxes, r, mach, kds, |s, k, v| row[s * nk + k] = v);
+                row
+            })
+            .collect();
+        for (r, row) in rows.into_iter().enumerate() {
+            for s in 0..n {
+                for k in 0..nk {
+                    out[k][r * n + s] = row[s * nk + k];
                 }
-                out.push(d);
             }
         }
         out
+    }
+
+    /// Calls `sink(s, k, D_rs(k))` for every sending box s and frequency k of receiving box r.
+    fn influence_row<S: Scalar>(
+        &self,
+        boxes: &[AeroBox<S>],
+        r: usize,
+        mach: f64,
+        kds: &[f64],
+        mut sink: impl FnMut(usize, usize, Cplx<S>),
+    ) {
+        let sign = self.symmetry.sign();
+        let rb = &boxes[r];
+        let mut osc = vec![Cplx::<S>::zero(); kds.len()];
+        let mut osc_img = vec![Cplx::<S>::zero(); kds.len()];
+        for (s, sb) in boxes.iter().enumerate() {
+            let mut steady = steady_influence(rb, sb, mach);
+            oscillatory_influences(rb, sb, mach, kds, &mut osc);
+            if let Some(sg) = sign {
+                let img = sb.mirrored();
+                steady += steady_influence(rb, &img, mach) * sg;
+                oscillatory_influences(rb, &img, mach, kds, &mut osc_img);
+                for (o, i) in osc.iter_mut().zip(&osc_img) {
+                    *o = *o + i.scale_f(sg);
+                }
+            }
+            for (k, o) in osc.iter().enumerate() {
+                sink(s, k, Cplx::real(steady) + *o);
+            }
+        }
     }
 
     fn check_inputs(
@@ -212,16 +250,22 @@ impl Dlm {
             .collect()
     }
 
+    /// The influence matrices of the model's own boxes at reduced frequencies `k`.
+    fn matrices(&self, flight: &FlightCondition, k: &[f64]) -> Vec<Vec<Cplx<f64>>> {
+        let kds: Vec<f64> = k.iter().map(|kk| kk / flight.b_ref).collect();
+        self.influence_matrices(&self.boxes, flight.mach, &kds)
+    }
+
     /// Pressure solutions c = D⁻¹ W at one frequency (columns: modes, gust) with the factorization.
     fn solve_k(
         &self,
+        d: &[Cplx<f64>],
         flight: &FlightCondition,
         modes: &ModalSurface,
         k: f64,
     ) -> Result<(faer::linalg::solvers::PartialPivLu<c64>, Mat<c64>), AeroError> {
         let n = self.n_boxes();
         let kd = k / flight.b_ref;
-        let d = self.influence_matrix(&self.boxes, flight.mach, kd);
         let dm = Mat::<c64>::from_fn(n, n, |i, j| d[i * n + j].value());
         let lu = dm.partial_piv_lu();
         let w = Self::normalwash(&self.boxes, modes, kd, flight.x_ref);
@@ -237,15 +281,14 @@ impl Dlm {
     }
 }
 
-/// Quantities held fixed while ℒ is differentiated with respect to the geometry.
-struct Frozen<'a> {
-    c: &'a Mat<c64>,
-    lam: &'a Mat<c64>,
-    lc: &'a Mat<c64>,
-    qbar: &'a Mat<c64>,
+/// Quantities of one frequency held fixed while ℒ is differentiated with respect to the geometry.
+struct FrozenK {
+    c: Mat<c64>,
+    lam: Mat<c64>,
+    /// Σ_col conj(λ_j,col) c_i,col: the weights of D_ji in ℒ.
+    lc: Mat<c64>,
+    qbar: Mat<c64>,
     kd: f64,
-    flight: &'a FlightCondition,
-    modes: &'a ModalSurface,
 }
 
 impl Dlm {
@@ -256,15 +299,19 @@ impl Dlm {
         self.active[surface] = params.iter().copied().filter(|&p| p < NQ).collect();
     }
 
-    /// ∂ℒ/∂q for up to N parameters of surface `si`, ℒ = Re[Σ conj(Q̄) Hᵀ A c + Σ conj(λ)(W − D c)].
+    /// ∂ℒ/∂q for up to N parameters of surface `si`, ℒ = Σ_k Re[Σ conj(Q̄) Hᵀ A c + Σ conj(λ)(W − D c)]:
+    /// the influence matrices of all frequencies are differentiated in one pass over the box pairs
+    /// (rows in parallel) and contracted on the fly.
     fn geometry_lagrangian<const N: usize>(
         &self,
         si: usize,
         params: &[usize],
-        f: &Frozen,
+        frozen: &[&FrozenK],
+        flight: &FlightCondition,
+        modes: &ModalSurface,
     ) -> [f64; N] {
         let n = self.n_boxes();
-        let nm = f.modes.n_modes();
+        let nm = modes.n_modes();
         let boxes: Vec<AeroBox<Dual<N>>> = self
             .surfaces
             .iter()
@@ -280,26 +327,32 @@ impl Dlm {
                 surface_boxes(s, qd)
             })
             .collect();
-        let d = self.influence_matrix(&boxes, f.flight.mach, f.kd);
-        let w = Self::normalwash(&boxes, f.modes, f.kd, f.flight.x_ref);
-        let hw = Self::force_weights(&boxes, f.modes);
-        let mut lag = Dual::<N>::cst(0.0);
-        for col in 0..=nm {
-            for j in 0..n {
-                let cj = f.c[(j, col)];
-                for m in 0..nm {
-                    lag += hw[m][j] * (f.qbar[(m, col)].conj() * cj).re;
+        let kds: Vec<f64> = frozen.iter().map(|f| f.kd).collect();
+        let hw = Self::force_weights(&boxes, modes);
+        // − Re Σ_k Σ_ji D_ji(k) lc_ji(k)
+        let d_part: Dual<N> = (0..n)
+            .into_par_iter()
+            .map(|j| {
+                let mut acc = Dual::<N>::cst(0.0);
+                self.influence_row(&boxes, j, flight.mach, &kds, |i, k, dji| {
+                    let l = frozen[k].lc[(j, i)];
+                    acc -= dji.re * l.re - dji.im * l.im;
+                });
+                acc
+            })
+            .reduce(|| Dual::cst(0.0), |a, b| a + b);
+        let mut lag = d_part;
+        for f in frozen {
+            let w = Self::normalwash(&boxes, modes, f.kd, flight.x_ref);
+            for col in 0..=nm {
+                for j in 0..n {
+                    let cj = f.c[(j, col)];
+                    for m in 0..nm {
+                        lag += hw[m][j] * (f.qbar[(m, col)].conj() * cj).re;
+                    }
+                    let lj = f.lam[(j, col)];
+                    lag += w[col][j].re * lj.re + w[col][j].im * lj.im;
                 }
-                let lj = f.lam[(j, col)];
-                lag += w[col][j].re * lj.re + w[col][j].im * lj.im;
-            }
-        }
-        // − Re Σ_ji conj(λ_j) D_ji c_i = − Re Σ_ji D_ji lc_ji
-        for j in 0..n {
-            for i in 0..n {
-                let dji = d[j * n + i];
-                let l = f.lc[(j, i)];
-                lag -= dji.re * l.re - dji.im * l.im;
             }
         }
         lag.d
@@ -338,12 +391,16 @@ impl Dlm {
             })
             .collect();
         let hw = Self::force_weights(&boxes, modes);
+        let mats = self.matrices(flight, k);
+        let kds: Vec<f64> = k.iter().map(|kk| kk / flight.b_ref).collect();
+        let dmats = self.influence_matrices(&boxes, flight.mach, &kds);
         let per_k: Vec<(Vec<Vec<c64>>, Vec<c64>)> = k
             .par_iter()
-            .map(|&kk| {
-                let kd = kk / flight.b_ref;
-                let (lu, c) = self.solve_k(flight, modes, kk)?;
-                let d = self.influence_matrix(&boxes, flight.mach, kd);
+            .enumerate()
+            .map(|(ik, &kk)| {
+                let kd = kds[ik];
+                let (lu, c) = self.solve_k(&mats[ik], flight, modes, kk)?;
+                let d = &dmats[ik];
                 let w = Self::normalwash(&boxes, modes, kd, flight.x_ref);
                 let rhs = Mat::<c64>::from_fn(n, nm + 1, |j, col| {
                     let dw = c64::new(w[col][j].re.d[0], w[col][j].im.d[0]);
@@ -394,10 +451,12 @@ impl Aerodynamics for Dlm {
         self.check_inputs(flight, modes, k)?;
         let nm = modes.n_modes();
         let weights = Self::force_weights(&self.boxes, modes);
+        let mats = self.matrices(flight, k);
         let per_k: Vec<(Vec<Vec<c64>>, Vec<c64>)> = k
             .par_iter()
-            .map(|&kk| {
-                let (_, c) = self.solve_k(flight, modes, kk)?;
+            .enumerate()
+            .map(|(ik, &kk)| {
+                let (_, c) = self.solve_k(&mats[ik], flight, modes, kk)?;
                 let gaf = |col: usize, m: usize| -> c64 {
                     weights[m]
                         .iter()
@@ -431,12 +490,13 @@ impl Aerodynamics for Dlm {
         }
         let n = self.n_boxes();
         let weights = Self::force_weights(&self.boxes, modes);
-        let parts: Vec<GafGradient> = k
+        let mats = self.matrices(flight, k);
+        let parts: Vec<(GafGradient, FrozenK)> = k
             .par_iter()
             .enumerate()
             .map(|(ik, &kk)| {
                 let kd = kk / flight.b_ref;
-                let (lu, c) = self.solve_k(flight, modes, kk)?;
+                let (lu, c) = self.solve_k(&mats[ik], flight, modes, kk)?;
                 // c̄_jn = Σ_m h_jm A_j Q̄_mn (gust column n = nm)
                 let qbar = |m: usize, col: usize| {
                     if col < nm {
@@ -487,26 +547,30 @@ impl Aerodynamics for Dlm {
                 let lc = Mat::<c64>::from_fn(n, n, |j, i| {
                     (0..=nm).map(|col| lam[(j, col)].conj() * c[(i, col)]).sum()
                 });
-                let frozen = Frozen {
-                    c: &c,
-                    lam: &lam,
-                    lc: &lc,
-                    qbar: &qbar_mat,
-                    kd,
-                    flight,
-                    modes,
-                };
-                for (si, active) in self.active.iter().enumerate() {
-                    for chunk in active.chunks(4) {
-                        let d = self.geometry_lagrangian::<4>(si, chunk, &frozen);
-                        for (p, &param) in chunk.iter().enumerate() {
-                            g.geometry[si * NQ + param] += d[p];
-                        }
-                    }
-                }
-                Ok(g)
+                Ok((
+                    g,
+                    FrozenK {
+                        c,
+                        lam,
+                        lc,
+                        qbar: qbar_mat,
+                        kd,
+                    },
+                ))
             })
             .collect::<Result<_, AeroError>>()?;
+        // geometry, all frequencies in one pass over the box pairs
+        let frozen: Vec<&FrozenK> = parts.iter().map(|(_, f)| f).collect();
+        let mut geometry = vec![0.0; NQ * self.surfaces.len()];
+        for (si, active) in self.active.iter().enumerate() {
+            for chunk in active.chunks(4) {
+                let d = self.geometry_lagrangian::<4>(si, chunk, &frozen, flight, modes);
+                for (p, &param) in chunk.iter().enumerate() {
+                    geometry[si * NQ + param] += d[p];
+                }
+            }
+        }
+        let parts: Vec<GafGradient> = parts.into_iter().map(|(g, _)| g).collect();
         let mut total = GafGradient {
             modes: ModalSurface::zeros(nm, 2 * n),
             geometry: vec![0.0; NQ * self.surfaces.len()],
@@ -523,6 +587,9 @@ impl Aerodynamics for Dlm {
             for (t, v) in total.geometry.iter_mut().zip(&p.geometry) {
                 *t += v;
             }
+        }
+        for (t, v) in total.geometry.iter_mut().zip(&geometry) {
+            *t += v;
         }
         Ok(total)
     }
