@@ -204,20 +204,12 @@ pub fn run(file: &Path, reports: &Path, resume: bool) -> Result<()> {
     if study.spec.flutter.is_some() {
         let (doc, r, velocities) = flutter_analysis(&study, reports)?;
         print_flutter(&study, &r, &velocities, &doc);
-        md += &match (r.flutter_speed_m_s, r.flutter_frequency_hz) {
-            (Some(v), Some(f)) => format!(
-                "\n## Flutter (p-k)\n\nM = {}, ρ = {} kg/m³: flutter at V = {v:.2} m/s ({:.1} ft/s), {f:.2} Hz, mode {}.\n\n![V-g, V-f](flutter_vg.png)\n",
-                doc["mach"],
-                doc["density_kg_m3"],
-                v / 0.3048,
-                r.flutter_mode.unwrap_or(0)
-            ),
-            _ => format!(
-                "\n## Flutter (p-k)\n\nNo flutter between {} and {} m/s.\n\n![V-g, V-f](flutter_vg.png)\n",
-                velocities[0],
-                velocities[velocities.len() - 1]
-            ),
-        };
+        md += &format!(
+            "\n## Flutter (p-k)\n\nM = {}, ρ = {} kg/m³: {}.\n\n![V-g, V-f](flutter_vg.png)\n",
+            doc["mach"],
+            doc["density_kg_m3"],
+            flutter_point(&r, &velocities)
+        );
         flutter = Some(serde_json::json!({
             "flutter_speed_m_s": r.flutter_speed_m_s,
             "flutter_frequency_hz": r.flutter_frequency_hz,
@@ -870,13 +862,18 @@ fn print_flutter(
         }
         println!();
     }
+    println!("{}", flutter_point(r, velocities));
+}
+
+/// One sentence on the flutter point of a sweep.
+fn flutter_point(r: &crate::flutter::FlutterResult, velocities: &[f64]) -> String {
     match (r.flutter_speed_m_s, r.flutter_frequency_hz) {
-        (Some(v), Some(f)) => println!(
-            "flutter: V = {v:.2} m/s ({:.1} ft/s), f = {f:.2} Hz, mode {}",
+        (Some(v), Some(f)) => format!(
+            "flutter at V = {v:.2} m/s ({:.1} ft/s), f = {f:.2} Hz, mode {}",
             v / 0.3048,
             r.flutter_mode.unwrap_or(0)
         ),
-        _ => println!(
+        _ => format!(
             "no flutter between {} and {} m/s",
             velocities[0],
             velocities[velocities.len() - 1]
