@@ -38,13 +38,6 @@ impl<S: Scalar> Cplx<S> {
             im: self.im * s,
         }
     }
-    /// Multiplication by i.
-    pub fn mul_i(self) -> Self {
-        Self {
-            re: -self.im,
-            im: self.re,
-        }
-    }
     /// The value part as a `Complex64`.
     pub fn value(self) -> Complex64 {
         Complex64::new(self.re.re(), self.im.re())

@@ -66,18 +66,6 @@ pub fn steady_influence<S: Scalar>(r: &AeroBox<S>, s: &AeroBox<S>, mach: f64) ->
     (v[0] * n[0] + v[1] * n[1] + v[2] * n[2]) * s.chord * 0.5
 }
 
-/// Oscillatory increment D1 + D2 of sending box `s` at the control point of `r`, for kd = ω/U.
-pub fn oscillatory_influence<S: Scalar>(
-    r: &AeroBox<S>,
-    s: &AeroBox<S>,
-    mach: f64,
-    kd: f64,
-) -> Cplx<S> {
-    let mut out = [Cplx::zero()];
-    oscillatory_influences(r, s, mach, &[kd], &mut out);
-    out[0]
-}
-
 /// Oscillatory increments of `s` at the control point of `r` for several kd = ω/U at once (the
 /// geometry, the kernel's frequency-independent parts and the quartic integrals' weights are
 /// computed once); kd = 0 gives zero.

@@ -75,25 +75,40 @@ fn problem_parts() -> (GafTable, Vec<f64>) {
     (t, vec![20.0, 60.0, 110.0])
 }
 
-/// Dot-product test of the RMS reverse mode against its forward mode, in all inputs at once
-/// (GAF table, ω_n², S vectors).
-#[test]
-fn rms_vjp_dot_product_test() {
-    let (table, wn) = problem_parts();
-    let p = GustProblem {
-        omega_n: wn.clone(),
+/// The three-mode test problem on a log grid of `points` frequencies up to 999 rad/s.
+fn problem<'a>(
+    table: &'a GafTable,
+    wn: &[f64],
+    points: usize,
+    outputs: Vec<Vec<f64>>,
+) -> GustProblem<'a> {
+    GustProblem {
+        omega_n: wn.to_vec(),
         damping_ratio: 0.03,
-        table: &table,
+        table,
         q_inf: 2000.0,
         velocity: 150.0,
         turbulence: Turbulence::Dryden {
             sigma_w_m_s: 1.0,
             scale_length_m: 200.0,
         },
-        grid: FrequencyGrid::log(0.01, 999.0, 400).unwrap(),
-        outputs: vec![vec![1.0, -0.5, 0.3], vec![0.2, 0.9, -0.4]],
+        grid: FrequencyGrid::log(0.01, 999.0, points).unwrap(),
+        outputs,
         max_tail: 1e-2,
-    };
+    }
+}
+
+/// Dot-product test of the RMS reverse mode against its forward mode, in all inputs at once
+/// (GAF table, ω_n², S vectors).
+#[test]
+fn rms_vjp_dot_product_test() {
+    let (table, wn) = problem_parts();
+    let p = problem(
+        &table,
+        &wn,
+        400,
+        vec![vec![1.0, -0.5, 0.3], vec![0.2, 0.9, -0.4]],
+    );
     let r = solve(&p).unwrap();
     let rms_bar = [0.7, -1.3];
     let g = rms_vjp(&p, &r, &rms_bar).unwrap();
@@ -167,20 +182,7 @@ fn rms_vjp_dot_product_test() {
 #[test]
 fn bad_input_is_rejected() {
     let (table, wn) = problem_parts();
-    let base = GustProblem {
-        omega_n: wn,
-        damping_ratio: 0.03,
-        table: &table,
-        q_inf: 2000.0,
-        velocity: 150.0,
-        turbulence: Turbulence::Dryden {
-            sigma_w_m_s: 1.0,
-            scale_length_m: 200.0,
-        },
-        grid: FrequencyGrid::log(0.01, 999.0, 100).unwrap(),
-        outputs: vec![vec![1.0, 0.0, 0.0]],
-        max_tail: 1e-2,
-    };
+    let base = problem(&table, &wn, 100, vec![vec![1.0, 0.0, 0.0]]);
     let mut p = base.clone();
     p.damping_ratio = -0.1;
     assert!(solve(&p).unwrap_err().to_string().contains("damping_ratio"));
