@@ -1,6 +1,10 @@
 //! What the `gustkit` subcommands do; `main.rs` only parses arguments.
 
-use crate::report::{self, figures::ModeShapes, save_figure, write_atomic};
+use crate::report::run::{
+    flutter_point, frequency_table, DesignSnapshot, FlutterSummary, GustResults, HistoryRow,
+    ModeRow, OptimizationResults, OutputRow, RunResults,
+};
+use crate::report::{self, figures::ModeShapes, figures::PsdSeries, save_figure, write_atomic};
 use crate::structure::model::Field;
 use crate::structure::{mass_grad, modal, modes_vjp, ModalSeed, Modes, PlateModel, Sampler};
 use crate::study::Study;
@@ -8,17 +12,6 @@ use anyhow::{Context, Result};
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
-
-/// One mode in the modal summary.
-#[derive(Serialize)]
-pub struct ModeRow {
-    pub mode: usize,
-    pub frequency_hz: f64,
-    /// "bending" or "membrane".
-    pub field: &'static str,
-    /// Vertical displacement of the wing-tip trailing edge in the mass-normalized mode, m/√kg.
-    pub tip_te_w: f64,
-}
 
 /// The modal analysis of a study as written to JSON.
 #[derive(Serialize)]
@@ -56,7 +49,7 @@ pub fn analyze(study: &Study) -> Result<(PlateModel, Modes, ModalSummary)> {
             .map(|(i, m)| ModeRow {
                 mode: i + 1,
                 frequency_hz: m.freq_hz(),
-                field: field_name(m.field),
+                field: field_name(m.field).to_string(),
                 tip_te_w: tip.sample(&model, &m.shape)[0][0],
             })
             .collect(),
@@ -64,28 +57,28 @@ pub fn analyze(study: &Study) -> Result<(PlateModel, Modes, ModalSummary)> {
     Ok((model, modes, summary))
 }
 
-/// Markdown frequency table.
-fn frequency_table(s: &ModalSummary) -> String {
-    let mut t = String::from("| mode | field | frequency [Hz] |\n|---:|---|---:|\n");
-    for r in &s.modes {
-        t += &format!("| {} | {} | {:.3} |\n", r.mode, r.field, r.frequency_hz);
+/// Name of the study's display length unit.
+fn unit_label(study: &Study) -> &'static str {
+    match study.spec.length_unit {
+        crate::study::LengthUnit::M => "m",
+        crate::study::LengthUnit::In => "in",
+        crate::study::LengthUnit::Ft => "ft",
     }
-    t
+}
+
+/// The mode-shape figure data of a model.
+fn mode_shapes(study: &Study, model: &PlateModel, modes: &Modes) -> ModeShapes {
+    ModeShapes::new(
+        model,
+        modes,
+        unit_label(study),
+        study.spec.length_unit.to_m(),
+    )
 }
 
 /// Writes the modal figures and the VTK file into `dir`.
 fn write_modal_files(study: &Study, model: &PlateModel, modes: &Modes, dir: &Path) -> Result<()> {
-    let unit = study.spec.length_unit;
-    let label = match unit {
-        crate::study::LengthUnit::M => "m",
-        crate::study::LengthUnit::In => "in",
-        crate::study::LengthUnit::Ft => "ft",
-    };
-    save_figure(
-        dir,
-        "modes",
-        &ModeShapes::new(model, modes, label, unit.to_m()),
-    )?;
+    save_figure(dir, "modes", &mode_shapes(study, model, modes))?;
     let vtk = report::vtk::plate_modes(model, modes, &format!("gustkit {} modes", study.spec.name));
     write_atomic(&dir.join("modes.vtk"), vtk.as_bytes())
 }
@@ -104,10 +97,55 @@ pub fn modes(file: &Path, json: bool, reports: &Path) -> Result<()> {
             "{}: mass {:.4} kg, planform area {:.4} m²",
             summary.study, summary.mass_kg, summary.area_m2
         );
-        print!("{}", frequency_table(&summary));
+        print!("{}", frequency_table(&summary.modes));
         println!("figures and VTK written to {}", dir.display());
     }
     Ok(())
+}
+
+/// The response PSD of output `i` of an evaluation.
+fn psd_series(ev: &crate::pipeline::Evaluation, i: usize) -> PsdSeries {
+    let o = &ev.settings().outputs[i];
+    PsdSeries {
+        label: o.name.clone(),
+        unit: o.quantity.unit().to_string(),
+        omega_rad_s: ev.grid.omega.clone(),
+        psd: ev.response.psd[i].clone(),
+    }
+}
+
+/// The gust response part of the results at the study's design.
+fn gust_results(study: &Study) -> Result<GustResults> {
+    let settings = study.gust_settings()?;
+    let x = study.initial_design()?.to_vec();
+    let ev = crate::pipeline::evaluate(study, &settings, &x)
+        .with_context(|| format!("{}: gust analysis", study.file.display()))?;
+    let f = ev.aero.flight;
+    let outputs: Vec<OutputRow> = settings
+        .outputs
+        .iter()
+        .enumerate()
+        .map(|(i, o)| OutputRow {
+            name: o.name.clone(),
+            rms: ev.rms_m[i],
+            unit: o.quantity.unit().to_string(),
+            n0_hz: ev.n0_hz[i],
+        })
+        .collect();
+    for o in &outputs {
+        println!("RMS {}: {:.6e} {}", o.name, o.rms, o.unit);
+    }
+    Ok(GustResults {
+        mach: f.mach,
+        velocity_m_s: f.velocity,
+        density_kg_m3: f.density,
+        q_inf_pa: f.q_inf(),
+        turbulence: settings.turbulence,
+        n_omega: ev.grid.omega.len(),
+        omega_max_rad_s: ev.grid.omega.last().copied().unwrap_or(0.0),
+        psd: (0..outputs.len()).map(|i| psd_series(&ev, i)).collect(),
+        outputs,
+    })
 }
 
 /// `gustkit run`: every analysis the study defines, with its report.
@@ -116,145 +154,64 @@ pub fn run(file: &Path, reports: &Path, resume: bool) -> Result<()> {
     let t0 = Instant::now();
     let (model, modes, summary) = analyze(&study)?;
     let dir = study.report_dir(reports);
-    write_modal_files(&study, &model, &modes, &dir)?;
-    let mut md = format!(
-        "# {}\n\n{}\n\n## Structure\n\nMass {:.4} kg, planform area {:.4} m², {} design variables.\n\n{}\n![modes](modes.png)\n\nVTK: `modes.vtk`.\n",
-        study.spec.name,
-        study.spec.description,
-        summary.mass_kg,
-        summary.area_m2,
-        model.design.len(),
-        frequency_table(&summary),
+    // fail early, before any long computation, when the run folder cannot be written
+    std::fs::create_dir_all(&dir)
+        .with_context(|| format!("cannot create the run folder {}", dir.display()))?;
+    let vtk = report::vtk::plate_modes(
+        &model,
+        &modes,
+        &format!("gustkit {} modes", study.spec.name),
     );
-    println!("{}", frequency_table(&summary));
-    let mut gust = None;
-    if study.spec.gust.is_some() {
-        let settings = study.gust_settings()?;
-        let x = study.initial_design()?.to_vec();
-        let ev = crate::pipeline::evaluate(&study, &settings, &x)
-            .with_context(|| format!("{}: gust analysis", file.display()))?;
-        let f = ev.aero.flight;
-        let rows: Vec<serde_json::Value> = settings
-            .outputs
-            .iter()
-            .enumerate()
-            .map(|(i, o)| {
-                let unit = o.quantity.unit();
-                serde_json::json!({"name": o.name, "rms": ev.rms_m[i], "unit": unit, "n0_hz": ev.n0_hz[i]})
+    write_atomic(&dir.join("modes.vtk"), vtk.as_bytes())?;
+    println!("{}", frequency_table(&summary.modes));
+    let gust = match study.spec.gust {
+        Some(_) => Some(gust_results(&study)?),
+        None => None,
+    };
+    let flutter = match study.spec.flutter {
+        Some(_) => {
+            let (doc, r, velocities) = flutter_analysis(&study, reports)?;
+            print_flutter(&study, &r, &velocities, &doc);
+            Some(FlutterSummary {
+                mach: doc["mach"].as_f64().unwrap_or(f64::NAN),
+                density_kg_m3: doc["density_kg_m3"].as_f64().unwrap_or(f64::NAN),
+                result: r,
             })
-            .collect();
-        md += &format!(
-            "\n## Gust response\n\nM = {}, V = {} m/s, ρ = {} kg/m³, q = {:.1} Pa; {:?}; {} frequencies on a log grid up to {:.1} rad/s.\n\n| output | RMS | unit | N0 [Hz] |\n|---|---:|---|---:|\n",
-            f.mach,
-            f.velocity,
-            f.density,
-            f.q_inf(),
-            settings.turbulence,
-            ev.grid.omega.len(),
-            ev.grid.omega.last().copied().unwrap_or(0.0)
-        );
-        for r in &rows {
-            md += &format!(
-                "| {} | {:.6e} | {} | {:.3} |\n",
-                r["name"].as_str().unwrap_or(""),
-                r["rms"].as_f64().unwrap_or(0.0),
-                r["unit"].as_str().unwrap_or(""),
-                r["n0_hz"].as_f64().unwrap_or(0.0)
-            );
-            println!(
-                "RMS {}: {:.6e} {}",
-                r["name"].as_str().unwrap_or(""),
-                r["rms"].as_f64().unwrap_or(0.0),
-                r["unit"].as_str().unwrap_or("")
-            );
         }
-        md += "\n![PSD](psd.png)\n";
-        let curves = settings
-            .outputs
-            .iter()
-            .enumerate()
-            .map(|(i, o)| {
-                let unit = o.quantity.unit();
-                (
-                    o.name.clone(),
-                    unit.to_string(),
-                    ev.grid
-                        .omega
-                        .iter()
-                        .copied()
-                        .zip(ev.response.psd[i].iter().copied())
-                        .collect(),
-                )
-            })
-            .collect();
-        save_figure(
-            &dir,
-            "psd",
-            &report::figures::PsdPlot {
-                title: format!("{}: gust response PSD", study.spec.name),
-                curves,
-            },
-        )?;
-        gust = Some(serde_json::json!({
-            "mach": f.mach, "velocity_m_s": f.velocity, "density_kg_m3": f.density,
-            "turbulence": settings.turbulence, "outputs": rows,
-        }));
-    }
-    let mut flutter = None;
-    if study.spec.flutter.is_some() {
-        let (doc, r, velocities) = flutter_analysis(&study, reports)?;
-        print_flutter(&study, &r, &velocities, &doc);
-        md += &format!(
-            "\n## Flutter (p-k)\n\nM = {}, ρ = {} kg/m³: {}.\n\n![V-g, V-f](flutter_vg.png)\n",
-            doc["mach"],
-            doc["density_kg_m3"],
-            flutter_point(&r, &velocities)
-        );
-        flutter = Some(serde_json::json!({
-            "flutter_speed_m_s": r.flutter_speed_m_s,
-            "flutter_frequency_hz": r.flutter_frequency_hz,
-            "flutter_mode": r.flutter_mode,
-        }));
-    }
-    let mut optimization = None;
-    if study.spec.optimization.is_some() {
-        let o = optimize(&study, &dir, resume)?;
-        md += &format!(
-            "\n## Optimization\n\n{} after {} iterations ({} evaluations).\n\n| | initial | final |\n|---|---:|---:|\n| mass [kg] | {:.4} | {:.4} |\n| RMS {} [{}] | {:.4} | {:.4} |\n| area [m²] | {:.5} | {:.5} |\n",
-            o["message"].as_str().unwrap_or(""),
-            o["iterations"],
-            o["evaluations"],
-            o["initial"]["mass_kg"].as_f64().unwrap_or(0.0),
-            o["final"]["mass_kg"].as_f64().unwrap_or(0.0),
-            o["output"].as_str().unwrap_or(""),
-            o["unit"].as_str().unwrap_or(""),
-            o["initial"]["rms_tip_in"].as_f64().unwrap_or(0.0),
-            o["final"]["rms_tip_in"].as_f64().unwrap_or(0.0),
-            o["initial"]["area_m2"].as_f64().unwrap_or(0.0),
-            o["final"]["area_m2"].as_f64().unwrap_or(0.0),
-        );
-        optimization = Some(o);
-    }
-    md += &format!("\nRun time {:.2} s.\n", t0.elapsed().as_secs_f64());
-    let mut results = serde_json::to_value(&summary)?;
-    if let Some(g) = gust {
-        results["gust"] = g;
-    }
-    if let Some(f) = flutter {
-        results["flutter"] = f;
-    }
-    if let Some(o) = optimization {
-        for key in ["converged", "iterations", "initial", "final", "history"] {
-            results[key] = o[key].clone();
-        }
-        results["optimization"] = o;
-    }
-    write_atomic(
-        &dir.join("results.json"),
-        serde_json::to_string_pretty(&results)?.as_bytes(),
-    )?;
-    write_atomic(&dir.join("summary.md"), md.as_bytes())?;
+        None => None,
+    };
+    let optimization = match study.spec.optimization {
+        Some(_) => Some(optimize(&study, &dir, resume)?),
+        None => None,
+    };
+    let results = RunResults {
+        study: study.spec.name.clone(),
+        description: study.spec.description.clone(),
+        length_unit: unit_label(&study).to_string(),
+        mass_kg: summary.mass_kg,
+        area_m2: summary.area_m2,
+        n_design_variables: model.design.len(),
+        frequencies_hz: summary.frequencies_hz,
+        modes: summary.modes,
+        mode_shapes: mode_shapes(&study, &model, &modes),
+        gust,
+        flutter,
+        optimization,
+        run_time_s: t0.elapsed().as_secs_f64(),
+    };
+    report::run::render(&dir, &results)?;
     println!("report written to {}", dir.display());
+    Ok(())
+}
+
+/// `gustkit report RUN_DIR`: every figure and the summary again, from results.json alone.
+pub fn report(dir: &Path) -> Result<()> {
+    let r = report::run::rerender(dir)?;
+    println!(
+        "report of {} re-rendered from {}",
+        r.study,
+        dir.join("results.json").display()
+    );
     Ok(())
 }
 
@@ -862,23 +819,7 @@ fn print_flutter(
         }
         println!();
     }
-    println!("{}", flutter_point(r, velocities));
-}
-
-/// One sentence on the flutter point of a sweep.
-fn flutter_point(r: &crate::flutter::FlutterResult, velocities: &[f64]) -> String {
-    match (r.flutter_speed_m_s, r.flutter_frequency_hz) {
-        (Some(v), Some(f)) => format!(
-            "flutter at V = {v:.2} m/s ({:.1} ft/s), f = {f:.2} Hz, mode {}",
-            v / 0.3048,
-            r.flutter_mode.unwrap_or(0)
-        ),
-        _ => format!(
-            "no flutter between {} and {} m/s",
-            velocities[0],
-            velocities[velocities.len() - 1]
-        ),
-    }
+    println!("{}", flutter_point(r));
 }
 
 /// Wall time of one function evaluation and one gradient of the gust pipeline at the initial
@@ -898,20 +839,22 @@ pub fn bench_pipeline(study: &Study) -> Result<(f64, f64)> {
     Ok(((t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()))
 }
 
-/// Prints each SQP iteration and writes the checkpoint atomically.
+/// Shows each SQP iteration on a progress bar (and as a line on stdout) and writes the checkpoint
+/// atomically.
 struct RunObserver {
     dir: std::path::PathBuf,
     mass0: f64,
     rms_scale: f64,
     rms_unit: &'static str,
     rms_limit: f64,
+    bar: indicatif::ProgressBar,
     error: Option<anyhow::Error>,
 }
 
 impl crate::optim::Observer for RunObserver {
     fn iteration(&mut self, it: &crate::optim::Iterate, cp: &crate::optim::Checkpoint) -> bool {
         let rms = (it.values.ineq[0] + 1.0) * self.rms_limit;
-        println!(
+        let line = format!(
             "iteration {:>3}: mass {:.5} kg ({:+.2} %), RMS {:.4} {} (limit {:.4}), violation {:.2e}, KKT {:.2e}",
             it.iteration,
             it.values.f * self.mass0,
@@ -922,6 +865,15 @@ impl crate::optim::Observer for RunObserver {
             it.violation,
             it.kkt
         );
+        self.bar.suspend(|| println!("{line}"));
+        self.bar.set_position(cp.iteration as u64);
+        self.bar.set_message(format!(
+            "mass {:+.1} %, RMS {:.3} {}, KKT {:.1e}",
+            100.0 * (it.values.f - 1.0),
+            rms * self.rms_scale,
+            self.rms_unit,
+            it.kkt
+        ));
         match serde_json::to_vec(cp)
             .map_err(anyhow::Error::from)
             .and_then(|b| write_atomic(&self.dir.join("checkpoint.json"), &b))
@@ -942,9 +894,41 @@ fn fnv(text: &str) -> u64 {
     })
 }
 
-/// The gust-constrained mass minimization of a study; returns the `optimization` part of
-/// results.json.
-pub fn optimize(study: &Study, dir: &Path, resume: bool) -> Result<serde_json::Value> {
+/// A design as the report shows it: values, planform, thickness map and the PSD of `output`.
+fn snapshot(
+    study: &Study,
+    ev: &crate::pipeline::Evaluation,
+    output: usize,
+    unit_scale: f64,
+) -> DesignSnapshot {
+    let to_m = study.spec.length_unit.to_m();
+    let xy = ev.plate.node_xy();
+    let mesh = &ev.plate.mesh;
+    DesignSnapshot {
+        mass_kg: ev.mass_kg,
+        area_m2: ev.area_m2,
+        rms_tip_in: ev.rms_m[output] * unit_scale,
+        rms: ev.rms_m[output],
+        frequencies_hz: ev.freq_hz.clone(),
+        design_variables: ev.x.clone(),
+        elements: mesh
+            .elements
+            .iter()
+            .map(|e| {
+                e.iter()
+                    .map(|&n| (xy[n][0] / to_m, xy[n][1] / to_m))
+                    .collect()
+            })
+            .collect(),
+        thickness: (0..mesh.elements.len())
+            .map(|e| ev.plate.element_thickness(e) / to_m)
+            .collect(),
+        psd: psd_series(ev, output),
+    }
+}
+
+/// The gust-constrained mass minimization of a study (the `optimization` section).
+pub fn optimize(study: &Study, dir: &Path, resume: bool) -> Result<OptimizationResults> {
     use crate::study::design::{DesignProblem, DesignSpec};
     let o = study.spec.optimization.as_ref().expect("caller checked");
     let settings = study.gust_settings()?;
@@ -1001,12 +985,21 @@ pub fn optimize(study: &Study, dir: &Path, resume: bool) -> Result<serde_json::V
     } else {
         None
     };
+    let bar = indicatif::ProgressBar::new(o.max_iterations as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} SQP [{elapsed_precise}] {bar:30} {pos}/{len} iterations  {msg}",
+        )
+        .expect("valid template"),
+    );
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
     let mut observer = RunObserver {
         dir: dir.to_path_buf(),
         mass0: ev0.mass_kg,
         rms_scale: unit_scale,
         rms_unit: unit,
         rms_limit,
+        bar,
         error: None,
     };
     let mut problem = DesignProblem::new(study, settings.clone(), spec.clone());
@@ -1018,35 +1011,29 @@ pub fn optimize(study: &Study, dir: &Path, resume: bool) -> Result<serde_json::V
         &problem_id,
         checkpoint,
         &mut observer,
-    )
-    .map_err(|e| anyhow::anyhow!("optimization: {e}"))?;
+    );
+    observer.bar.finish_and_clear();
+    let info = info.map_err(|e| anyhow::anyhow!("optimization: {e}"))?;
     if let Some(e) = observer.error {
         return Err(e.context("cannot write the checkpoint"));
     }
+    let wall_time_s = t0.elapsed().as_secs_f64();
     let ev = crate::pipeline::evaluate(study, &settings, &info.x).context("final design")?;
-    let snapshot = |ev: &crate::pipeline::Evaluation| {
-        serde_json::json!({
-            "mass_kg": ev.mass_kg,
-            "area_m2": ev.area_m2,
-            "rms_tip_in": ev.rms_m[output] * unit_scale,
-            "rms": ev.rms_m[output],
-            "frequencies_hz": ev.freq_hz,
-            "design_variables": ev.x,
-        })
-    };
-    let history: Vec<serde_json::Value> = info
+    let history = info
         .history
         .iter()
-        .map(|it| {
-            serde_json::json!({
-                "iteration": it.iteration,
-                "mass_kg": it.values.f * ev0.mass_kg,
-                "rms_tip_in": (it.values.ineq[0] + 1.0) * rms_limit * unit_scale,
-                "area_m2": it.values.eq.first().map_or(f64::NAN, |h| (h + 1.0) * ev0.area_m2),
-                "violation": it.violation,
-                "kkt": it.kkt,
-                "evaluations": it.evaluations,
-            })
+        .map(|it| HistoryRow {
+            iteration: it.iteration,
+            mass_kg: it.values.f * ev0.mass_kg,
+            rms_tip_in: (it.values.ineq[0] + 1.0) * rms_limit * unit_scale,
+            area_m2: it
+                .values
+                .eq
+                .first()
+                .map_or(ev0.area_m2, |h| (h + 1.0) * ev0.area_m2),
+            violation: it.violation,
+            kkt: it.kkt,
+            evaluations: it.evaluations,
         })
         .collect();
     println!(
@@ -1054,26 +1041,33 @@ pub fn optimize(study: &Study, dir: &Path, resume: bool) -> Result<serde_json::V
         info.message,
         info.iterations,
         info.evaluations,
-        t0.elapsed().as_secs_f64(),
+        wall_time_s,
         ev0.mass_kg,
         ev.mass_kg,
         100.0 * (ev.mass_kg / ev0.mass_kg - 1.0),
         ev0.rms_m[output] * unit_scale,
         ev.rms_m[output] * unit_scale
     );
-    Ok(serde_json::json!({
-        "converged": info.converged,
-        "message": info.message,
-        "iterations": info.iterations,
-        "evaluations": info.evaluations,
-        "output": o.output,
-        "rms_limit": o.rms_max,
-        "unit": unit,
-        "design_variable_names": (0..x0.len()).map(|i| study.initial_design().map(|d| d.name(i)).unwrap_or_default()).collect::<Vec<_>>(),
-        "lower": spec.lower,
-        "upper": spec.upper,
-        "initial": snapshot(&ev0),
-        "final": snapshot(&ev),
-        "history": history,
-    }))
+    let design = study.initial_design()?;
+    Ok(OptimizationResults {
+        converged: info.converged,
+        message: info.message.clone(),
+        iterations: info.iterations,
+        evaluations: info.evaluations,
+        wall_time_s,
+        output: o.output.clone(),
+        rms_limit: if is_disp {
+            rms_limit * unit_scale
+        } else {
+            rms_limit
+        },
+        unit: unit.to_string(),
+        fix_area: o.fix_area,
+        design_variable_names: (0..x0.len()).map(|i| design.name(i)).collect(),
+        lower: spec.lower,
+        upper: spec.upper,
+        initial: snapshot(study, &ev0, output, unit_scale),
+        final_: snapshot(study, &ev, output, unit_scale),
+        history,
+    })
 }

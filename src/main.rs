@@ -28,6 +28,11 @@ enum Command {
         #[arg(long)]
         resume: bool,
     },
+    /// Re-render every figure and summary.md of a run folder from its results.json alone.
+    Report {
+        /// A run folder written by `gustkit run` (holds results.json).
+        run_dir: PathBuf,
+    },
     /// Modal analysis of a study's wing: frequency table, mode-shape figures and a VTK file.
     Modes {
         study: PathBuf,
@@ -95,6 +100,7 @@ fn main() -> Result<()> {
             reports,
             resume,
         } => cli::run(&study, &reports, resume),
+        Command::Report { run_dir } => cli::report(&run_dir),
         Command::Modes {
             study,
             json,

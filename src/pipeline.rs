@@ -78,6 +78,11 @@ pub struct Evaluation {
 }
 
 impl Evaluation {
+    /// The gust settings it was evaluated with.
+    pub fn settings(&self) -> &GustSettings {
+        &self.settings
+    }
+
     fn problem(&self) -> GustProblem<'_> {
         GustProblem {
             omega_n: self.modes.omega(),

@@ -431,6 +431,50 @@ fn run_optimization_and_resume() {
         r2["final"]["design_variables"],
         r["final"]["design_variables"]
     );
+    // `gustkit report` re-renders every figure and the same summary from results.json alone
+    let run_dir = dir.join("opt_small");
+    let figures = [
+        "modes",
+        "psd",
+        "convergence",
+        "psd_optimization",
+        "thickness",
+    ];
+    let summary = std::fs::read_to_string(run_dir.join("summary.md")).unwrap();
+    assert!(summary.contains("## Optimization") && summary.contains("thickness.png"));
+    for f in figures {
+        for ext in ["png", "svg"] {
+            std::fs::remove_file(run_dir.join(format!("{f}.{ext}"))).unwrap();
+        }
+    }
+    std::fs::remove_file(run_dir.join("summary.md")).unwrap();
+    let o = gustkit().args(["report"]).arg(&run_dir).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in figures {
+        for ext in ["png", "svg"] {
+            assert!(run_dir.join(format!("{f}.{ext}")).is_file(), "{f}.{ext}");
+        }
+    }
+    assert_eq!(
+        std::fs::read_to_string(run_dir.join("summary.md")).unwrap(),
+        summary
+    );
+    // a folder without results.json, and a results.json of the wrong shape
+    let o = gustkit().args(["report"]).arg(&dir).output().unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("cannot read"));
+    let bad = dir.join("bad_run");
+    std::fs::create_dir_all(&bad).unwrap();
+    let mut broken = r.clone();
+    broken["initial"]["mass_kg"] = "heavy".into();
+    std::fs::write(bad.join("results.json"), broken.to_string()).unwrap();
+    let o = gustkit().args(["report"]).arg(&bad).output().unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("results.json") && err.contains("mass_kg"),
+        "{err}"
+    );
     // a corrupted checkpoint
     std::fs::write(dir.join("opt_small/checkpoint.json"), "{not json").unwrap();
     let o = run(&["--resume"]);

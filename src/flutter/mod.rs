@@ -13,7 +13,7 @@ use crate::gust::interp::SplineWeights;
 use faer::Mat;
 use gustkit_core::GafTable;
 use num_complex::Complex64;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Why a flutter analysis failed.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -31,7 +31,7 @@ pub enum FlutterError {
 }
 
 /// Damping and frequency of one mode against speed.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct ModeCurve {
     pub mode: usize,
     pub velocity_m_s: Vec<f64>,
@@ -43,7 +43,7 @@ pub struct ModeCurve {
 }
 
 /// The result of a p-k sweep.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct FlutterResult {
     pub flutter_speed_m_s: Option<f64>,
     pub flutter_frequency_hz: Option<f64>,

@@ -6,9 +6,11 @@ use crate::structure::{Modes, PlateModel};
 use anyhow::{anyhow, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use serde::{Deserialize, Serialize};
 
 /// Mode shapes on the planform: one panel a mode, each element coloured by its mean deflection
 /// (membrane modes by in-plane displacement magnitude), scaled to the mode's maximum.
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct ModeShapes {
     /// Element corner polygons in display units.
     polygons: Vec<Vec<(f64, f64)>>,
@@ -237,18 +239,25 @@ impl Figure for VgVf<'_> {
     }
 }
 
-/// One PSD curve: label, unit, (ω rad/s, PSD) points.
-pub type PsdCurve = (String, String, Vec<(f64, f64)>);
+/// The response PSD of one output (SI, one-sided in ω).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct PsdSeries {
+    pub label: String,
+    pub unit: String,
+    pub omega_rad_s: Vec<f64>,
+    pub psd: Vec<f64>,
+}
 
-/// Power spectral densities of the gust response outputs on log-log axes.
+/// Power spectral densities on log-log axes: one panel per entry, each with one or more series
+/// of the same quantity.
 pub struct PsdPlot {
     pub title: String,
-    pub curves: Vec<PsdCurve>,
+    pub panels: Vec<Vec<PsdSeries>>,
 }
 
 impl Figure for PsdPlot {
     fn size(&self) -> (u32, u32) {
-        (1000, 420 * self.curves.len().max(1) as u32)
+        (1000, 420 * self.panels.len().max(1) as u32)
     }
 
     fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()>
@@ -257,20 +266,28 @@ impl Figure for PsdPlot {
     {
         let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing PSD: {e}");
         area.fill(&WHITE).map_err(err)?;
-        let panels = area.split_evenly((self.curves.len().max(1), 1));
-        for (i, (panel, (label, unit, pts))) in panels.iter().zip(&self.curves).enumerate() {
-            let pts: Vec<(f64, f64)> = pts
+        let cells = area.split_evenly((self.panels.len().max(1), 1));
+        for (i, (cell, series)) in cells.iter().zip(&self.panels).enumerate() {
+            let curves: Vec<Vec<(f64, f64)>> = series
                 .iter()
-                .copied()
-                .filter(|(w, p)| *w > 0.0 && *p > 0.0)
+                .map(|s| {
+                    s.omega_rad_s
+                        .iter()
+                        .copied()
+                        .zip(s.psd.iter().copied())
+                        .filter(|(w, p)| *w > 0.0 && *p > 0.0)
+                        .collect()
+                })
                 .collect();
-            if pts.is_empty() {
+            let all = || curves.iter().flatten();
+            if all().next().is_none() {
                 continue;
             }
-            let (w0, w1) = (pts[0].0, pts[pts.len() - 1].0);
-            let pmax = pts.iter().map(|p| p.1).fold(0.0, f64::max);
-            let pmin = (pmax * 1e-10).max(pts.iter().map(|p| p.1).fold(f64::MAX, f64::min));
-            let mut chart = ChartBuilder::on(panel)
+            let w0 = all().map(|p| p.0).fold(f64::MAX, f64::min);
+            let w1 = all().map(|p| p.0).fold(0.0, f64::max);
+            let pmax = all().map(|p| p.1).fold(0.0, f64::max);
+            let pmin = (pmax * 1e-10).max(all().map(|p| p.1).fold(f64::MAX, f64::min));
+            let mut chart = ChartBuilder::on(cell)
                 .caption(
                     if i == 0 { self.title.as_str() } else { "" },
                     ("sans-serif", 18),
@@ -283,19 +300,244 @@ impl Figure for PsdPlot {
             chart
                 .configure_mesh()
                 .x_desc("circular frequency [rad/s]")
-                .y_desc(format!("PSD of {label} [{unit}² s/rad]"))
+                .y_desc(format!(
+                    "PSD [{}² s/rad]",
+                    series.first().map_or("", |s| s.unit.as_str())
+                ))
                 .x_label_formatter(&|v| format!("{v:.0e}"))
                 .y_label_formatter(&|v| format!("{v:.0e}"))
                 .label_style(("sans-serif", 12))
                 .draw()
                 .map_err(err)?;
+            for (j, (s, pts)) in series.iter().zip(&curves).enumerate() {
+                let color = Palette99::pick(j).to_rgba();
+                chart
+                    .draw_series(LineSeries::new(
+                        pts.iter().map(|p| (p.0, p.1.max(pmin))),
+                        color.stroke_width(2),
+                    ))
+                    .map_err(err)?
+                    .label(s.label.clone())
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+                    });
+            }
             chart
-                .draw_series(LineSeries::new(
-                    pts.iter().map(|p| (p.0, p.1.max(pmin))),
-                    BLUE.stroke_width(2),
-                ))
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperRight)
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 13))
+                .draw()
                 .map_err(err)?;
         }
+        Ok(())
+    }
+}
+
+/// Convergence history of an optimization (like paper Fig. 6): objective and constraints against
+/// iteration, each normalized by its reference (mass by the initial mass, RMS by its limit, area
+/// by the initial area), with the feasible limit drawn.
+pub struct Convergence {
+    title: String,
+    /// (label, points) per curve.
+    curves: Vec<(String, Vec<(f64, f64)>)>,
+}
+
+impl Convergence {
+    pub fn new(study: &str, o: &crate::report::run::OptimizationResults) -> Self {
+        let m0 = o.initial.mass_kg;
+        let a0 = o.initial.area_m2;
+        let it = |f: &dyn Fn(&crate::report::run::HistoryRow) -> f64| {
+            o.history
+                .iter()
+                .map(|h| (h.iteration as f64, f(h)))
+                .collect::<Vec<_>>()
+        };
+        let mut curves = vec![
+            ("mass / initial mass".to_string(), it(&|h| h.mass_kg / m0)),
+            (
+                format!("RMS {} / limit", o.output),
+                it(&|h| h.rms_tip_in / o.rms_limit),
+            ),
+        ];
+        if o.fix_area {
+            curves.push(("area / initial area".to_string(), it(&|h| h.area_m2 / a0)));
+        }
+        Self {
+            title: format!("{study}: optimization history"),
+            curves,
+        }
+    }
+}
+
+impl Figure for Convergence {
+    fn size(&self) -> (u32, u32) {
+        (1000, 520)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing convergence: {e}");
+        area.fill(&WHITE).map_err(err)?;
+        let pts = || self.curves.iter().flat_map(|c| c.1.iter());
+        let n = pts().map(|p| p.0).fold(1.0, f64::max);
+        let ylo = pts().map(|p| p.1).fold(1.0, f64::min).min(0.9);
+        let yhi = pts().map(|p| p.1).fold(1.0, f64::max).max(1.1);
+        let pad = 0.05 * (yhi - ylo);
+        let mut chart = ChartBuilder::on(area)
+            .caption(&self.title, ("sans-serif", 20))
+            .margin(12)
+            .x_label_area_size(35)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..n, ylo - pad..yhi + pad)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc("iteration")
+            .y_desc("normalized value")
+            .x_label_formatter(&|v| format!("{v:.0}"))
+            .label_style(("sans-serif", 13))
+            .draw()
+            .map_err(err)?;
+        chart
+            .draw_series(LineSeries::new(
+                [(0.0, 1.0), (n, 1.0)],
+                BLACK.mix(0.4).stroke_width(1),
+            ))
+            .map_err(err)?;
+        for (i, (label, p)) in self.curves.iter().enumerate() {
+            let color = Palette99::pick(i).to_rgba();
+            chart
+                .draw_series(LineSeries::new(p.iter().copied(), color.stroke_width(2)))
+                .map_err(err)?
+                .label(label.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+                });
+            chart
+                .draw_series(p.iter().map(|q| Circle::new(*q, 3, color.filled())))
+                .map_err(err)?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 13))
+            .draw()
+            .map_err(err)?;
+        Ok(())
+    }
+}
+
+/// One thickness panel: title, element polygons, element thickness (display units).
+pub type ThicknessPanel = (String, Vec<Vec<(f64, f64)>>, Vec<f64>);
+
+/// Planforms coloured by element thickness on one common scale (like paper Fig. 7; flow from left
+/// to right, x streamwise, y spanwise), with the scale's range in each caption.
+pub struct ThicknessMaps {
+    pub title: String,
+    pub unit: String,
+    pub panels: Vec<ThicknessPanel>,
+}
+
+/// Sequential white-to-dark-blue colour for v in [0, 1].
+fn sequential(v: f64) -> RGBColor {
+    let v = v.clamp(0.0, 1.0);
+    let lerp = |a: f64, b: f64| (a + (b - a) * v).round() as u8;
+    RGBColor(lerp(247.0, 8.0), lerp(251.0, 48.0), lerp(255.0, 107.0))
+}
+
+impl Figure for ThicknessMaps {
+    fn size(&self) -> (u32, u32) {
+        (600 * self.panels.len().max(1) as u32, 620)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing thickness: {e}");
+        area.fill(&WHITE).map_err(err)?;
+        let area = area.titled(&self.title, ("sans-serif", 20)).map_err(err)?;
+        let (body, bar) = area.split_vertically(540);
+        let cells = body.split_evenly((1, self.panels.len().max(1)));
+        let pts = || self.panels.iter().flat_map(|p| p.1.iter().flatten());
+        let x0 = pts().map(|p| p.0).fold(f64::MAX, f64::min);
+        let x1 = pts().map(|p| p.0).fold(f64::MIN, f64::max);
+        let y0 = pts().map(|p| p.1).fold(f64::MAX, f64::min);
+        let y1 = pts().map(|p| p.1).fold(f64::MIN, f64::max);
+        let half = 0.55 * (x1 - x0).max(y1 - y0);
+        let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+        let tmin = self
+            .panels
+            .iter()
+            .flat_map(|p| p.2.iter())
+            .fold(f64::MAX, |a, b| a.min(*b));
+        let tmax = self
+            .panels
+            .iter()
+            .flat_map(|p| p.2.iter())
+            .fold(f64::MIN, |a, b| a.max(*b));
+        let scale = |t: f64| (t - tmin) / (tmax - tmin).max(1e-300);
+        for (cell, (title, polys, t)) in cells.iter().zip(&self.panels) {
+            let mut chart = ChartBuilder::on(cell)
+                .caption(title, ("sans-serif", 17))
+                .margin(8)
+                .x_label_area_size(30)
+                .y_label_area_size(45)
+                .build_cartesian_2d(cx - half..cx + half, cy - half..cy + half)
+                .map_err(err)?;
+            chart
+                .configure_mesh()
+                .disable_mesh()
+                .x_desc(format!("x [{}] (flow →)", self.unit))
+                .y_desc(format!("y [{}]", self.unit))
+                .label_style(("sans-serif", 12))
+                .draw()
+                .map_err(err)?;
+            chart
+                .draw_series(
+                    polys.iter().zip(t).map(|(poly, v)| {
+                        Polygon::new(poly.clone(), sequential(scale(*v)).filled())
+                    }),
+                )
+                .map_err(err)?;
+            chart
+                .draw_series(polys.iter().map(|poly| {
+                    let mut closed = poly.clone();
+                    closed.push(poly[0]);
+                    PathElement::new(closed, BLACK.mix(0.3))
+                }))
+                .map_err(err)?;
+        }
+        // colour bar
+        let mut chart = ChartBuilder::on(&bar)
+            .margin_left(80)
+            .margin_right(80)
+            .margin_bottom(5)
+            .x_label_area_size(30)
+            .build_cartesian_2d(tmin..tmax.max(tmin + 1e-12), 0.0..1.0)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .disable_y_axis()
+            .x_desc(format!("element thickness [{}]", self.unit))
+            .label_style(("sans-serif", 12))
+            .draw()
+            .map_err(err)?;
+        let steps = 100;
+        chart
+            .draw_series((0..steps).map(|i| {
+                let a = tmin + (tmax - tmin) * i as f64 / steps as f64;
+                let b = tmin + (tmax - tmin) * (i + 1) as f64 / steps as f64;
+                Rectangle::new([(a, 0.0), (b, 1.0)], sequential(scale(a)).filled())
+            }))
+            .map_err(err)?;
         Ok(())
     }
 }
