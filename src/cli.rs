@@ -834,6 +834,7 @@ pub fn bench_pipeline(study: &Study) -> Result<(f64, f64)> {
         mass: 1.0,
         area: 1.0,
         rms: vec![1.0; ev.rms_m.len()],
+        damping: None,
     };
     std::hint::black_box(crate::pipeline::gradient(&ev, &seeds)?);
     Ok(((t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()))
@@ -847,6 +848,8 @@ struct RunObserver {
     rms_scale: f64,
     rms_unit: &'static str,
     rms_limit: f64,
+    /// Damping limit of the flutter-margin constraint, when there is one.
+    damping_max: Option<f64>,
     bar: indicatif::ProgressBar,
     error: Option<anyhow::Error>,
 }
@@ -854,8 +857,15 @@ struct RunObserver {
 impl crate::optim::Observer for RunObserver {
     fn iteration(&mut self, it: &crate::optim::Iterate, cp: &crate::optim::Checkpoint) -> bool {
         let rms = (it.values.ineq[0] + 1.0) * self.rms_limit;
+        let flutter = match (it.values.ineq.get(1), self.damping_max) {
+            (Some(c), Some(g_max)) => format!(
+                ", g_KS {:+.4}",
+                g_max + c * crate::study::design::DAMPING_SCALE
+            ),
+            _ => String::new(),
+        };
         let line = format!(
-            "iteration {:>3}: mass {:.5} kg ({:+.2} %), RMS {:.4} {} (limit {:.4}), violation {:.2e}, KKT {:.2e}",
+            "iteration {:>3}: mass {:.5} kg ({:+.2} %), RMS {:.4} {} (limit {:.4}){flutter}, violation {:.2e}, KKT {:.2e}, step {:.3}{}",
             it.iteration,
             it.values.f * self.mass0,
             100.0 * (it.values.f - 1.0),
@@ -863,7 +873,13 @@ impl crate::optim::Observer for RunObserver {
             self.rms_unit,
             self.rms_limit * self.rms_scale,
             it.violation,
-            it.kkt
+            it.kkt,
+            it.alpha,
+            if it.failed_trials > 0 {
+                format!(" ({} trial points failed)", it.failed_trials)
+            } else {
+                String::new()
+            }
         );
         self.bar.suspend(|| println!("{line}"));
         self.bar.set_position(cp.iteration as u64);
@@ -959,6 +975,13 @@ pub fn optimize(study: &Study, dir: &Path, resume: bool) -> Result<OptimizationR
         mass0: ev0.mass_kg,
         area0: ev0.area_m2,
         fix_area: o.fix_area,
+        flutter: o
+            .flutter_margin
+            .as_ref()
+            .map(|m| crate::pipeline::FlutterMargin {
+                speed_factor: m.speed_factor,
+                damping_max: m.damping_max,
+            }),
     };
     let params = crate::optim::SqpParams {
         max_iterations: o.max_iterations,
@@ -999,6 +1022,7 @@ pub fn optimize(study: &Study, dir: &Path, resume: bool) -> Result<OptimizationR
         rms_scale: unit_scale,
         rms_unit: unit,
         rms_limit,
+        damping_max: spec.flutter.map(|m| m.damping_max),
         bar,
         error: None,
     };
@@ -1031,6 +1055,10 @@ pub fn optimize(study: &Study, dir: &Path, resume: bool) -> Result<OptimizationR
                 .eq
                 .first()
                 .map_or(ev0.area_m2, |h| (h + 1.0) * ev0.area_m2),
+            flutter_damping: match (it.values.ineq.get(1), &spec.flutter) {
+                (Some(c), Some(m)) => Some(m.damping_max + c * crate::study::design::DAMPING_SCALE),
+                _ => None,
+            },
             violation: it.violation,
             kkt: it.kkt,
             evaluations: it.evaluations,
@@ -1063,6 +1091,7 @@ pub fn optimize(study: &Study, dir: &Path, resume: bool) -> Result<OptimizationR
         },
         unit: unit.to_string(),
         fix_area: o.fix_area,
+        flutter_margin: spec.flutter.map(|m| (m.speed_factor, m.damping_max)),
         design_variable_names: (0..x0.len()).map(|i| design.name(i)).collect(),
         lower: spec.lower,
         upper: spec.upper,

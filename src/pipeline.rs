@@ -9,6 +9,8 @@
 //! This is the "flip the sign of the imaginary part" of the paper: the linearization of J with
 //! respect to a complex state z is conj(Q̄)ᵀ, not Q̄ᵀ.
 
+use crate::flutter::margin::{ks_max, zeros_like, DampingRoot};
+use crate::flutter::PkProblem;
 use crate::gust::{self, FrequencyGrid, GustProblem, GustResponse, Turbulence};
 use crate::structure::modal::SAMPLED;
 use crate::structure::{
@@ -78,6 +80,35 @@ pub struct Evaluation {
 }
 
 impl Evaluation {
+    fn pk(&self) -> PkProblem<'_> {
+        PkProblem {
+            omega_n: self.modes.omega(),
+            damping_ratio: self.modes.damping_ratio,
+            table: &self.table,
+            density: self.aero.flight.density,
+        }
+    }
+
+    /// The p-k roots at every speed up to the margin speed of `m`, and the KS aggregate of their
+    /// dampings with its weights.
+    pub fn flutter_damping(&self, m: &FlutterMargin) -> Result<(f64, Vec<f64>, DampingSeed)> {
+        let velocity = m.speed_factor * self.aero.flight.velocity;
+        let roots = self
+            .pk()
+            .roots_up_to(velocity, PK_STEPS)
+            .map_err(|e| anyhow::anyhow!("flutter margin at {velocity:.2} m/s: {e}"))?;
+        let g: Vec<f64> = roots.iter().map(|r| r.g).collect();
+        let (ks, weights) = ks_max(&g, KS_RHO);
+        Ok((
+            ks,
+            weights,
+            DampingSeed {
+                g_bar: vec![0.0; roots.len()],
+                roots,
+            },
+        ))
+    }
+
     /// The gust settings it was evaluated with.
     pub fn settings(&self) -> &GustSettings {
         &self.settings
@@ -105,7 +136,32 @@ pub struct OutputSeeds {
     pub area: f64,
     /// One per gust output (RMS in m).
     pub rms: Vec<f64>,
+    /// Seeds on the damping of p-k roots at one speed.
+    pub damping: Option<DampingSeed>,
 }
+
+/// Seeds `g_bar` on the damping of p-k `roots` (from [`Evaluation::flutter_damping`]).
+#[derive(Clone, Debug)]
+pub struct DampingSeed {
+    pub roots: Vec<DampingRoot>,
+    pub g_bar: Vec<f64>,
+}
+
+/// A flutter-margin requirement: every p-k root at every speed up to `speed_factor` × the flight
+/// speed (Mach and density of the flight condition) has a damping g ≤ `damping_max` (a hump mode
+/// that goes unstable and back below the flight speed violates it too).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlutterMargin {
+    pub speed_factor: f64,
+    pub damping_max: f64,
+}
+
+/// Sharpness of the KS aggregate of the modal dampings (it exceeds the largest by ≤ ln(n)/ρ).
+pub const KS_RHO: f64 = 200.0;
+
+/// Speeds (from a fifth of the margin speed up to it) at which the margin constraint checks the
+/// p-k roots.
+const PK_STEPS: usize = 20;
 
 /// Evaluates a design of the study.
 pub fn evaluate(study: &Study, settings: &GustSettings, x: &[f64]) -> Result<Evaluation> {
@@ -181,14 +237,79 @@ pub fn gradient(ev: &Evaluation, seeds: &OutputSeeds) -> Result<Vec<f64>> {
             g[n - N_PLANFORM + k] += seeds.area * a;
         }
     }
-    if seeds.rms.iter().all(|s| *s == 0.0) {
+    let rms_seeded = seeds.rms.iter().any(|s| *s != 0.0);
+    if !rms_seeded && seeds.damping.is_none() {
         return Ok(g);
     }
-    // gust response → GAF table, ω_n², S
-    let gg = gust::rms_vjp(&ev.problem(), &ev.response, &seeds.rms)?;
     let mut modal_seed = ModalSeed::zeros(&ev.modes);
-    modal_seed.lambda = gg.lambda.clone();
     let mut p_bar = [0.0; N_PLANFORM];
+    let mut table_bar = zeros_like(&ev.table);
+    // p-k dampings → GAF table, ω_n²
+    if let Some(d) = &seeds.damping {
+        let pk = ev.pk();
+        for (root, g_bar) in d.roots.iter().zip(&d.g_bar) {
+            if *g_bar == 0.0 {
+                continue;
+            }
+            let (om_bar, t_bar) = pk
+                .damping_vjp(root, *g_bar)
+                .map_err(|e| anyhow::anyhow!("flutter margin reverse mode: {e}"))?;
+            for (l, v) in modal_seed.lambda.iter_mut().zip(om_bar) {
+                *l += v;
+            }
+            add_table(&mut table_bar, &t_bar);
+        }
+    }
+    if rms_seeded {
+        rms_seeds(
+            ev,
+            seeds,
+            &mut table_bar,
+            &mut modal_seed,
+            &mut p_bar,
+            &mut g,
+        )?;
+    }
+    // GAFs → mode shapes on the aerodynamic surface, aerodynamic geometry, transfer
+    let (shapes, pb) = ev
+        .aero
+        .gafs_vjp(&ev.plate, &ev.modes, &table_bar)
+        .map_err(|e| anyhow::anyhow!("aerodynamics reverse mode: {e}"))?;
+    for (m, s) in shapes.iter().enumerate() {
+        add_into(&mut modal_seed.shape[m], s);
+    }
+    for k in 0..N_PLANFORM {
+        p_bar[k] += pb[k];
+    }
+    // modes → design
+    for (gi, v) in g
+        .iter_mut()
+        .zip(modes_vjp(&ev.plate, &ev.modes, &modal_seed))
+    {
+        *gi += v;
+    }
+    let n = g.len();
+    for k in 0..N_PLANFORM {
+        g[n - N_PLANFORM + k] += p_bar[k];
+    }
+    Ok(g)
+}
+
+/// The gust-response part of the reverse sweep: RMS seeds → seeds on the GAF table, on ω_n², on
+/// the output mode samples (mode shapes, planform) and direct design terms.
+fn rms_seeds(
+    ev: &Evaluation,
+    seeds: &OutputSeeds,
+    table_bar: &mut GafTable,
+    modal_seed: &mut ModalSeed,
+    p_bar: &mut [f64; N_PLANFORM],
+    g: &mut [f64],
+) -> Result<()> {
+    let gg = gust::rms_vjp(&ev.problem(), &ev.response, &seeds.rms)?;
+    add_table(table_bar, &gg.table);
+    for (l, v) in modal_seed.lambda.iter_mut().zip(&gg.lambda) {
+        *l += v;
+    }
     // S = mode deflection at each output point, or the modal root bending moment
     for (y, sampler) in ev.samplers.iter().enumerate() {
         let Some(sampler) = sampler else {
@@ -218,28 +339,23 @@ pub fn gradient(ev: &Evaluation, seeds: &OutputSeeds) -> Result<Vec<f64>> {
             }
         }
     }
-    // GAFs → mode shapes on the aerodynamic surface, aerodynamic geometry, transfer
-    let (shapes, pb) = ev
-        .aero
-        .gafs_vjp(&ev.plate, &ev.modes, &gg.table)
-        .map_err(|e| anyhow::anyhow!("aerodynamics reverse mode: {e}"))?;
-    for (m, s) in shapes.iter().enumerate() {
-        add_into(&mut modal_seed.shape[m], s);
-    }
-    for k in 0..N_PLANFORM {
-        p_bar[k] += pb[k];
-    }
-    // modes → design
-    for (gi, v) in g
+    Ok(())
+}
+
+/// acc += t over both parts of a GAF table.
+fn add_table(acc: &mut GafTable, t: &GafTable) {
+    for (a, b) in acc
+        .q_ss
         .iter_mut()
-        .zip(modes_vjp(&ev.plate, &ev.modes, &modal_seed))
+        .flatten()
+        .flatten()
+        .zip(t.q_ss.iter().flatten().flatten())
     {
-        *gi += v;
+        *a += b;
     }
-    for k in 0..N_PLANFORM {
-        g[n - N_PLANFORM + k] += p_bar[k];
+    for (a, b) in acc.q_gs.iter_mut().flatten().zip(t.q_gs.iter().flatten()) {
+        *a += b;
     }
-    Ok(g)
 }
 
 /// The gust response of an unstable aeroelastic system has no meaning: a p-k sweep from a fifth

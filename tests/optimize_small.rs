@@ -47,6 +47,7 @@ fn small_mass_minimization() {
         mass0: ev0.mass_kg,
         area0: ev0.area_m2,
         fix_area: true,
+        flutter: None,
     };
     let mut problem = DesignProblem::new(&study, settings, spec.clone());
     let params = SqpParams {

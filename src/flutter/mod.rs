@@ -90,33 +90,48 @@ impl PkProblem<'_> {
         Ok(())
     }
 
-    /// Q(k) by the table's spline (clamped to its range) as (real part, imaginary part).
-    fn q_at(&self, k: f64) -> Result<(Mat<f64>, Mat<f64>), FlutterError> {
+    /// Q(k) by the table's spline (clamped to its range) as (real part, imaginary part), and the
+    /// slope dQ/dk the same way (zero outside the table, where Q is held).
+    fn q_at(&self, k: f64) -> Result<[Mat<f64>; 4], FlutterError> {
         let kmax = *self.table.k.last().expect("table has k");
         let kk = k.clamp(self.table.k[0], kmax);
-        let w = SplineWeights::new(&self.table.k, &[kk]).map_err(FlutterError::Input)?;
-        let w = &w.weights[0];
+        let (w, dw) =
+            SplineWeights::with_slope(&self.table.k, &[kk]).map_err(FlutterError::Input)?;
+        let inside = kk == k;
+        let (w, dw) = (&w.weights[0], &dw.weights[0]);
         let n = self.omega_n.len();
-        let q = |m: usize, j: usize| -> Complex64 {
+        let q = |w: &[f64], m: usize, j: usize| -> Complex64 {
             w.iter()
                 .enumerate()
                 .map(|(i, wi)| self.table.q_ss[i][m][j] * *wi)
                 .sum()
         };
-        Ok((
-            Mat::from_fn(n, n, |m, j| q(m, j).re),
-            Mat::from_fn(n, n, |m, j| q(m, j).im),
-        ))
+        let dq = |m: usize, j: usize| {
+            if inside {
+                q(dw, m, j)
+            } else {
+                Complex64::new(0.0, 0.0)
+            }
+        };
+        Ok([
+            Mat::from_fn(n, n, |m, j| q(w, m, j).re),
+            Mat::from_fn(n, n, |m, j| q(w, m, j).im),
+            Mat::from_fn(n, n, |m, j| dq(m, j).re),
+            Mat::from_fn(n, n, |m, j| dq(m, j).im),
+        ])
     }
 
-    /// Roots p of the p-k equation at speed `v` with the aerodynamics evaluated at `k`.
-    fn roots(&self, v: f64, k: f64) -> Result<Vec<Complex64>, FlutterError> {
+    /// The first-order state matrix of the p-k equation at speed `v` with the aerodynamics at `k`,
+    /// and its derivative with respect to k.
+    fn state_matrix(&self, v: f64, k: f64) -> Result<(Mat<f64>, Mat<f64>), FlutterError> {
         let n = self.omega_n.len();
-        let b = self.table.b_ref;
+        let beta = self.table.b_ref / v;
         let qd = 0.5 * self.density * v * v;
-        let (qr, qi) = self.q_at(k)?;
-        let kk = k.max(1e-6);
+        let [qr, qi, dqr, dqi] = self.q_at(k)?;
+        // below k = 1e-6 the Q_I/k term is held, as the steady limit of the damping
+        let (kk, dkk) = if k > 1e-6 { (k, 1.0) } else { (1e-6, 0.0) };
         let mut a = Mat::<f64>::zeros(2 * n, 2 * n);
+        let mut a_k = Mat::<f64>::zeros(2 * n, 2 * n);
         for i in 0..n {
             a[(i, n + i)] = 1.0;
             for j in 0..n {
@@ -125,12 +140,21 @@ impl PkProblem<'_> {
                     2.0 * self.damping_ratio * self.omega_n[i]
                 } else {
                     0.0
-                } - qd * (b / v) * qi[(i, j)] / kk;
+                } - qd * beta * qi[(i, j)] / kk;
                 a[(n + i, j)] = -kstiff;
                 a[(n + i, n + j)] = -cdamp;
+                a_k[(n + i, j)] = qd * dqr[(i, j)];
+                a_k[(n + i, n + j)] = qd * beta * (dqi[(i, j)] / kk - dkk * qi[(i, j)] / (kk * kk));
             }
         }
-        a.eigenvalues()
+        Ok((a, a_k))
+    }
+
+    /// Roots p of the p-k equation at speed `v` with the aerodynamics evaluated at `k`.
+    fn roots(&self, v: f64, k: f64) -> Result<Vec<Complex64>, FlutterError> {
+        self.state_matrix(v, k)?
+            .0
+            .eigenvalues()
             .map_err(|_| FlutterError::Eigen { velocity: v })
     }
 
@@ -143,7 +167,8 @@ impl PkProblem<'_> {
         let mut p_prev = p0;
         let mut k = p0.im * b / v;
         let mut history = vec![k];
-        for _ in 0..100 {
+        let mut last_step = f64::INFINITY;
+        for _ in 0..200 {
             let roots = self.roots(v, k)?;
             let p = roots
                 .iter()
@@ -158,7 +183,11 @@ impl PkProblem<'_> {
             let k_new = p.im * b / v;
             history.push(k_new);
             p_prev = p;
-            if (k_new - k).abs() <= 1e-10 * k.max(1e-8) {
+            // converged to round-off, or at the eigensolver's noise floor (the step has stopped
+            // shrinking once below 1e-10): the damping derivatives need the root that tight
+            let step = (k_new - k).abs();
+            let scale = k.max(1e-8);
+            if step <= 1e-13 * scale || (step <= 1e-10 * scale && step >= last_step) {
                 return Ok(Root {
                     g: 2.0 * p.re / p.im,
                     p,
@@ -167,6 +196,7 @@ impl PkProblem<'_> {
                 });
             }
             k = k_new;
+            last_step = step;
         }
         Err(FlutterError::NoConvergence {
             mode,
@@ -278,6 +308,8 @@ impl PkProblem<'_> {
         Ok((best.0, best.1, mode))
     }
 }
+
+pub mod margin;
 
 #[cfg(test)]
 mod tests;

@@ -72,6 +72,12 @@ pub struct Iterate {
     pub kkt: f64,
     pub step: f64,
     pub evaluations: usize,
+    /// Step length the line search accepted from this point (0 until it has run).
+    #[serde(default)]
+    pub alpha: f64,
+    /// Trial points of that line search that could not be evaluated.
+    #[serde(default)]
+    pub failed_trials: usize,
 }
 
 /// How a run ended.

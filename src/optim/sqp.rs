@@ -204,8 +204,10 @@ pub fn minimize(
             kkt,
             step: step.d.iter().fold(0.0, |a, v| a.max(v.abs())),
             evaluations,
+            alpha: 0.0,
+            failed_trials: 0,
         };
-        history.push(record.clone());
+        history.push(record);
         let finish =
             |converged: bool, message: String, history: Vec<Iterate>, evaluations: usize| SqpInfo {
                 converged,
@@ -232,24 +234,69 @@ pub fn minimize(
                 evaluations,
             ));
         }
-        // merit penalty: above every multiplier
+        // merit penalty above every multiplier, allowed to relax towards it again (Powell's rule):
+        // a penalty stuck at early, large multipliers makes the merit reject good steps
         let lam_max = step
             .lambda_eq
             .iter()
             .chain(&step.lambda_ineq)
             .fold(0.0f64, |a, l| a.max(l.abs()));
-        penalty = penalty.max(1.1 * lam_max + 1e-8);
+        let needed = 1.1 * lam_max + 1e-8;
+        penalty = needed.max(0.5 * (penalty + needed));
         let phi = |v: &Values| v.f + penalty * infeasibility_sum(v);
         let phi0 = phi(&values);
         let deriv = dot(&g, &step.d) - penalty * (infeasibility_sum(&values) - step.elastic);
         let mut alpha = 1.0;
+        let (mut failed, mut last_failure) = (0usize, None);
         let accepted = loop {
             let zt: Vec<f64> = z.iter().zip(&step.d).map(|(a, b)| a + alpha * b).collect();
             let trial = problem.values(&scaling.x(&zt));
             evaluations += 1;
-            if let Ok(v) = trial {
-                if phi(&v) <= phi0 + 1e-4 * alpha * deriv.min(0.0) {
-                    break Some((zt, v));
+            match trial {
+                Ok(v) => {
+                    if phi(&v) <= phi0 + 1e-4 * alpha * deriv.min(0.0) {
+                        break Some((zt, v));
+                    }
+                    // second-order correction of a rejected full step (the Maratos effect: the
+                    // curvature of the constraints raises the violation along the QP step): the
+                    // QP again, with its constraints shifted by the values at the trial point
+                    if alpha == 1.0 {
+                        let shift = |c: &[f64], jac: &[Vec<f64>]| -> Vec<f64> {
+                            c.iter()
+                                .zip(jac)
+                                .map(|(c, row)| c - dot(row, &step.d))
+                                .collect()
+                        };
+                        let (eq_soc, ineq_soc) = (shift(&v.eq, &eq_jac), shift(&v.ineq, &ineq_jac));
+                        if let Some(soc) = qp::solve(&QpData {
+                            hessian: &hess,
+                            grad: &g,
+                            eq: &eq_soc,
+                            eq_jac: &eq_jac,
+                            ineq: &ineq_soc,
+                            ineq_jac: &ineq_jac,
+                            lower: &lower,
+                            upper: &upper,
+                            rho: params.elastic_penalty,
+                        }) {
+                            let zc: Vec<f64> = z.iter().zip(&soc.d).map(|(a, b)| a + b).collect();
+                            evaluations += 1;
+                            match problem.values(&scaling.x(&zc)) {
+                                Ok(vc) if phi(&vc) <= phi0 + 1e-4 * deriv.min(0.0) => {
+                                    break Some((zc, vc));
+                                }
+                                Ok(_) => {}
+                                Err(reason) => {
+                                    failed += 1;
+                                    last_failure = Some(reason);
+                                }
+                            }
+                        }
+                    }
+                }
+                Err(reason) => {
+                    failed += 1;
+                    last_failure = Some(reason);
                 }
             }
             alpha *= 0.5;
@@ -257,14 +304,20 @@ pub fn minimize(
                 break None;
             }
         };
+        if let Some(last) = history.last_mut() {
+            last.alpha = if accepted.is_some() { alpha } else { 0.0 };
+            last.failed_trials = failed;
+        }
+        let record = history.last().expect("pushed above").clone();
         let Some((z_new, v_new)) = accepted else {
             let converged = viol < params.tolerance && kkt < 10.0 * params.tolerance;
-            return Ok(finish(
-                converged,
-                "line search stalled".into(),
-                history,
-                evaluations,
-            ));
+            let message = match last_failure {
+                Some(reason) => format!(
+                    "line search stalled ({failed} of its trial points could not be evaluated; the last: {reason})"
+                ),
+                None => "line search stalled (no decrease of the merit function along the step)".into(),
+            };
+            return Ok(finish(converged, message, history, evaluations));
         };
         let grads_new = problem
             .gradients(&scaling.x(&z_new))

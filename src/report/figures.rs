@@ -364,6 +364,12 @@ impl Convergence {
         if o.fix_area {
             curves.push(("area / initial area".to_string(), it(&|h| h.area_m2 / a0)));
         }
+        if let Some((_, g_max)) = o.flutter_margin {
+            curves.push((
+                "flutter margin: 1 + (g_KS − g_max) / 0.1".to_string(),
+                it(&|h| 1.0 + (h.flutter_damping.unwrap_or(g_max) - g_max) / 0.1),
+            ));
+        }
         Self {
             title: format!("{study}: optimization history"),
             curves,

@@ -81,6 +81,9 @@ pub struct HistoryRow {
     pub mass_kg: f64,
     pub rms_tip_in: f64,
     pub area_m2: f64,
+    /// KS aggregate of the p-k dampings at the margin speed (with a flutter-margin constraint).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flutter_damping: Option<f64>,
     pub violation: f64,
     pub kkt: f64,
     pub evaluations: usize,
@@ -99,6 +102,9 @@ pub struct OptimizationResults {
     pub rms_limit: f64,
     pub unit: String,
     pub fix_area: bool,
+    /// The flutter-margin constraint: speed factor and largest damping, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flutter_margin: Option<(f64, f64)>,
     pub design_variable_names: Vec<String>,
     pub lower: Vec<f64>,
     pub upper: Vec<f64>,
@@ -201,7 +207,10 @@ pub fn summary(r: &RunResults) -> String {
             o.output,
             o.rms_limit,
             o.unit,
-            if o.fix_area { ", planform area fixed" } else { "" },
+            match o.flutter_margin {
+                Some((f, g)) => format!(", every p-k root damped (g ≤ {g}) at {f} × the flight speed (KS aggregate, ρ = {})", crate::pipeline::KS_RHO),
+                None => String::new(),
+            } + if o.fix_area { ", planform area fixed" } else { "" },
             o.design_variable_names.len(),
             o.message,
             o.iterations,

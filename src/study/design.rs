@@ -1,11 +1,17 @@
 //! The gust-constrained design problem of a study as an [`optim::Problem`]: minimize mass subject
-//! to RMS(output) ≤ limit and planform area = initial area, within the design bounds.
-//! Objective and constraints are normalized (mass/mass₀, RMS/limit − 1, area/area₀ − 1) so the
-//! SQP sees quantities of order one.
+//! to RMS(output) ≤ limit, optionally a flutter margin (every p-k root at a speed above the flight
+//! speed damped), and planform area = initial area, within the design bounds.
+//! Objective and constraints are normalized (mass/mass₀, RMS/limit − 1, (g_KS − g_max)/0.1,
+//! area/area₀ − 1) so the SQP sees quantities of order one.
 
 use crate::optim::{Gradients, Problem, Values};
-use crate::pipeline::{evaluate, gradient, Evaluation, GustSettings, OutputSeeds};
+use crate::pipeline::{
+    evaluate, gradient, DampingSeed, Evaluation, FlutterMargin, GustSettings, OutputSeeds,
+};
 use crate::study::Study;
+
+/// Damping change that counts as one unit of the normalized flutter constraint.
+pub const DAMPING_SCALE: f64 = 0.1;
 
 /// Bounds and constraint settings (SI).
 #[derive(Clone, Debug)]
@@ -19,6 +25,8 @@ pub struct DesignSpec {
     pub area0: f64,
     /// Keep the planform area at area0 (an equality constraint).
     pub fix_area: bool,
+    /// The flutter-margin constraint, if any (the second inequality).
+    pub flutter: Option<FlutterMargin>,
 }
 
 /// The study's design problem; caches the last evaluation for its gradient.
@@ -26,7 +34,7 @@ pub struct DesignProblem<'a> {
     pub study: &'a Study,
     pub settings: GustSettings,
     pub spec: DesignSpec,
-    last: Option<Evaluation>,
+    last: Option<(Evaluation, Option<(Vec<f64>, DampingSeed)>)>,
 }
 
 impl<'a> DesignProblem<'a> {
@@ -41,7 +49,7 @@ impl<'a> DesignProblem<'a> {
 
     /// The last evaluation (at the last point asked for).
     pub fn last(&self) -> Option<&Evaluation> {
-        self.last.as_ref()
+        self.last.as_ref().map(|l| &l.0)
     }
 }
 
@@ -54,6 +62,13 @@ impl Problem for DesignProblem<'_> {
     }
     fn values(&mut self, x: &[f64]) -> Result<Values, String> {
         let ev = evaluate(self.study, &self.settings, x).map_err(|e| format!("{e:#}"))?;
+        let mut ineq = vec![ev.rms_m[self.spec.output] / self.spec.rms_limit - 1.0];
+        let mut flutter = None;
+        if let Some(m) = &self.spec.flutter {
+            let (ks, weights, seed) = ev.flutter_damping(m).map_err(|e| format!("{e:#}"))?;
+            ineq.push((ks - m.damping_max) / DAMPING_SCALE);
+            flutter = Some((weights, seed));
+        }
         let v = Values {
             f: ev.mass_kg / self.spec.mass0,
             eq: if self.spec.fix_area {
@@ -61,16 +76,16 @@ impl Problem for DesignProblem<'_> {
             } else {
                 Vec::new()
             },
-            ineq: vec![ev.rms_m[self.spec.output] / self.spec.rms_limit - 1.0],
+            ineq,
         };
-        self.last = Some(ev);
+        self.last = Some((ev, flutter));
         Ok(v)
     }
     fn gradients(&mut self, x: &[f64]) -> Result<Gradients, String> {
-        if self.last.as_ref().is_none_or(|e| e.x != x) {
+        if self.last.as_ref().is_none_or(|e| e.0.x != x) {
             self.values(x)?;
         }
-        let ev = self.last.as_ref().expect("evaluated");
+        let (ev, flutter) = self.last.as_ref().expect("evaluated");
         let n_out = ev.rms_m.len();
         let seeds = |mass: f64, area: f64, rms: f64| OutputSeeds {
             mass,
@@ -78,17 +93,29 @@ impl Problem for DesignProblem<'_> {
             rms: (0..n_out)
                 .map(|i| if i == self.spec.output { rms } else { 0.0 })
                 .collect(),
+            damping: None,
         };
         let f =
             gradient(ev, &seeds(1.0 / self.spec.mass0, 0.0, 0.0)).map_err(|e| format!("{e:#}"))?;
         let h =
             gradient(ev, &seeds(0.0, 1.0 / self.spec.area0, 0.0)).map_err(|e| format!("{e:#}"))?;
-        let c = gradient(ev, &seeds(0.0, 0.0, 1.0 / self.spec.rms_limit))
-            .map_err(|e| format!("{e:#}"))?;
+        let mut ineq = vec![gradient(ev, &seeds(0.0, 0.0, 1.0 / self.spec.rms_limit))
+            .map_err(|e| format!("{e:#}"))?];
+        if let Some((weights, seed)) = flutter {
+            let mut s = seeds(0.0, 0.0, 0.0);
+            let mut d = seed.clone();
+            d.g_bar = weights.iter().map(|w| w / DAMPING_SCALE).collect();
+            s.damping = Some(d);
+            ineq.push(gradient(ev, &s).map_err(|e| format!("{e:#}"))?);
+        }
         Ok(Gradients {
             f,
-            eq: vec![h],
-            ineq: vec![c],
+            eq: if self.spec.fix_area {
+                vec![h]
+            } else {
+                Vec::new()
+            },
+            ineq,
         })
     }
 }

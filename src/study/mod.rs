@@ -164,6 +164,20 @@ impl Study {
                 "tolerance must be positive and max_iterations at least 1",
             ));
         }
+        if let Some(m) = &o.flutter_margin {
+            if !(m.speed_factor > 0.0 && m.speed_factor <= 3.0) {
+                return Err(self.err(
+                    "optimization.flutter_margin.speed_factor",
+                    format!("must lie in (0, 3] (got {})", m.speed_factor),
+                ));
+            }
+            if !(m.damping_max.abs() < 1.0) {
+                return Err(self.err(
+                    "optimization.flutter_margin.damping_max",
+                    format!("must lie in (-1, 1) (got {})", m.damping_max),
+                ));
+            }
+        }
         let to_m = self.spec.length_unit.to_m();
         if !(o.thickness_min > 0.0 && o.thickness_max >= o.thickness_min) {
             return Err(self.err(
@@ -178,6 +192,18 @@ impl Study {
         let n = x0.len() - 4;
         let mut lower = vec![o.thickness_min * to_m; n];
         let mut upper = vec![o.thickness_max * to_m; n];
+        if let Some([lo, hi]) = o.thickness_relative {
+            if !(lo > 0.0 && lo <= 1.0 && hi >= 1.0 && hi.is_finite()) {
+                return Err(self.err(
+                    "optimization.thickness_relative",
+                    format!("need 0 < lower <= 1 <= upper (got [{lo}, {hi}])"),
+                ));
+            }
+            for i in 0..n {
+                lower[i] = lower[i].max(lo * x0[i]);
+                upper[i] = upper[i].min(hi * x0[i]);
+            }
+        }
         for (name, b, scale) in [
             ("span", o.span, to_m),
             ("sweep_c4_deg", o.sweep_c4_deg, std::f64::consts::PI / 180.0),

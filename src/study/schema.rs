@@ -49,11 +49,19 @@ pub struct OptimizationSpec {
     /// Thickness bounds (length unit).
     pub thickness_min: f64,
     pub thickness_max: f64,
+    /// Optional bounds relative to each element's initial thickness, [lower, upper] factors: the
+    /// element's bounds are then [max(thickness_min, lower·t₀), min(thickness_max, upper·t₀)].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub thickness_relative: Option<[f64; 2]>,
     /// [lower, upper] of the planform variables (length unit, degrees for the sweep).
     pub span: [f64; 2],
     pub sweep_c4_deg: [f64; 2],
     pub root_chord: [f64; 2],
     pub tip_chord: [f64; 2],
+    /// Optional flutter margin: every p-k root at `speed_factor` × the flight speed has damping
+    /// g ≤ `damping_max`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flutter_margin: Option<FlutterMarginSpec>,
     #[serde(default = "default_max_iterations")]
     pub max_iterations: usize,
     #[serde(default = "default_tolerance")]
@@ -68,6 +76,22 @@ fn default_max_iterations() -> usize {
 }
 fn default_tolerance() -> f64 {
     1e-4
+}
+
+/// The flutter-margin constraint of an optimization.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct FlutterMarginSpec {
+    /// Speed of the check relative to the flight speed (1.15: the customary 15 % margin).
+    #[serde(default = "default_speed_factor")]
+    pub speed_factor: f64,
+    /// Largest damping g allowed for any root there (0: neutrally stable).
+    #[serde(default)]
+    pub damping_max: f64,
+}
+
+fn default_speed_factor() -> f64 {
+    1.15
 }
 
 /// Velocity range of a p-k sweep (SI).

@@ -1,0 +1,331 @@
+//! The damping of the p-k roots at one speed, as a design constraint, with its exact forward and
+//! reverse modes.
+//!
+//! At a converged p-k point the root p is an eigenvalue of the state matrix A(k) with
+//! k = Im(p) b_ref / V. For a perturbation dA of the inputs (ω_n², the GAF table),
+//!   dp = e + c β Im(dp),  e = yᴴ dA x / yᴴx,  c = yᴴ A_k x / yᴴx,  β = b_ref / V,
+//! where x, y are the right and left eigenvectors and A_k = ∂A/∂k (the spline's slope), so
+//! Im(dp) = Im(e) / (1 − β Im c). The damping g = 2 Re p / Im p follows.
+
+use super::{FlutterError, PkProblem};
+use faer::{Mat, MatRef};
+use gustkit_core::GafTable;
+use num_complex::Complex64;
+
+/// One mode's p-k root at one speed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DampingRoot {
+    /// Mode number (from 1).
+    pub mode: usize,
+    /// Speed, m/s.
+    pub velocity: f64,
+    /// Root in rad/s.
+    pub p: Complex64,
+    pub k: f64,
+    /// Damping g = 2 Re p / Im p.
+    pub g: f64,
+}
+
+/// Kreisselmeier–Steinhauser aggregate of `values` (a smooth upper bound of their maximum, above
+/// it by at most ln(n)/ρ) and its weights ∂KS/∂value (non-negative, summing to one).
+pub fn ks_max(values: &[f64], rho: f64) -> (f64, Vec<f64>) {
+    let m = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let e: Vec<f64> = values.iter().map(|v| (rho * (v - m)).exp()).collect();
+    let sum: f64 = e.iter().sum();
+    (m + sum.ln() / rho, e.iter().map(|v| v / sum).collect())
+}
+
+/// Eigenvector of the eigenvalue of `a` nearest to `p`.
+fn eigenvector(a: MatRef<'_, f64>, p: Complex64, v: f64) -> Result<Vec<Complex64>, FlutterError> {
+    let eig = a.eigen().map_err(|_| FlutterError::Eigen { velocity: v })?;
+    let s = eig.S();
+    let s = s.column_vector();
+    let i = (0..s.nrows())
+        .min_by(|&i, &j| (s[i] - p).norm().total_cmp(&(s[j] - p).norm()))
+        .ok_or(FlutterError::Eigen { velocity: v })?;
+    let u = eig.U();
+    Ok((0..u.nrows()).map(|r| u[(r, i)]).collect())
+}
+
+/// A table of zeros shaped like `t` (for seeds).
+pub fn zeros_like(t: &GafTable) -> GafTable {
+    let mut z = t.clone();
+    let zero = Complex64::new(0.0, 0.0);
+    z.q_ss
+        .iter_mut()
+        .flatten()
+        .flatten()
+        .for_each(|v| *v = zero);
+    z.q_gs.iter_mut().flatten().for_each(|v| *v = zero);
+    z
+}
+
+impl PkProblem<'_> {
+    /// Every mode's root at each of `steps` equal speed steps from v/5 to `v` (the branches are
+    /// followed from the lowest speed, so they keep their identity through frequency coalescence).
+    pub fn roots_up_to(&self, v: f64, steps: usize) -> Result<Vec<DampingRoot>, FlutterError> {
+        let steps = steps.max(2);
+        let speeds: Vec<f64> = (0..steps)
+            .map(|i| v * (0.2 + 0.8 * i as f64 / (steps - 1) as f64))
+            .collect();
+        let r = self.sweep(&speeds)?;
+        let mut roots = Vec::new();
+        for c in &r.curves {
+            for (i, &velocity) in c.velocity_m_s.iter().enumerate() {
+                let omega = 2.0 * std::f64::consts::PI * c.frequency_hz[i];
+                roots.push(DampingRoot {
+                    mode: c.mode,
+                    velocity,
+                    p: Complex64::new(0.5 * c.damping_g[i] * omega, omega),
+                    k: c.k[i],
+                    g: c.damping_g[i],
+                });
+            }
+        }
+        Ok(roots)
+    }
+
+    /// s_ij = conj(y_i) x_j / (yᴴ x) (so dp = Σ s_ij dA_ij) and the coefficients (a, γ) with
+    /// dg = a Re(e) + γ Im(e), e = Σ s_ij dA_ij, at root `r`.
+    fn root_sensitivity(
+        &self,
+        r: &DampingRoot,
+    ) -> Result<(Mat<Complex64>, f64, f64), FlutterError> {
+        let v = r.velocity;
+        let (a, a_k) = self.state_matrix(v, r.k)?;
+        let x = eigenvector(a.as_ref(), r.p, v)?;
+        // left eigenvector: Aᵀ w = p w, so yᴴ = wᵀ
+        let w = eigenvector(a.transpose(), r.p, v)?;
+        let denom: Complex64 = w.iter().zip(&x).map(|(a, b)| a * b).sum();
+        let n2 = x.len();
+        let s = Mat::from_fn(n2, n2, |i, j| w[i] * x[j] / denom);
+        let mut c = Complex64::new(0.0, 0.0);
+        for i in 0..n2 {
+            for j in 0..n2 {
+                c += s[(i, j)] * a_k[(i, j)];
+            }
+        }
+        let beta = self.table.b_ref / v;
+        let (pr, pi) = (r.p.re, r.p.im);
+        let a_re = 2.0 / pi;
+        let a_im = -2.0 * pr / (pi * pi);
+        let gamma = (a_re * beta * c.re + a_im) / (1.0 - beta * c.im);
+        Ok((s, a_re, gamma))
+    }
+
+    /// Forward mode: dg of root `r` for perturbations of ω_n² and of the GAF table.
+    pub fn damping_jvp(
+        &self,
+        r: &DampingRoot,
+        d_omega2: &[f64],
+        d_table: &GafTable,
+    ) -> Result<f64, FlutterError> {
+        let n = self.omega_n.len();
+        let v = r.velocity;
+        let (s, a_re, gamma) = self.root_sensitivity(r)?;
+        let (w, _) = self.weights(r.k)?;
+        let beta = self.table.b_ref / v;
+        let qd = 0.5 * self.density * v * v;
+        let kk = r.k.max(1e-6);
+        let mut e = Complex64::new(0.0, 0.0);
+        for i in 0..n {
+            for j in 0..n {
+                let dq: Complex64 = w
+                    .iter()
+                    .enumerate()
+                    .map(|(t, wt)| d_table.q_ss[t][i][j] * *wt)
+                    .sum();
+                let mut dk = -qd * dq.re;
+                let mut dc = -qd * beta * dq.im / kk;
+                if i == j {
+                    dk += d_omega2[i];
+                    dc += self.damping_ratio * d_omega2[i] / self.omega_n[i];
+                }
+                e += s[(n + i, j)] * (-dk) + s[(n + i, n + j)] * (-dc);
+            }
+        }
+        Ok(a_re * e.re + gamma * e.im)
+    }
+
+    /// Reverse mode: seeds on ω_n² and on the GAF table (Q_ss only; conjugate convention
+    /// Q̄ = ∂J/∂Re Q + i ∂J/∂Im Q) for the seed `g_bar` on the damping of root `r`.
+    pub fn damping_vjp(
+        &self,
+        r: &DampingRoot,
+        g_bar: f64,
+    ) -> Result<(Vec<f64>, GafTable), FlutterError> {
+        let n = self.omega_n.len();
+        let v = r.velocity;
+        let (s, a_re, gamma) = self.root_sensitivity(r)?;
+        let (w, _) = self.weights(r.k)?;
+        let beta = self.table.b_ref / v;
+        let qd = 0.5 * self.density * v * v;
+        let kk = r.k.max(1e-6);
+        let sigma = Complex64::new(a_re, -gamma) * g_bar;
+        let mut omega2_bar = vec![0.0; n];
+        let mut table_bar = zeros_like(self.table);
+        for i in 0..n {
+            for j in 0..n {
+                // dg = Re(σ s_ij) dA_ij; A = [[0, I], [−K̃, −C̃]]
+                let k_bar = -(sigma * s[(n + i, j)]).re;
+                let c_bar = -(sigma * s[(n + i, n + j)]).re;
+                if i == j {
+                    omega2_bar[i] += k_bar + c_bar * self.damping_ratio / self.omega_n[i];
+                }
+                let q_bar = Complex64::new(-qd * k_bar, -qd * beta * c_bar / kk);
+                for (t, wt) in w.iter().enumerate() {
+                    table_bar.q_ss[t][i][j] += q_bar * *wt;
+                }
+            }
+        }
+        Ok((omega2_bar, table_bar))
+    }
+
+    /// Spline weights at k, clamped to the table as in the p-k iteration.
+    fn weights(&self, k: f64) -> Result<(Vec<f64>, Vec<f64>), FlutterError> {
+        let kmax = *self.table.k.last().expect("table has k");
+        let kk = k.clamp(self.table.k[0], kmax);
+        let (w, dw) = crate::gust::interp::SplineWeights::with_slope(&self.table.k, &[kk])
+            .map_err(FlutterError::Input)?;
+        Ok((w.weights[0].clone(), dw.weights[0].clone()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gustkit_testkit::{fd_check, rand_vec};
+
+    /// A 3-mode system with smooth, frequency-dependent GAFs (Theodorsen-like lag terms).
+    fn table() -> GafTable {
+        let k: Vec<f64> = (0..11).map(|i| 2.0 * (i as f64 / 10.0).powi(2)).collect();
+        let n = 3;
+        let flight = gustkit_core::FlightCondition {
+            mach: 0.5,
+            velocity: 100.0,
+            density: 1.2,
+            b_ref: 0.3,
+            x_ref: 0.0,
+        };
+        let mut t = GafTable::zeros(&flight, &k, n);
+        for (ik, kv) in k.iter().enumerate() {
+            let lag = Complex64::new(1.0, 0.0) / Complex64::new(1.0, 2.0 * kv);
+            for i in 0..n {
+                for j in 0..n {
+                    let base =
+                        0.02 * (1.0 + i as f64) * (if i == j { 1.0 } else { 0.3 + 0.1 * j as f64 });
+                    let motion = Complex64::new(-0.2 * kv * kv, kv * (0.5 + 0.1 * i as f64));
+                    t.q_ss[ik][i][j] = base * (lag * 2.0 + motion) * if i < j { -1.0 } else { 1.0 };
+                }
+            }
+        }
+        t
+    }
+
+    fn problem(t: &GafTable) -> PkProblem<'_> {
+        PkProblem {
+            omega_n: vec![60.0, 150.0, 260.0],
+            damping_ratio: 0.02,
+            table: t,
+            density: 1.2,
+        }
+    }
+
+    #[test]
+    fn ks_bounds_the_maximum() {
+        let v = [-0.3, -0.05, -0.2];
+        let (ks, w) = ks_max(&v, 100.0);
+        assert!(ks >= -0.05 && ks <= -0.05 + 3f64.ln() / 100.0);
+        assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-14);
+        // derivative against central differences
+        let h = 1e-6;
+        for i in 0..3 {
+            let mut p = v;
+            p[i] += h;
+            let mut m = v;
+            m[i] -= h;
+            let fd = (ks_max(&p, 100.0).0 - ks_max(&m, 100.0).0) / (2.0 * h);
+            assert!((fd - w[i]).abs() < 1e-7);
+        }
+    }
+
+    /// The forward mode of the damping against central finite differences of the whole p-k
+    /// solution (roots re-converged at every step), for ω_n² and table perturbations, and the
+    /// reverse mode against the forward mode (dot-product test).
+    #[test]
+    fn damping_derivatives_match_finite_differences_and_each_other() {
+        let t = table();
+        let pk = problem(&t);
+        let v = 120.0;
+        let roots: Vec<DampingRoot> = pk
+            .roots_up_to(v, 12)
+            .unwrap()
+            .into_iter()
+            .filter(|r| r.velocity == v)
+            .collect();
+        let n = 3;
+        let mut d_table = zeros_like(&t);
+        let r = rand_vec(2 * n * n * t.k.len(), 7);
+        let mut c = 0;
+        for ik in 0..t.k.len() {
+            for i in 0..n {
+                for j in 0..n {
+                    d_table.q_ss[ik][i][j] = Complex64::new(0.01 * r[c], 0.01 * r[c + 1]);
+                    c += 2;
+                }
+            }
+        }
+        let d_om2: Vec<f64> = rand_vec(n, 11).iter().map(|x| 100.0 * x).collect();
+        for root in &roots {
+            let jvp = pk.damping_jvp(root, &d_om2, &d_table).unwrap();
+            let g_at = |x: &[f64]| {
+                let h = x[0];
+                let mut tt = t.clone();
+                for ik in 0..t.k.len() {
+                    for i in 0..n {
+                        for j in 0..n {
+                            tt.q_ss[ik][i][j] += d_table.q_ss[ik][i][j] * h;
+                        }
+                    }
+                }
+                let om: Vec<f64> = pk
+                    .omega_n
+                    .iter()
+                    .zip(&d_om2)
+                    .map(|(w, d)| (w * w + h * d).sqrt())
+                    .collect();
+                let p = PkProblem {
+                    omega_n: om,
+                    damping_ratio: pk.damping_ratio,
+                    table: &tt,
+                    density: pk.density,
+                };
+                p.roots_up_to(v, 12)
+                    .unwrap()
+                    .into_iter()
+                    .find(|r| r.mode == root.mode && r.velocity == v)
+                    .unwrap()
+                    .g
+            };
+            let rep = fd_check(&g_at, &[0.0], 0, jvp, jvp.abs().max(1e-3));
+            assert!(
+                rep.best_rel_error < 1e-6,
+                "mode {}: jvp {jvp} fd {rep:?}",
+                root.mode
+            );
+            eprintln!(
+                "mode {}: g {:.6} k {:.4}, dg forward {jvp:.9e}, best FD {:.9e} (rel {:.1e})",
+                root.mode, root.g, root.k, rep.best, rep.best_rel_error
+            );
+            // dot-product test
+            let (om_bar, tab_bar) = pk.damping_vjp(root, 1.0).unwrap();
+            let rev =
+                om_bar.iter().zip(&d_om2).map(|(a, b)| a * b).sum::<f64>() + tab_bar.pair(&d_table);
+            assert!(
+                (rev - jvp).abs() <= 1e-12 * jvp.abs().max(1e-12),
+                "mode {}: {rev} vs {jvp}",
+                root.mode
+            );
+        }
+    }
+}
