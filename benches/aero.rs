@@ -2,7 +2,8 @@
 //! for the AGARD 445.6 study (400 boxes, 11 reduced frequencies, 6 modes).
 
 fn main() -> anyhow::Result<()> {
-    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json");
+    let file =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm_analysis.json");
     let study = gustkit::study::Study::load(&file)?;
     let a = gustkit::cli::bench_aero(&study, 3)?;
     println!(

@@ -2,7 +2,8 @@
 //! gust problem (104 variables, 11 reduced frequencies, 6 modes, 400 boxes).
 
 fn main() -> anyhow::Result<()> {
-    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json");
+    let file =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm_analysis.json");
     let study = gustkit::study::Study::load(&file)?;
     let (f, g) = gustkit::cli::bench_pipeline(&study)?;
     println!(

@@ -2,7 +2,8 @@
 //! 445.6 plate model (10 × 10 elements, 104 design variables). Prints the median timings.
 
 fn main() -> anyhow::Result<()> {
-    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json");
+    let file =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm_analysis.json");
     let study = gustkit::study::Study::load(&file)?;
     let t = gustkit::cli::bench_structure(&study, 50)?;
     println!(

@@ -103,14 +103,18 @@ pub fn modes(file: &Path, json: bool, reports: &Path) -> Result<()> {
     Ok(())
 }
 
-/// The response PSD of output `i` of an evaluation.
+/// The response PSD of output `i` of an evaluation, for the figures: at most about 500 of the
+/// log-spaced grid points (every n-th and the last), so that results.json stays small.
 fn psd_series(ev: &crate::pipeline::Evaluation, i: usize) -> PsdSeries {
     let o = &ev.settings().outputs[i];
+    let n = ev.grid.omega.len();
+    let stride = n.div_ceil(500).max(1);
+    let keep: Vec<usize> = (0..n).filter(|j| j % stride == 0 || *j == n - 1).collect();
     PsdSeries {
         label: o.name.clone(),
         unit: o.quantity.unit().to_string(),
-        omega_rad_s: ev.grid.omega.clone(),
-        psd: ev.response.psd[i].clone(),
+        omega_rad_s: keep.iter().map(|&j| ev.grid.omega[j]).collect(),
+        psd: keep.iter().map(|&j| ev.response.psd[i][j]).collect(),
     }
 }
 
@@ -135,6 +139,46 @@ fn gust_results(study: &Study) -> Result<GustResults> {
     for o in &outputs {
         println!("RMS {}: {:.6e} {}", o.name, o.rms, o.unit);
     }
+    let spec = study.spec.gust.as_ref().expect("checked by gust_settings");
+    let calibration = match &spec.calibration {
+        Some(c) => {
+            let i = settings
+                .outputs
+                .iter()
+                .position(|o| o.name == c.output)
+                .with_context(|| {
+                    format!(
+                        "{}: gust.calibration.output: no gust output named '{}'",
+                        study.file.display(),
+                        c.output
+                    )
+                })?;
+            let (to_unit, unit) = match settings.outputs[i].quantity {
+                crate::pipeline::Quantity::Displacement { .. } => {
+                    (1.0 / study.spec.length_unit.to_m(), unit_label(study))
+                }
+                crate::pipeline::Quantity::RootBendingMoment => (1.0, "N m"),
+            };
+            let rms = ev.rms_m[i] * to_unit;
+            let sigma = settings.turbulence.sigma();
+            println!(
+                "σ_w calibration: RMS {} {rms:.5} {unit} (target {} {unit}); σ_w for the target {:.5} m/s",
+                c.output,
+                c.target_rms,
+                sigma * c.target_rms / rms
+            );
+            Some(crate::report::run::Calibration {
+                output: c.output.clone(),
+                target_rms: c.target_rms,
+                rms,
+                unit: unit.to_string(),
+                sigma_w_m_s: sigma,
+                sigma_w_for_target_m_s: sigma * c.target_rms / rms,
+                source: c.source.clone(),
+            })
+        }
+        None => None,
+    };
     Ok(GustResults {
         mach: f.mach,
         velocity_m_s: f.velocity,
@@ -145,6 +189,7 @@ fn gust_results(study: &Study) -> Result<GustResults> {
         omega_max_rad_s: ev.grid.omega.last().copied().unwrap_or(0.0),
         psd: (0..outputs.len()).map(|i| psd_series(&ev, i)).collect(),
         outputs,
+        calibration,
     })
 }
 
@@ -181,7 +226,7 @@ pub fn run(file: &Path, reports: &Path, resume: bool) -> Result<()> {
         None => None,
     };
     let optimization = match study.spec.optimization {
-        Some(_) => Some(optimize(&study, &dir, resume)?),
+        Some(_) => Some(optimize(&study, &dir, resume, false)?),
         None => None,
     };
     let results = RunResults {
@@ -204,8 +249,18 @@ pub fn run(file: &Path, reports: &Path, resume: bool) -> Result<()> {
     Ok(())
 }
 
-/// `gustkit report RUN_DIR`: every figure and the summary again, from results.json alone.
+/// `gustkit report RUN_DIR`: every figure and the summary again, from results.json alone (or, for
+/// a sweep folder, from sweep_results.json).
 pub fn report(dir: &Path) -> Result<()> {
+    if dir.join("sweep_results.json").is_file() {
+        let r = report::sweep::rerender(dir)?;
+        println!(
+            "sweep report of {} re-rendered from {}",
+            r.study,
+            dir.join("sweep_results.json").display()
+        );
+        return Ok(());
+    }
     let r = report::run::rerender(dir)?;
     println!(
         "report of {} re-rendered from {}",
@@ -850,6 +905,7 @@ struct RunObserver {
     rms_limit: f64,
     /// Damping limit of the flutter-margin constraint, when there is one.
     damping_max: Option<f64>,
+    quiet: bool,
     bar: indicatif::ProgressBar,
     error: Option<anyhow::Error>,
 }
@@ -881,7 +937,9 @@ impl crate::optim::Observer for RunObserver {
                 String::new()
             }
         );
-        self.bar.suspend(|| println!("{line}"));
+        if !self.quiet {
+            self.bar.suspend(|| println!("{line}"));
+        }
         self.bar.set_position(cp.iteration as u64);
         self.bar.set_message(format!(
             "mass {:+.1} %, RMS {:.3} {}, KKT {:.1e}",
@@ -944,7 +1002,12 @@ fn snapshot(
 }
 
 /// The gust-constrained mass minimization of a study (the `optimization` section).
-pub fn optimize(study: &Study, dir: &Path, resume: bool) -> Result<OptimizationResults> {
+pub fn optimize(
+    study: &Study,
+    dir: &Path,
+    resume: bool,
+    quiet: bool,
+) -> Result<OptimizationResults> {
     use crate::study::design::{DesignProblem, DesignSpec};
     let o = study.spec.optimization.as_ref().expect("caller checked");
     let settings = study.gust_settings()?;
@@ -1003,12 +1066,18 @@ pub fn optimize(study: &Study, dir: &Path, resume: bool) -> Result<OptimizationR
                 path.display()
             )
         })?;
-        println!("resuming from iteration {}", cp.iteration);
+        if !quiet {
+            println!("resuming from iteration {}", cp.iteration);
+        }
         Some(cp)
     } else {
         None
     };
-    let bar = indicatif::ProgressBar::new(o.max_iterations as u64);
+    let bar = if quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        indicatif::ProgressBar::new(o.max_iterations as u64)
+    };
     bar.set_style(
         indicatif::ProgressStyle::with_template(
             "{spinner} SQP [{elapsed_precise}] {bar:30} {pos}/{len} iterations  {msg}",
@@ -1023,6 +1092,7 @@ pub fn optimize(study: &Study, dir: &Path, resume: bool) -> Result<OptimizationR
         rms_unit: unit,
         rms_limit,
         damping_max: spec.flutter.map(|m| m.damping_max),
+        quiet,
         bar,
         error: None,
     };
@@ -1064,7 +1134,8 @@ pub fn optimize(study: &Study, dir: &Path, resume: bool) -> Result<OptimizationR
             evaluations: it.evaluations,
         })
         .collect();
-    println!(
+    if !quiet {
+        println!(
         "{} after {} iterations ({} evaluations, {:.1} s): mass {:.4} → {:.4} kg ({:+.1} %), RMS {:.4} → {:.4} {unit}",
         info.message,
         info.iterations,
@@ -1076,6 +1147,7 @@ pub fn optimize(study: &Study, dir: &Path, resume: bool) -> Result<OptimizationR
         ev0.rms_m[output] * unit_scale,
         ev.rms_m[output] * unit_scale
     );
+    }
     let design = study.initial_design()?;
     Ok(OptimizationResults {
         converged: info.converged,
@@ -1099,4 +1171,142 @@ pub fn optimize(study: &Study, dir: &Path, resume: bool) -> Result<OptimizationR
         final_: snapshot(study, &ev, output, unit_scale),
         history,
     })
+}
+
+/// The metrics of one sweep case: mass and first frequency; RMS of every gust output; flutter
+/// speed (with a flutter section; none found in the range gives no value); the optimum (with
+/// `optimize`).
+fn sweep_metrics(
+    case: &crate::study::sweep::SweepCase,
+    dir: &Path,
+    optimize_case: bool,
+) -> Result<Vec<crate::report::sweep::Metric>> {
+    use crate::report::sweep::Metric;
+    let metric = |name: &str, unit: &str, value: f64| Metric {
+        name: name.to_string(),
+        unit: unit.to_string(),
+        value,
+    };
+    let study = &case.study;
+    let (_, _, summary) = analyze(study)?;
+    let mut out = vec![
+        metric("mass", "kg", summary.mass_kg),
+        metric("f1", "Hz", summary.frequencies_hz[0]),
+    ];
+    if study.spec.gust.is_some() {
+        let settings = study.gust_settings()?;
+        let x = study.initial_design()?.to_vec();
+        let ev = crate::pipeline::evaluate(study, &settings, &x)?;
+        for (o, rms) in settings.outputs.iter().zip(&ev.rms_m) {
+            out.push(metric(&format!("RMS {}", o.name), o.quantity.unit(), *rms));
+        }
+        if study.spec.flutter.is_some() {
+            let pk = crate::flutter::PkProblem {
+                omega_n: ev.modes.omega(),
+                damping_ratio: ev.modes.damping_ratio,
+                table: &ev.table,
+                density: ev.aero.flight.density,
+            };
+            let r = pk.sweep(&study.flutter_velocities()?)?;
+            if let Some(v) = r.flutter_speed_m_s {
+                out.push(metric("flutter speed", "m/s", v));
+            }
+        }
+    }
+    if optimize_case {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        let o = optimize(study, dir, false, true)?;
+        out.push(metric("optimum mass", "kg", o.final_.mass_kg));
+        out.push(metric(
+            &format!("optimum RMS {}", o.output),
+            &o.unit,
+            o.final_.rms_tip_in,
+        ));
+        out.push(metric("iterations", "-", o.iterations as f64));
+        out.push(metric(
+            "converged",
+            "-",
+            if o.converged { 1.0 } else { 0.0 },
+        ));
+    }
+    Ok(out)
+}
+
+/// `gustkit sweep`: every case of the study's sweep in parallel (rayon), each case's result
+/// written as it finishes so that `--resume` skips it; then the table, CSV and figure.
+pub fn sweep(file: &Path, reports: &Path, resume: bool) -> Result<()> {
+    use crate::report::sweep::{CaseResult, SweepResults};
+    use rayon::prelude::*;
+    let study = Study::load(file)?;
+    let cases = study.sweep_cases()?;
+    let spec = study.spec.sweep.as_ref().expect("checked by sweep_cases");
+    let dir = study.report_dir(reports).join("sweep");
+    std::fs::create_dir_all(dir.join("cases"))
+        .with_context(|| format!("cannot create the sweep folder {}", dir.display()))?;
+    println!(
+        "{}: {} cases over {}",
+        study.spec.name,
+        cases.len(),
+        spec.parameters
+            .iter()
+            .map(|p| p.path.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let t0 = Instant::now();
+    let bar = indicatif::ProgressBar::new(cases.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} sweep [{elapsed_precise}] {bar:30} {pos}/{len} cases  {msg}",
+        )
+        .expect("valid template"),
+    );
+    let results: Vec<Result<CaseResult>> = cases
+        .par_iter()
+        .map(|case| {
+            let hash = format!("{:016x}", fnv(&serde_json::to_string(&case.study.spec)?));
+            let path = dir.join(format!("cases/case_{:04}.json", case.index));
+            if resume {
+                if let Ok(text) = std::fs::read_to_string(&path) {
+                    if let Ok(r) = serde_json::from_str::<CaseResult>(&text) {
+                        if r.study_hash == hash {
+                            bar.inc(1);
+                            return Ok(r);
+                        }
+                    }
+                }
+            }
+            let t = Instant::now();
+            let case_dir = dir.join(format!("cases/case_{:04}", case.index));
+            let (metrics, error) = match sweep_metrics(case, &case_dir, spec.optimize) {
+                Ok(m) => (m, None),
+                Err(e) => (Vec::new(), Some(format!("{e:#}"))),
+            };
+            let r = CaseResult {
+                index: case.index,
+                values: case.values.clone(),
+                study_hash: hash,
+                metrics,
+                error,
+                wall_time_s: t.elapsed().as_secs_f64(),
+            };
+            write_atomic(&path, serde_json::to_string_pretty(&r)?.as_bytes())?;
+            bar.inc(1);
+            bar.set_message(format!("case {} done", case.index));
+            Ok(r)
+        })
+        .collect();
+    bar.finish_and_clear();
+    let cases = results.into_iter().collect::<Result<Vec<_>>>()?;
+    let r = SweepResults {
+        study: study.spec.name.clone(),
+        parameters: spec.parameters.iter().map(|p| p.path.clone()).collect(),
+        optimize: spec.optimize,
+        cases,
+        wall_time_s: t0.elapsed().as_secs_f64(),
+    };
+    crate::report::sweep::render(&dir, &r)?;
+    print!("{}", crate::report::sweep::summary(&r));
+    println!("sweep written to {}", dir.display());
+    Ok(())
 }

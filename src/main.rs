@@ -28,6 +28,17 @@ enum Command {
         #[arg(long)]
         resume: bool,
     },
+    /// Run the study's `sweep` section: every case in parallel, then a table, CSV and figure in
+    /// reports/<study>/sweep/.
+    Sweep {
+        study: PathBuf,
+        /// Folder that holds the per-study report folders.
+        #[arg(long, default_value = "reports")]
+        reports: PathBuf,
+        /// Reuse the results of cases that finished in an earlier, interrupted sweep.
+        #[arg(long)]
+        resume: bool,
+    },
     /// Re-render every figure and summary.md of a run folder from its results.json alone.
     Report {
         /// A run folder written by `gustkit run` (holds results.json).
@@ -101,6 +112,11 @@ fn main() -> Result<()> {
             resume,
         } => cli::run(&study, &reports, resume),
         Command::Report { run_dir } => cli::report(&run_dir),
+        Command::Sweep {
+            study,
+            reports,
+            resume,
+        } => cli::sweep(&study, &reports, resume),
         Command::Modes {
             study,
             json,

@@ -15,7 +15,7 @@ fn scratch(name: &str) -> PathBuf {
 }
 
 fn study() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm_analysis.json")
 }
 
 /// `gustkit modes --json` prints the frequencies and mass and writes the figures and the VTK file.
@@ -41,7 +41,7 @@ fn modes_json_and_report_files() {
     let m = v["mass_kg"].as_f64().unwrap();
     assert!((m - 1.69).abs() < 0.02, "{m}");
     for name in ["modes.png", "modes.svg", "modes.vtk"] {
-        let p = dir.join("agard445_dlm").join(name);
+        let p = dir.join("agard445_dlm_analysis").join(name);
         assert!(
             std::fs::metadata(&p)
                 .map(|m| m.len() > 1000)
@@ -49,7 +49,7 @@ fn modes_json_and_report_files() {
             "{name} missing"
         );
     }
-    let vtk = std::fs::read_to_string(dir.join("agard445_dlm/modes.vtk")).unwrap();
+    let vtk = std::fs::read_to_string(dir.join("agard445_dlm_analysis/modes.vtk")).unwrap();
     assert!(vtk.contains("POINTS 121 double") && vtk.contains("VECTORS mode_6 double"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -69,11 +69,11 @@ fn run_writes_results_and_summary() {
         String::from_utf8_lossy(&out.stderr)
     );
     let r: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(dir.join("agard445_dlm/results.json")).unwrap(),
+        &std::fs::read_to_string(dir.join("agard445_dlm_analysis/results.json")).unwrap(),
     )
     .unwrap();
     assert!(r["mass_kg"].as_f64().unwrap() > 1.6);
-    let md = std::fs::read_to_string(dir.join("agard445_dlm/summary.md")).unwrap();
+    let md = std::fs::read_to_string(dir.join("agard445_dlm_analysis/summary.md")).unwrap();
     assert!(md.contains("| 1 | bending |"));
     // the gust analysis: RMS of each output, in SI, and the PSD figure
     let outs = r["gust"]["outputs"].as_array().unwrap();
@@ -81,7 +81,10 @@ fn run_writes_results_and_summary() {
     assert!(outs[0]["rms"].as_f64().unwrap() > 0.0);
     assert_eq!(outs[1]["unit"], "N m");
     assert!(md.contains("## Gust response"));
-    assert!(dir.join("agard445_dlm/psd.png").exists() && dir.join("agard445_dlm/psd.svg").exists());
+    assert!(
+        dir.join("agard445_dlm_analysis/psd.png").exists()
+            && dir.join("agard445_dlm_analysis/psd.svg").exists()
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -381,7 +384,7 @@ fn gust_and_flutter_inputs() {
 #[test]
 fn run_optimization_and_resume() {
     let dir = scratch("opt");
-    let opt = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm_opt.json");
+    let opt = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json");
     let mut v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(opt).unwrap()).unwrap();
     v["name"] = "opt_small".into();
@@ -485,5 +488,133 @@ fn run_optimization_and_resume() {
         results()["final"]["design_variables"],
         r["final"]["design_variables"]
     );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The sweep study on a coarse lattice: `gustkit sweep` runs a 2 × 2 grid of analyses and a zip
+/// of two optimizations. Checks against plate theory: scaling every thickness by s scales the
+/// mass by s and every in-vacuo frequency by s (D ∝ t³, m ∝ t), exactly; the gust RMS grows
+/// with Mach at fixed speed (compressibility raises the lift slope). `--resume` reuses finished
+/// cases; `gustkit report` re-renders the sweep; a misspelt parameter is named in the error.
+#[test]
+fn sweep_grid_resume_report_and_errors() {
+    let dir = scratch("sweep");
+    let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm_sweep.json");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(base).unwrap()).unwrap();
+    v["name"] = "sweep_small".into();
+    v["aero"]["fidelity"]["dlm"]["n_chord"] = 4.into();
+    v["aero"]["fidelity"]["dlm"]["n_span"] = 6.into();
+    v["structure"]["modes"] = 4.into();
+    v["gust"]["points"] = 300.into();
+    v["sweep"]["parameters"] = serde_json::json!([
+        {"path": "flight.mach", "values": [0.3, 0.5]},
+        {"path": "structure.thickness_scale", "values": [0.9, 1.0]}
+    ]);
+    let file = dir.join("sweep.json");
+    std::fs::write(&file, v.to_string()).unwrap();
+    let sweep = |f: &Path, extra: &[&str]| {
+        gustkit()
+            .args(["sweep", f.to_str().unwrap(), "--reports"])
+            .arg(&dir)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let o = sweep(&file, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = dir.join("sweep_small/sweep");
+    let read = || -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(out.join("sweep_results.json")).unwrap())
+            .unwrap()
+    };
+    let r = read();
+    let cases = r["cases"].as_array().unwrap().clone();
+    assert_eq!(cases.len(), 4);
+    let metric = |c: &serde_json::Value, name: &str| {
+        c["metrics"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|m| m["name"] == name)
+            .unwrap_or_else(|| panic!("{name} in {c}"))["value"]
+            .as_f64()
+            .unwrap()
+    };
+    // grid order: the first parameter varies fastest
+    let case = |mach: f64, scale: f64| {
+        cases
+            .iter()
+            .find(|c| c["values"][0] == mach && c["values"][1] == scale)
+            .unwrap()
+    };
+    for mach in [0.3, 0.5] {
+        let (thin, base) = (case(mach, 0.9), case(mach, 1.0));
+        let rm = metric(thin, "mass") / metric(base, "mass");
+        let rf = metric(thin, "f1") / metric(base, "f1");
+        assert!((rm - 0.9).abs() < 1e-12, "mass ratio {rm}");
+        assert!((rf - 0.9).abs() < 1e-9, "frequency ratio {rf}");
+    }
+    for scale in [0.9, 1.0] {
+        assert!(
+            metric(case(0.5, scale), "RMS tip_te_w") > metric(case(0.3, scale), "RMS tip_te_w")
+        );
+    }
+    for f in ["sweep.png", "sweep.svg", "sweep.csv", "sweep.md"] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 5);
+    // --resume reuses every finished case (same results, bit for bit)
+    let o = sweep(&file, &["--resume"]);
+    assert!(o.status.success());
+    assert_eq!(read()["cases"], r["cases"]);
+    // the report again from sweep_results.json alone
+    std::fs::remove_file(out.join("sweep.png")).unwrap();
+    let o = gustkit().args(["report"]).arg(&out).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.join("sweep.png").is_file());
+    // a misspelt parameter path
+    let mut bad = v.clone();
+    bad["sweep"]["parameters"][0]["path"] = "flight.mahc".into();
+    let bad_file = dir.join("bad.json");
+    std::fs::write(&bad_file, bad.to_string()).unwrap();
+    let o = sweep(&bad_file, &[]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("flight.mahc") && err.contains("sweep"),
+        "{err}"
+    );
+    // a zip of optimizations (a few iterations each, the optimum lighter than the start)
+    let mut opt = v.clone();
+    opt["name"] = "sweep_opt".into();
+    let flagship = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json");
+    let f: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(flagship).unwrap()).unwrap();
+    opt["optimization"] = f["optimization"].clone();
+    opt["optimization"]["max_iterations"] = 3.into();
+    opt["sweep"] = serde_json::json!({
+        "parameters": [
+            {"path": "optimization.rms_max", "values": [2.5, 3.0]},
+            {"path": "flight.mach", "values": [0.4, 0.5]}
+        ],
+        "combine": "zip",
+        "optimize": true
+    });
+    let opt_file = dir.join("opt.json");
+    std::fs::write(&opt_file, opt.to_string()).unwrap();
+    let o = sweep(&opt_file, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("sweep_opt/sweep/sweep_results.json")).unwrap(),
+    )
+    .unwrap();
+    let cases = r["cases"].as_array().unwrap();
+    assert_eq!(cases.len(), 2);
+    for c in cases {
+        assert!(c["error"].is_null(), "{c}");
+        assert!(metric(c, "optimum mass") < metric(c, "mass"), "{c}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -10,7 +10,7 @@ use std::path::Path;
 fn small_mass_minimization() {
     let text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/studies/agard445_dlm.json"
+        "/studies/agard445_dlm_analysis.json"
     ))
     .unwrap();
     let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();

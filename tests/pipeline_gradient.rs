@@ -89,7 +89,7 @@ fn rms_gradient_matches_finite_differences() {
 fn unstable_flight_condition_is_an_error() {
     let text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/studies/agard445_dlm.json"
+        "/studies/agard445_dlm_analysis.json"
     ))
     .unwrap();
     let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();

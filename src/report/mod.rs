@@ -2,6 +2,7 @@
 
 pub mod figures;
 pub mod run;
+pub mod sweep;
 pub mod vtk;
 
 use anyhow::{Context, Result};

@@ -45,6 +45,22 @@ pub struct GustResults {
     pub outputs: Vec<OutputRow>,
     /// The response PSD of every output (SI).
     pub psd: Vec<PsdSeries>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<Calibration>,
+}
+
+/// The σ_w calibration recorded in the study, checked at the initial design.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Calibration {
+    pub output: String,
+    /// Target and computed RMS in `unit` (the study's length unit for displacements).
+    pub target_rms: f64,
+    pub rms: f64,
+    pub unit: String,
+    pub sigma_w_m_s: f64,
+    /// σ_w that meets the target exactly.
+    pub sigma_w_for_target_m_s: f64,
+    pub source: String,
 }
 
 /// A p-k sweep and its flutter point.
@@ -188,6 +204,13 @@ pub fn summary(r: &RunResults) -> String {
             md += &format!(
                 "| {} | {:.6e} | {} | {:.3} |\n",
                 o.name, o.rms, o.unit, o.n0_hz
+            );
+        }
+        if let Some(c) = &g.calibration {
+            md += &format!(
+                "\nσ_w calibration: σ_w = {} m/s gives RMS({}) = {:.4} {} at the initial design against the target {} {} ({:+.3} %); the target alone would give σ_w = {:.4} m/s. {}\n",
+                c.sigma_w_m_s, c.output, c.rms, c.unit, c.target_rms, c.unit,
+                100.0 * (c.rms / c.target_rms - 1.0), c.sigma_w_for_target_m_s, c.source
             );
         }
         md += "\n![PSD](psd.png)\n";

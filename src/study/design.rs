@@ -29,12 +29,15 @@ pub struct DesignSpec {
     pub flutter: Option<FlutterMargin>,
 }
 
+/// KS weights and the p-k roots of the last flutter-margin evaluation.
+type FlutterState = (Vec<f64>, DampingSeed);
+
 /// The study's design problem; caches the last evaluation for its gradient.
 pub struct DesignProblem<'a> {
     pub study: &'a Study,
     pub settings: GustSettings,
     pub spec: DesignSpec,
-    last: Option<(Evaluation, Option<(Vec<f64>, DampingSeed)>)>,
+    last: Option<(Evaluation, Option<FlutterState>)>,
 }
 
 impl<'a> DesignProblem<'a> {

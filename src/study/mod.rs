@@ -8,12 +8,13 @@
 pub mod design;
 pub mod fidelity;
 mod schema;
+pub mod sweep;
 
 pub use fidelity::AeroModel;
 pub use schema::{
     AeroSpec, AirfoilSpec, ClampSpec, DlmSpec, FidelitySpec, FlightSpec, FlutterSpec, GustSpec,
     LengthUnit, MaterialSpec, MeshSpec, OptimizationSpec, OutputSpec, StructureSpec, StudyFile,
-    WingSpec,
+    SweepCombine, SweepParameter, SweepSpec, WingSpec,
 };
 
 use crate::structure::{airfoil_thickness, Clamp, Orthotropic, PlateMesh, PlateModel};
@@ -542,6 +543,14 @@ impl Study {
             }
             None => airfoil_thickness(&mesh, &planform, &self.airfoil()?),
         };
+        let scale = self.spec.structure.thickness_scale;
+        if !(scale > 0.0 && scale.is_finite()) {
+            return Err(self.err(
+                "structure.thickness_scale",
+                format!("must be positive (got {scale})"),
+            ));
+        }
+        let thickness = thickness.into_iter().map(|t| t * scale).collect();
         Ok(DesignVector {
             thickness,
             planform,

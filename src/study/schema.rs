@@ -33,6 +33,42 @@ pub struct StudyFile {
     /// Gust-constrained mass minimization.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub optimization: Option<OptimizationSpec>,
+    /// Parameter study run by `gustkit sweep`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sweep: Option<SweepSpec>,
+}
+
+/// A parameter study: the study's analysis (or optimization) at every combination of parameter
+/// values, each parameter named by its path in this file (e.g. "flight.mach").
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepSpec {
+    pub parameters: Vec<SweepParameter>,
+    /// "grid": every combination (the first parameter varies fastest); "zip": the i-th values of
+    /// every parameter together (equal lengths).
+    #[serde(default)]
+    pub combine: SweepCombine,
+    /// Run the `optimization` section at every case instead of the analysis.
+    #[serde(default)]
+    pub optimize: bool,
+}
+
+/// One swept parameter.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepParameter {
+    /// Dotted path of a number in the study file, e.g. "gust.turbulence.sigma_w_m_s".
+    pub path: String,
+    pub values: Vec<f64>,
+}
+
+/// How the parameter values combine into cases.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq)]
+#[serde(rename_all = "snake_case")]
+pub enum SweepCombine {
+    #[default]
+    Grid,
+    Zip,
 }
 
 /// Minimum mass subject to RMS(output) ≤ limit and (optionally) the initial planform area.
@@ -125,6 +161,22 @@ pub struct GustSpec {
     pub max_tail: f64,
     /// Response outputs: vertical displacement at plate points (ξ chord fraction, η span fraction).
     pub outputs: Vec<OutputSpec>,
+    /// How σ_w was chosen, if by calibration: `gustkit run` reports the RMS it gives against the
+    /// target and the σ_w that would meet the target exactly (the RMS is linear in σ_w).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<CalibrationSpec>,
+}
+
+/// σ_w calibrated so that the initial RMS of `output` equals `target_rms` (length unit for
+/// displacements, N·m for moments).
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct CalibrationSpec {
+    pub output: String,
+    pub target_rms: f64,
+    /// Free text: where the target comes from.
+    #[serde(default)]
+    pub source: String,
 }
 
 fn default_omega_min() -> f64 {
@@ -288,6 +340,16 @@ pub struct StructureSpec {
     /// the airfoil thickness.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub thickness: Option<Vec<f64>>,
+    /// Factor on every initial thickness (a sweep parameter: 1 leaves the wing as it is).
+    #[serde(default = "default_one", skip_serializing_if = "is_one")]
+    pub thickness_scale: f64,
+}
+
+fn default_one() -> f64 {
+    1.0
+}
+fn is_one(v: &f64) -> bool {
+    *v == 1.0
 }
 
 fn default_modes() -> usize {

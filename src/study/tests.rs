@@ -5,7 +5,7 @@ use super::*;
 fn agard_text() -> String {
     std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/studies/agard445_dlm.json"
+        "/studies/agard445_dlm_analysis.json"
     ))
     .unwrap()
 }

@@ -7,8 +7,10 @@ use gustkit_testkit::{dot, rand_vec};
 use std::path::Path;
 
 fn plate() -> (PlateModel, Modes) {
-    let s = Study::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json"))
-        .unwrap();
+    let s = Study::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm_analysis.json"),
+    )
+    .unwrap();
     let p = s.build_model().unwrap();
     let m = modal::solve(&p, 3, 0.0, &[Field::Bending, Field::Membrane]).unwrap();
     (p, m)

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 /// Path of the shipped AGARD study.
 pub fn agard_path() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm_analysis.json")
 }
 
 /// The AGARD study as JSON.

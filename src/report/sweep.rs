@@ -1,0 +1,262 @@
+//! The results of `gustkit sweep` (sweep_results.json) and the table, CSV and figure rendered from
+//! them alone.
+
+use super::{save_figure, write_atomic, Figure};
+use anyhow::{anyhow, Context, Result};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// One named result of a case.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Metric {
+    pub name: String,
+    pub unit: String,
+    pub value: f64,
+}
+
+/// The outcome of one case.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct CaseResult {
+    pub index: usize,
+    /// Parameter values, in the order of `SweepResults::parameters`.
+    pub values: Vec<f64>,
+    /// Hash of the case's study, so that `--resume` reuses a result only for the same case.
+    pub study_hash: String,
+    /// Mass, RMS of each output, flutter speed, optimum … (empty when the case failed).
+    pub metrics: Vec<Metric>,
+    /// Why the case failed (e.g. the flight condition flutters), if it did.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+    pub wall_time_s: f64,
+}
+
+/// All cases of a sweep.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct SweepResults {
+    pub study: String,
+    pub parameters: Vec<String>,
+    pub optimize: bool,
+    pub cases: Vec<CaseResult>,
+    pub wall_time_s: f64,
+}
+
+impl SweepResults {
+    /// Names (with units) of every metric any case reported, in first-seen order.
+    fn metric_names(&self) -> Vec<(String, String)> {
+        let mut names: Vec<(String, String)> = Vec::new();
+        for c in &self.cases {
+            for m in &c.metrics {
+                if !names.iter().any(|(n, _)| *n == m.name) {
+                    names.push((m.name.clone(), m.unit.clone()));
+                }
+            }
+        }
+        names
+    }
+
+    fn value(c: &CaseResult, name: &str) -> Option<f64> {
+        c.metrics.iter().find(|m| m.name == name).map(|m| m.value)
+    }
+}
+
+/// The table as CSV (failed cases have empty metrics and their error in the last column).
+pub fn csv(r: &SweepResults) -> String {
+    let names = r.metric_names();
+    let mut out = String::from("case");
+    for p in &r.parameters {
+        out += &format!(",{p}");
+    }
+    for (n, u) in &names {
+        out += &format!(",{n} [{u}]");
+    }
+    out += ",error\n";
+    for c in &r.cases {
+        out += &c.index.to_string();
+        for v in &c.values {
+            out += &format!(",{v}");
+        }
+        for (n, _) in &names {
+            out += &match SweepResults::value(c, n) {
+                Some(v) => format!(",{v:.10e}"),
+                None => ",".into(),
+            };
+        }
+        let err = c.error.as_deref().unwrap_or("").replace(['"', '\n'], "'");
+        out += &format!(",\"{err}\"\n");
+    }
+    out
+}
+
+/// The markdown summary with the table.
+pub fn summary(r: &SweepResults) -> String {
+    let names = r.metric_names();
+    let failed = r.cases.iter().filter(|c| c.error.is_some()).count();
+    let mut md = format!(
+        "# {}: sweep\n\n{} cases of {} over {} ({} failed), {:.1} s in all.\n\n| case |",
+        r.study,
+        r.cases.len(),
+        if r.optimize {
+            "the optimization"
+        } else {
+            "the analysis"
+        },
+        r.parameters.join(", "),
+        failed,
+        r.wall_time_s
+    );
+    for p in &r.parameters {
+        md += &format!(" {p} |");
+    }
+    for (n, u) in &names {
+        md += &format!(" {n} [{u}] |");
+    }
+    md += "\n|---:|";
+    md += &"---:|".repeat(r.parameters.len() + names.len());
+    md += "\n";
+    for c in &r.cases {
+        md += &format!("| {} |", c.index);
+        for v in &c.values {
+            md += &format!(" {v} |");
+        }
+        for (n, _) in &names {
+            md += &match SweepResults::value(c, n) {
+                Some(v) => format!(" {v:.5} |"),
+                None => " – |".into(),
+            };
+        }
+        md += "\n";
+    }
+    for c in r.cases.iter().filter(|c| c.error.is_some()) {
+        md += &format!("\nCase {}: {}\n", c.index, c.error.as_deref().unwrap_or(""));
+    }
+    md += "\n![sweep](sweep.png)\n\nTable: `sweep.csv`.\n";
+    md
+}
+
+/// Every metric against the first parameter, one line for each combination of the others.
+pub struct SweepPlot<'a> {
+    pub results: &'a SweepResults,
+}
+
+impl Figure for SweepPlot<'_> {
+    fn size(&self) -> (u32, u32) {
+        let n = self.results.metric_names().len().max(1) as u32;
+        (1000, 340 * n)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing sweep: {e}");
+        area.fill(&WHITE).map_err(err)?;
+        let r = self.results;
+        let names = r.metric_names();
+        let panels = area.split_evenly((names.len().max(1), 1));
+        // groups: cases sharing the values of every parameter but the first
+        let mut groups: Vec<(Vec<f64>, Vec<&CaseResult>)> = Vec::new();
+        for c in &r.cases {
+            let key = c.values[1..].to_vec();
+            match groups.iter_mut().find(|g| g.0 == key) {
+                Some(g) => g.1.push(c),
+                None => groups.push((key, vec![c])),
+            }
+        }
+        let xs = || r.cases.iter().map(|c| c.values[0]);
+        let (x0, x1) = (xs().fold(f64::MAX, f64::min), xs().fold(f64::MIN, f64::max));
+        let (x0, x1) = if x1 > x0 {
+            (x0, x1)
+        } else {
+            (x0 - 0.5, x1 + 0.5)
+        };
+        for (panel, (name, unit)) in panels.iter().zip(&names) {
+            let ys: Vec<f64> = r
+                .cases
+                .iter()
+                .filter_map(|c| SweepResults::value(c, name))
+                .collect();
+            if ys.is_empty() {
+                continue;
+            }
+            let (y0, y1) = (
+                ys.iter().copied().fold(f64::MAX, f64::min),
+                ys.iter().copied().fold(f64::MIN, f64::max),
+            );
+            let pad = 0.08 * (y1 - y0).max(1e-9 * y1.abs().max(1e-30));
+            let mut chart = ChartBuilder::on(panel)
+                .margin(10)
+                .x_label_area_size(35)
+                .y_label_area_size(75)
+                .build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))
+                .map_err(err)?;
+            chart
+                .configure_mesh()
+                .x_desc(r.parameters[0].as_str())
+                .y_desc(format!("{name} [{unit}]"))
+                .y_label_formatter(&|v| format!("{v:.4}"))
+                .label_style(("sans-serif", 12))
+                .draw()
+                .map_err(err)?;
+            for (gi, (key, cases)) in groups.iter().enumerate() {
+                let color = Palette99::pick(gi).to_rgba();
+                let mut pts: Vec<(f64, f64)> = cases
+                    .iter()
+                    .filter_map(|c| SweepResults::value(c, name).map(|y| (c.values[0], y)))
+                    .collect();
+                pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let label = r.parameters[1..]
+                    .iter()
+                    .zip(key)
+                    .map(|(p, v)| format!("{p} = {v}"))
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                let series = chart
+                    .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
+                    .map_err(err)?;
+                if !label.is_empty() {
+                    series.label(label).legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+                    });
+                }
+                chart
+                    .draw_series(pts.iter().map(|p| Circle::new(*p, 4, color.filled())))
+                    .map_err(err)?;
+            }
+            if groups.len() > 1 {
+                chart
+                    .configure_series_labels()
+                    .background_style(WHITE.mix(0.8))
+                    .border_style(BLACK)
+                    .label_font(("sans-serif", 12))
+                    .draw()
+                    .map_err(err)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Writes sweep_results.json, sweep.csv, sweep.md and the figure into `dir`.
+pub fn render(dir: &Path, r: &SweepResults) -> Result<()> {
+    save_figure(dir, "sweep", &SweepPlot { results: r })?;
+    write_atomic(&dir.join("sweep.csv"), csv(r).as_bytes())?;
+    write_atomic(&dir.join("sweep.md"), summary(r).as_bytes())?;
+    write_atomic(
+        &dir.join("sweep_results.json"),
+        serde_json::to_string_pretty(r)?.as_bytes(),
+    )
+}
+
+/// Reads `dir/sweep_results.json` and renders the sweep report again.
+pub fn rerender(dir: &Path) -> Result<SweepResults> {
+    let path = dir.join("sweep_results.json");
+    let text = std::fs::read_to_string(&path)
+        .with_context(|| format!("cannot read {}", path.display()))?;
+    let de = &mut serde_json::Deserializer::from_str(&text);
+    let r: SweepResults = serde_path_to_error::deserialize(de)
+        .map_err(|e| anyhow!("{}: {}: {}", path.display(), e.path(), e.inner()))?;
+    render(dir, &r)?;
+    Ok(r)
+}
