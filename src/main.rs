@@ -100,6 +100,9 @@ enum Command {
         /// Repetitions (the median is reported).
         #[arg(long, default_value_t = 20)]
         repeat: usize,
+        /// Also time the study's whole optimization once (from scratch, no checkpoint).
+        #[arg(long)]
+        optimization: bool,
     },
 }
 
@@ -135,6 +138,10 @@ fn main() -> Result<()> {
             reports,
         } => cli::flutter(&study, json, &reports),
         Command::CheckGradient { study, dv, json } => cli::check_gradient(&study, &dv, json),
-        Command::Bench { study, repeat } => cli::bench(&study, repeat),
+        Command::Bench {
+            study,
+            repeat,
+            optimization,
+        } => cli::bench(&study, repeat, optimization),
     }
 }

@@ -224,75 +224,113 @@ pub fn evaluate(study: &Study, settings: &GustSettings, x: &[f64]) -> Result<Eva
 
 /// Gradient of Σ seeds · outputs with respect to the design vector, in one reverse sweep.
 pub fn gradient(ev: &Evaluation, seeds: &OutputSeeds) -> Result<Vec<f64>> {
+    let mut g = gradients(ev, std::slice::from_ref(seeds))?;
+    Ok(g.pop().expect("one seed, one gradient"))
+}
+
+/// One gradient per set of seeds, with a single reverse pass through the aerodynamic model for
+/// all of them (its influence matrices, factorizations and geometry derivatives are shared).
+pub fn gradients(ev: &Evaluation, all: &[OutputSeeds]) -> Result<Vec<Vec<f64>>> {
     let n = ev.x.len();
-    let mut g = vec![0.0; n];
-    // mass and area
-    if seeds.mass != 0.0 {
-        for (gi, mi) in g.iter_mut().zip(mass_grad(&ev.plate)) {
-            *gi += seeds.mass * mi;
-        }
+    // stage 1, per seed set: direct terms, and seeds on the GAF table, ω_n², shapes, planform
+    struct Partial {
+        g: Vec<f64>,
+        modal_seed: ModalSeed,
+        p_bar: [f64; N_PLANFORM],
+        table_bar: Option<GafTable>,
     }
-    if seeds.area != 0.0 {
-        for (k, a) in ev.plate.planform().area_grad().iter().enumerate() {
-            g[n - N_PLANFORM + k] += seeds.area * a;
-        }
-    }
-    let rms_seeded = seeds.rms.iter().any(|s| *s != 0.0);
-    if !rms_seeded && seeds.damping.is_none() {
-        return Ok(g);
-    }
-    let mut modal_seed = ModalSeed::zeros(&ev.modes);
-    let mut p_bar = [0.0; N_PLANFORM];
-    let mut table_bar = zeros_like(&ev.table);
-    // p-k dampings → GAF table, ω_n²
-    if let Some(d) = &seeds.damping {
-        let pk = ev.pk();
-        for (root, g_bar) in d.roots.iter().zip(&d.g_bar) {
-            if *g_bar == 0.0 {
-                continue;
+    let mut partials = Vec::with_capacity(all.len());
+    for seeds in all {
+        let mut g = vec![0.0; n];
+        if seeds.mass != 0.0 {
+            for (gi, mi) in g.iter_mut().zip(mass_grad(&ev.plate)) {
+                *gi += seeds.mass * mi;
             }
-            let (om_bar, t_bar) = pk
-                .damping_vjp(root, *g_bar)
-                .map_err(|e| anyhow::anyhow!("flutter margin reverse mode: {e}"))?;
-            for (l, v) in modal_seed.lambda.iter_mut().zip(om_bar) {
-                *l += v;
-            }
-            add_table(&mut table_bar, &t_bar);
         }
+        if seeds.area != 0.0 {
+            for (k, a) in ev.plate.planform().area_grad().iter().enumerate() {
+                g[n - N_PLANFORM + k] += seeds.area * a;
+            }
+        }
+        let mut modal_seed = ModalSeed::zeros(&ev.modes);
+        let mut p_bar = [0.0; N_PLANFORM];
+        let rms_seeded = seeds.rms.iter().any(|s| *s != 0.0);
+        let table_bar = if rms_seeded || seeds.damping.is_some() {
+            let mut table_bar = zeros_like(&ev.table);
+            // p-k dampings → GAF table, ω_n²
+            if let Some(d) = &seeds.damping {
+                let pk = ev.pk();
+                for (root, g_bar) in d.roots.iter().zip(&d.g_bar) {
+                    if *g_bar == 0.0 {
+                        continue;
+                    }
+                    let (om_bar, t_bar) = pk
+                        .damping_vjp(root, *g_bar)
+                        .map_err(|e| anyhow::anyhow!("flutter margin reverse mode: {e}"))?;
+                    for (l, v) in modal_seed.lambda.iter_mut().zip(om_bar) {
+                        *l += v;
+                    }
+                    add_table(&mut table_bar, &t_bar);
+                }
+            }
+            if rms_seeded {
+                rms_seeds(
+                    ev,
+                    seeds,
+                    &mut table_bar,
+                    &mut modal_seed,
+                    &mut p_bar,
+                    &mut g,
+                )?;
+            }
+            Some(table_bar)
+        } else {
+            None
+        };
+        partials.push(Partial {
+            g,
+            modal_seed,
+            p_bar,
+            table_bar,
+        });
     }
-    if rms_seeded {
-        rms_seeds(
-            ev,
-            seeds,
-            &mut table_bar,
-            &mut modal_seed,
-            &mut p_bar,
-            &mut g,
-        )?;
+    // stage 2: GAFs → mode shapes on the aerodynamic surface, aerodynamic geometry, transfer
+    let tables: Vec<GafTable> = partials
+        .iter()
+        .filter_map(|p| p.table_bar.clone())
+        .collect();
+    let mut aero = if tables.is_empty() {
+        Vec::new()
+    } else {
+        ev.aero
+            .gafs_vjp_many(&ev.plate, &ev.modes, &tables)
+            .map_err(|e| anyhow::anyhow!("aerodynamics reverse mode: {e}"))?
     }
-    // GAFs → mode shapes on the aerodynamic surface, aerodynamic geometry, transfer
-    let (shapes, pb) = ev
-        .aero
-        .gafs_vjp(&ev.plate, &ev.modes, &table_bar)
-        .map_err(|e| anyhow::anyhow!("aerodynamics reverse mode: {e}"))?;
-    for (m, s) in shapes.iter().enumerate() {
-        add_into(&mut modal_seed.shape[m], s);
+    .into_iter();
+    // stage 3: modes → design
+    let mut out = Vec::with_capacity(partials.len());
+    for mut p in partials {
+        if p.table_bar.is_some() {
+            let (shapes, pb) = aero.next().expect("one aerodynamic gradient per table");
+            for (m, s) in shapes.iter().enumerate() {
+                add_into(&mut p.modal_seed.shape[m], s);
+            }
+            for k in 0..N_PLANFORM {
+                p.p_bar[k] += pb[k];
+            }
+            for (gi, v) in
+                p.g.iter_mut()
+                    .zip(modes_vjp(&ev.plate, &ev.modes, &p.modal_seed))
+            {
+                *gi += v;
+            }
+            for k in 0..N_PLANFORM {
+                p.g[n - N_PLANFORM + k] += p.p_bar[k];
+            }
+        }
+        out.push(p.g);
     }
-    for k in 0..N_PLANFORM {
-        p_bar[k] += pb[k];
-    }
-    // modes → design
-    for (gi, v) in g
-        .iter_mut()
-        .zip(modes_vjp(&ev.plate, &ev.modes, &modal_seed))
-    {
-        *gi += v;
-    }
-    let n = g.len();
-    for k in 0..N_PLANFORM {
-        g[n - N_PLANFORM + k] += p_bar[k];
-    }
-    Ok(g)
+    Ok(out)
 }
 
 /// The gust-response part of the reverse sweep: RMS seeds → seeds on the GAF table, on ω_n², on

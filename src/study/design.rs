@@ -6,7 +6,7 @@
 
 use crate::optim::{Gradients, Problem, Values};
 use crate::pipeline::{
-    evaluate, gradient, DampingSeed, Evaluation, FlutterMargin, GustSettings, OutputSeeds,
+    evaluate, gradients, DampingSeed, Evaluation, FlutterMargin, GustSettings, OutputSeeds,
 };
 use crate::study::Study;
 
@@ -98,19 +98,23 @@ impl Problem for DesignProblem<'_> {
                 .collect(),
             damping: None,
         };
-        let f =
-            gradient(ev, &seeds(1.0 / self.spec.mass0, 0.0, 0.0)).map_err(|e| format!("{e:#}"))?;
-        let h =
-            gradient(ev, &seeds(0.0, 1.0 / self.spec.area0, 0.0)).map_err(|e| format!("{e:#}"))?;
-        let mut ineq = vec![gradient(ev, &seeds(0.0, 0.0, 1.0 / self.spec.rms_limit))
-            .map_err(|e| format!("{e:#}"))?];
+        let mut all = vec![
+            seeds(1.0 / self.spec.mass0, 0.0, 0.0),
+            seeds(0.0, 1.0 / self.spec.area0, 0.0),
+            seeds(0.0, 0.0, 1.0 / self.spec.rms_limit),
+        ];
         if let Some((weights, seed)) = flutter {
             let mut s = seeds(0.0, 0.0, 0.0);
             let mut d = seed.clone();
             d.g_bar = weights.iter().map(|w| w / DAMPING_SCALE).collect();
             s.damping = Some(d);
-            ineq.push(gradient(ev, &s).map_err(|e| format!("{e:#}"))?);
+            all.push(s);
         }
+        let mut g = gradients(ev, &all)
+            .map_err(|e| format!("{e:#}"))?
+            .into_iter();
+        let (f, h) = (g.next().expect("mass"), g.next().expect("area"));
+        let ineq: Vec<Vec<f64>> = g.collect();
         Ok(Gradients {
             f,
             eq: if self.spec.fix_area {

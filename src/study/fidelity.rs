@@ -119,16 +119,33 @@ impl AeroModel {
         modes: &Modes,
         seed: &GafTable,
     ) -> Result<(Vec<Vec<f64>>, [f64; N_PLANFORM]), AeroError> {
+        let mut out = self.gafs_vjp_many(plate, modes, std::slice::from_ref(seed))?;
+        Ok(out.pop().expect("one seed, one gradient"))
+    }
+
+    /// [`AeroModel::gafs_vjp`] for several seeds, sharing the aerodynamic model's work.
+    pub fn gafs_vjp_many(
+        &self,
+        plate: &PlateModel,
+        modes: &Modes,
+        seeds: &[GafTable],
+    ) -> Result<Vec<(Vec<Vec<f64>>, [f64; N_PLANFORM])>, AeroError> {
         let surface = self.modal_surface(plate, modes);
-        let g = self
+        let gs = self
             .fidelity
-            .gafs_vjp(&self.flight, &surface, &self.k, seed)?;
-        let (shapes, mut p_bar) = self.transfer.modes_on_surface_vjp(plate, modes, &g.modes);
-        for (gq, row) in g.geometry.iter().zip(&self.geometry_jacobian) {
-            for k in 0..N_PLANFORM {
-                p_bar[k] += gq * row[k];
-            }
-        }
-        Ok((shapes, p_bar))
+            .gafs_vjp_many(&self.flight, &surface, &self.k, seeds)?;
+        Ok(gs
+            .iter()
+            .map(|g| {
+                let (shapes, mut p_bar) =
+                    self.transfer.modes_on_surface_vjp(plate, modes, &g.modes);
+                for (gq, row) in g.geometry.iter().zip(&self.geometry_jacobian) {
+                    for k in 0..N_PLANFORM {
+                        p_bar[k] += gq * row[k];
+                    }
+                }
+                (shapes, p_bar)
+            })
+            .collect())
     }
 }

@@ -263,6 +263,20 @@ pub trait Aerodynamics: Send + Sync {
         k: &[f64],
         seed: &GafTable,
     ) -> Result<GafGradient, AeroError>;
+    /// Reverse mode for several seeds at once, one gradient each. Models that share work between
+    /// seeds (factorizations, geometry passes) override it.
+    fn gafs_vjp_many(
+        &self,
+        flight: &FlightCondition,
+        modes: &ModalSurface,
+        k: &[f64],
+        seeds: &[GafTable],
+    ) -> Result<Vec<GafGradient>, AeroError> {
+        seeds
+            .iter()
+            .map(|s| self.gafs_vjp(flight, modes, k, s))
+            .collect()
+    }
 }
 
 #[cfg(test)]

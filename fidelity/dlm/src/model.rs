@@ -55,6 +55,16 @@ pub struct Dlm {
     surface: AeroSurface,
     /// Geometry parameters differentiated by the reverse mode, per surface.
     active: Vec<Vec<usize>>,
+    /// The influence matrices of the last (geometry, Mach, frequencies) asked for, so that a
+    /// reverse pass after the forward one does not build them again.
+    cache: std::sync::Arc<std::sync::Mutex<Option<MatrixCache>>>,
+}
+
+/// Influence matrices (one per reduced frequency) and what they were built for.
+#[derive(Debug)]
+struct MatrixCache {
+    key: u64,
+    mats: std::sync::Arc<Vec<Vec<Cplx<f64>>>>,
 }
 
 /// Number of geometry parameters of one surface.
@@ -88,6 +98,7 @@ impl Dlm {
         }
         debug_assert_eq!(surface.points.len(), 2 * n);
         Ok(Self {
+            cache: Default::default(),
             active: vec![(0..NQ).collect(); surfaces.len()],
             surfaces,
             symmetry,
@@ -251,9 +262,39 @@ impl Dlm {
     }
 
     /// The influence matrices of the model's own boxes at reduced frequencies `k`.
-    fn matrices(&self, flight: &FlightCondition, k: &[f64]) -> Vec<Vec<Cplx<f64>>> {
+    fn matrices(&self, flight: &FlightCondition, k: &[f64]) -> std::sync::Arc<Vec<Vec<Cplx<f64>>>> {
         let kds: Vec<f64> = k.iter().map(|kk| kk / flight.b_ref).collect();
-        self.influence_matrices(&self.boxes, flight.mach, &kds)
+        // FNV-1a over every number the matrices depend on (the boxes are public, so their
+        // geometry is part of the key)
+        let mut key: u64 = 0xcbf2_9ce4_8422_2325;
+        let mut mix = |v: f64| {
+            for b in v.to_bits().to_le_bytes() {
+                key = (key ^ b as u64).wrapping_mul(0x0100_0000_01b3);
+            }
+        };
+        mix(flight.mach);
+        kds.iter().for_each(|v| mix(*v));
+        mix(match self.symmetry {
+            Symmetry::None => 0.0,
+            Symmetry::Symmetric => 1.0,
+            Symmetry::Antisymmetric => 2.0,
+        });
+        for b in &self.boxes {
+            let points = b.corners.iter().chain([&b.line_a, &b.line_b, &b.cp, &b.dp]);
+            for p in points.flatten() {
+                mix(*p);
+            }
+        }
+        let mut cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(c) = cache.as_ref().filter(|c| c.key == key) {
+            return c.mats.clone();
+        }
+        let mats = std::sync::Arc::new(self.influence_matrices(&self.boxes, flight.mach, &kds));
+        *cache = Some(MatrixCache {
+            key,
+            mats: mats.clone(),
+        });
+        mats
     }
 
     /// Pressure solutions c = D⁻¹ W at one frequency (columns: modes, gust) with the factorization.
@@ -306,10 +347,10 @@ impl Dlm {
         &self,
         si: usize,
         params: &[usize],
-        frozen: &[&FrozenK],
+        frozen: &[Vec<&FrozenK>],
         flight: &FlightCondition,
         modes: &ModalSurface,
-    ) -> [f64; N] {
+    ) -> Vec<[f64; N]> {
         let n = self.n_boxes();
         let nm = modes.n_modes();
         let boxes: Vec<AeroBox<Dual<N>>> = self
@@ -327,35 +368,44 @@ impl Dlm {
                 surface_boxes(s, qd)
             })
             .collect();
-        let kds: Vec<f64> = frozen.iter().map(|f| f.kd).collect();
+        let ns = frozen.len();
+        let kds: Vec<f64> = frozen[0].iter().map(|f| f.kd).collect();
         let hw = Self::force_weights(&boxes, modes);
-        // − Re Σ_k Σ_ji D_ji(k) lc_ji(k)
-        let d_part: Dual<N> = (0..n)
+        // − Re Σ_k Σ_ji D_ji(k) lc_ji(k), every seed contracted with the same dD_ji
+        let zero = || vec![Dual::<N>::cst(0.0); ns];
+        let d_part: Vec<Dual<N>> = (0..n)
             .into_par_iter()
             .map(|j| {
-                let mut acc = Dual::<N>::cst(0.0);
+                let mut acc = zero();
                 self.influence_row(&boxes, j, flight.mach, &kds, |i, k, dji| {
-                    let l = frozen[k].lc[(j, i)];
-                    acc -= dji.re * l.re - dji.im * l.im;
+                    for (a, f) in acc.iter_mut().zip(frozen) {
+                        let l = f[k].lc[(j, i)];
+                        *a -= dji.re * l.re - dji.im * l.im;
+                    }
                 });
                 acc
             })
-            .reduce(|| Dual::cst(0.0), |a, b| a + b);
-        let mut lag = d_part;
-        for f in frozen {
-            let w = Self::normalwash(&boxes, modes, f.kd, flight.x_ref);
-            for col in 0..=nm {
-                for j in 0..n {
-                    let cj = f.c[(j, col)];
-                    for m in 0..nm {
-                        lag += hw[m][j] * (f.qbar[(m, col)].conj() * cj).re;
+            .reduce(zero, |a, b| {
+                a.into_iter().zip(b).map(|(x, y)| x + y).collect()
+            });
+        let mut out = Vec::with_capacity(ns);
+        for (mut lag, seed) in d_part.into_iter().zip(frozen) {
+            for f in seed {
+                let w = Self::normalwash(&boxes, modes, f.kd, flight.x_ref);
+                for col in 0..=nm {
+                    for j in 0..n {
+                        let cj = f.c[(j, col)];
+                        for m in 0..nm {
+                            lag += hw[m][j] * (f.qbar[(m, col)].conj() * cj).re;
+                        }
+                        let lj = f.lam[(j, col)];
+                        lag += w[col][j].re * lj.re + w[col][j].im * lj.im;
                     }
-                    let lj = f.lam[(j, col)];
-                    lag += w[col][j].re * lj.re + w[col][j].im * lj.im;
                 }
             }
+            out.push(lag.d);
         }
-        lag.d
+        out
     }
 
     /// Forward mode with respect to the geometry parameters ([`Aerodynamics::geometry_names`]):
@@ -481,9 +531,25 @@ impl Aerodynamics for Dlm {
         k: &[f64],
         seed: &GafTable,
     ) -> Result<GafGradient, AeroError> {
+        let mut g = self.gafs_vjp_many(flight, modes, k, std::slice::from_ref(seed))?;
+        Ok(g.pop().expect("one seed, one gradient"))
+    }
+
+    /// One influence matrix and LU per frequency and one dual-number pass over the box pairs for
+    /// all seeds together.
+    fn gafs_vjp_many(
+        &self,
+        flight: &FlightCondition,
+        modes: &ModalSurface,
+        k: &[f64],
+        seeds: &[GafTable],
+    ) -> Result<Vec<GafGradient>, AeroError> {
         self.check_inputs(flight, modes, k)?;
         let nm = modes.n_modes();
-        if seed.k.len() != k.len() || seed.n_modes() != nm {
+        if seeds
+            .iter()
+            .any(|seed| seed.k.len() != k.len() || seed.n_modes() != nm)
+        {
             return Err(AeroError::Input(
                 "seed: its shape does not match the GAF table".into(),
             ));
@@ -491,106 +557,107 @@ impl Aerodynamics for Dlm {
         let n = self.n_boxes();
         let weights = Self::force_weights(&self.boxes, modes);
         let mats = self.matrices(flight, k);
-        let parts: Vec<(GafGradient, FrozenK)> = k
+        let zero_gradient = || GafGradient {
+            modes: ModalSurface::zeros(nm, 2 * n),
+            geometry: vec![0.0; NQ * self.surfaces.len()],
+        };
+        // per frequency: per seed, its modal gradient part and its frozen adjoint quantities
+        let parts: Vec<Vec<(GafGradient, FrozenK)>> = k
             .par_iter()
             .enumerate()
             .map(|(ik, &kk)| {
                 let kd = kk / flight.b_ref;
                 let (lu, c) = self.solve_k(&mats[ik], flight, modes, kk)?;
-                // c̄_jn = Σ_m h_jm A_j Q̄_mn (gust column n = nm)
-                let qbar = |m: usize, col: usize| {
-                    if col < nm {
-                        seed.q_ss[ik][m][col]
-                    } else {
-                        seed.q_gs[ik][m]
-                    }
-                };
-                let cbar = Mat::<c64>::from_fn(n, nm + 1, |j, col| {
-                    (0..nm).map(|m| qbar(m, col) * weights[m][j]).sum()
-                });
-                let mut lam = cbar;
-                lu.solve_adjoint_in_place(lam.as_mut());
-                let mut g = GafGradient {
-                    modes: ModalSurface::zeros(nm, 2 * n),
-                    geometry: vec![0.0; NQ * self.surfaces.len()],
-                };
-                // mode shapes at the doublet points: h̄_jm A_j = Re Σ_n conj(Q̄_mn) c_jn
-                for m in 0..nm {
-                    for j in 0..n {
-                        let b = &self.boxes[j];
-                        let s: f64 = (0..=nm)
-                            .map(|col| (qbar(m, col).conj() * c[(j, col)]).re)
-                            .sum();
-                        let nrm = b.normal();
-                        for a in 0..3 {
-                            g.modes.disp[m][n + j][a] += s * b.area * nrm[a];
+                let mut out = Vec::with_capacity(seeds.len());
+                for seed in seeds {
+                    // c̄_jn = Σ_m h_jm A_j Q̄_mn (gust column n = nm)
+                    let qbar = |m: usize, col: usize| {
+                        if col < nm {
+                            seed.q_ss[ik][m][col]
+                        } else {
+                            seed.q_gs[ik][m]
+                        }
+                    };
+                    let cbar = Mat::<c64>::from_fn(n, nm + 1, |j, col| {
+                        (0..nm).map(|m| qbar(m, col) * weights[m][j]).sum()
+                    });
+                    let mut lam = cbar;
+                    lu.solve_adjoint_in_place(lam.as_mut());
+                    let mut g = zero_gradient();
+                    // mode shapes at the doublet points: h̄_jm A_j = Re Σ_n conj(Q̄_mn) c_jn
+                    for m in 0..nm {
+                        for j in 0..n {
+                            let b = &self.boxes[j];
+                            let s: f64 = (0..=nm)
+                                .map(|col| (qbar(m, col).conj() * c[(j, col)]).re)
+                                .sum();
+                            let nrm = b.normal();
+                            for a in 0..3 {
+                                g.modes.disp[m][n + j][a] += s * b.area * nrm[a];
+                            }
                         }
                     }
-                }
-                // mode shapes at the control points through W: W̄ = λ
-                for m in 0..nm {
-                    for j in 0..n {
-                        let nrm = self.boxes[j].normal();
-                        let l = lam[(j, m)].conj();
-                        // W = n·u_x + i kd n·u  ⇒  ū = Re(conj(λ) i kd) n, ū_x = Re(conj(λ)) n
-                        let (sx, su) = (l.re, (l * c64::new(0.0, kd)).re);
-                        for a in 0..3 {
-                            g.modes.disp_x[m][j][a] += sx * nrm[a];
-                            g.modes.disp[m][j][a] += su * nrm[a];
+                    // mode shapes at the control points through W: W̄ = λ
+                    for m in 0..nm {
+                        for j in 0..n {
+                            let nrm = self.boxes[j].normal();
+                            let l = lam[(j, m)].conj();
+                            // W = n·u_x + i kd n·u  ⇒  ū = Re(conj(λ) i kd) n, ū_x = Re(conj(λ)) n
+                            let (sx, su) = (l.re, (l * c64::new(0.0, kd)).re);
+                            for a in 0..3 {
+                                g.modes.disp_x[m][j][a] += sx * nrm[a];
+                                g.modes.disp[m][j][a] += su * nrm[a];
+                            }
                         }
                     }
+                    // geometry: ℒ(q) = Re[Σ conj(Q̄) Hᵀ A c + Σ conj(λ)(W − D c)] with c, λ
+                    // frozen, differentiated by duals along the active parameters
+                    let qbar_mat = Mat::<c64>::from_fn(nm, nm + 1, qbar);
+                    // Σ_col conj(λ_j,col) c_i,col: the weights of D_ji in ℒ
+                    let lc = Mat::<c64>::from_fn(n, n, |j, i| {
+                        (0..=nm).map(|col| lam[(j, col)].conj() * c[(i, col)]).sum()
+                    });
+                    out.push((
+                        g,
+                        FrozenK {
+                            c: c.clone(),
+                            lam,
+                            lc,
+                            qbar: qbar_mat,
+                            kd,
+                        },
+                    ));
                 }
-                // geometry: ℒ(q) = Re[Σ conj(Q̄) Hᵀ A c + Σ conj(λ)(W − D c)] with c, λ frozen,
-                // differentiated by duals along the active parameters, four at a time
-                let qbar_mat = Mat::<c64>::from_fn(nm, nm + 1, qbar);
-                // Σ_col conj(λ_j,col) c_i,col: the weights of D_ji in ℒ
-                let lc = Mat::<c64>::from_fn(n, n, |j, i| {
-                    (0..=nm).map(|col| lam[(j, col)].conj() * c[(i, col)]).sum()
-                });
-                Ok((
-                    g,
-                    FrozenK {
-                        c,
-                        lam,
-                        lc,
-                        qbar: qbar_mat,
-                        kd,
-                    },
-                ))
+                Ok(out)
             })
             .collect::<Result<_, AeroError>>()?;
-        // geometry, all frequencies in one pass over the box pairs
-        let frozen: Vec<&FrozenK> = parts.iter().map(|(_, f)| f).collect();
-        let mut geometry = vec![0.0; NQ * self.surfaces.len()];
+        // geometry, all frequencies and seeds in one pass over the box pairs
+        let frozen: Vec<Vec<&FrozenK>> = (0..seeds.len())
+            .map(|s| parts.iter().map(|per_k| &per_k[s].1).collect())
+            .collect();
+        let mut totals: Vec<GafGradient> = (0..seeds.len()).map(|_| zero_gradient()).collect();
         for (si, active) in self.active.iter().enumerate() {
             for chunk in active.chunks(4) {
                 let d = self.geometry_lagrangian::<4>(si, chunk, &frozen, flight, modes);
-                for (p, &param) in chunk.iter().enumerate() {
-                    geometry[si * NQ + param] += d[p];
-                }
-            }
-        }
-        let parts: Vec<GafGradient> = parts.into_iter().map(|(g, _)| g).collect();
-        let mut total = GafGradient {
-            modes: ModalSurface::zeros(nm, 2 * n),
-            geometry: vec![0.0; NQ * self.surfaces.len()],
-        };
-        for p in parts {
-            for m in 0..nm {
-                for j in 0..2 * n {
-                    for a in 0..3 {
-                        total.modes.disp[m][j][a] += p.modes.disp[m][j][a];
-                        total.modes.disp_x[m][j][a] += p.modes.disp_x[m][j][a];
+                for (total, d) in totals.iter_mut().zip(d) {
+                    for (p, &param) in chunk.iter().enumerate() {
+                        total.geometry[si * NQ + param] += d[p];
                     }
                 }
             }
-            for (t, v) in total.geometry.iter_mut().zip(&p.geometry) {
-                *t += v;
+        }
+        for per_k in &parts {
+            for (total, (p, _)) in totals.iter_mut().zip(per_k) {
+                for m in 0..nm {
+                    for j in 0..2 * n {
+                        for a in 0..3 {
+                            total.modes.disp[m][j][a] += p.modes.disp[m][j][a];
+                            total.modes.disp_x[m][j][a] += p.modes.disp_x[m][j][a];
+                        }
+                    }
+                }
             }
         }
-        for (t, v) in total.geometry.iter_mut().zip(&geometry) {
-            *t += v;
-        }
-        Ok(total)
+        Ok(totals)
     }
 }
