@@ -11,6 +11,9 @@ use gustkit_core::scalar::Dual;
 use gustkit_core::{AeroError, Aerodynamics, FlightCondition, GafTable, ModalSurface};
 use gustkit_dlm::{Dlm, SurfaceSpec};
 
+/// Seeds on the nodal mode shapes (one vector a mode) and the direct planform gradient.
+pub type ShapeSeeds = (Vec<Vec<f64>>, [f64; N_PLANFORM]);
+
 /// An aerodynamic model bound to a planform and a plate.
 pub struct AeroModel {
     pub fidelity: Box<dyn Aerodynamics>,
@@ -118,7 +121,7 @@ impl AeroModel {
         plate: &PlateModel,
         modes: &Modes,
         seed: &GafTable,
-    ) -> Result<(Vec<Vec<f64>>, [f64; N_PLANFORM]), AeroError> {
+    ) -> Result<ShapeSeeds, AeroError> {
         let mut out = self.gafs_vjp_many(plate, modes, std::slice::from_ref(seed))?;
         Ok(out.pop().expect("one seed, one gradient"))
     }
@@ -129,7 +132,7 @@ impl AeroModel {
         plate: &PlateModel,
         modes: &Modes,
         seeds: &[GafTable],
-    ) -> Result<Vec<(Vec<Vec<f64>>, [f64; N_PLANFORM])>, AeroError> {
+    ) -> Result<Vec<ShapeSeeds>, AeroError> {
         let surface = self.modal_surface(plate, modes);
         let gs = self
             .fidelity
