@@ -1192,6 +1192,7 @@ pub fn optimize(
         unit: unit.to_string(),
         fix_area: o.fix_area,
         flutter_margin: spec.flutter.map(|m| (m.speed_factor, m.damping_max)),
+        reference: o.reference.clone(),
         design_variable_names: (0..x0.len()).map(|i| design.name(i)).collect(),
         lower: spec.lower,
         upper: spec.upper,

@@ -121,6 +121,9 @@ pub struct OptimizationResults {
     /// The flutter-margin constraint: speed factor and largest damping, if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub flutter_margin: Option<(f64, f64)>,
+    /// Published results to compare with.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<crate::study::ReferenceSpec>,
     pub design_variable_names: Vec<String>,
     pub lower: Vec<f64>,
     pub upper: Vec<f64>,
@@ -226,7 +229,7 @@ pub fn summary(r: &RunResults) -> String {
     if let Some(o) = &r.optimization {
         let (i, f) = (&o.initial, &o.final_);
         md += &format!(
-            "\n## Optimization\n\nMinimum mass subject to RMS({}) ≤ {} {}{}; {} design variables. {} after {} iterations ({} evaluations, {:.1} s).\n\n| | initial | final | change |\n|---|---:|---:|---:|\n| mass [kg] | {:.4} | {:.4} | {:+.1} % |\n| RMS {} [{}] | {:.4} | {:.4} | {:+.1} % |\n| area [m²] | {:.5} | {:.5} | {:+.2} % |\n",
+            "\n## Optimization\n\nMinimum mass subject to RMS({}) ≤ {:.4} {}{}; {} design variables. {} after {} iterations ({} evaluations, {:.1} s).\n\n| | initial | final | change |\n|---|---:|---:|---:|\n| mass [kg] | {:.4} | {:.4} | {:+.1} % |\n| RMS {} [{}] | {:.4} | {:.4} | {:+.1} % |\n| area [m²] | {:.5} | {:.5} | {:+.2} % |\n",
             o.output,
             o.rms_limit,
             o.unit,
@@ -251,16 +254,42 @@ pub fn summary(r: &RunResults) -> String {
             f.area_m2,
             100.0 * (f.area_m2 / i.area_m2 - 1.0),
         );
-        md += "\n| planform variable | lower | initial | final | upper |\n|---|---:|---:|---:|---:|\n";
+        if let Some(refr) = &o.reference {
+            let opt = |v: Option<String>| v.unwrap_or_else(|| "–".into());
+            md += &format!(
+                "\nSide by side with {}:\n\n| | reference | gustkit |\n|---|---:|---:|\n| iterations | {} | {} |\n| mass change | {} | {:+.1} % |\n| initial RMS [{}] | {} | {:.3} |\n| optimum | {} | see the planform table and figure below |\n",
+                refr.source,
+                opt(refr.iterations.map(|v| v.to_string())),
+                o.iterations,
+                opt(refr.mass_change_percent.map(|v| format!("{v:+.1} %"))),
+                100.0 * (f.mass_kg / i.mass_kg - 1.0),
+                o.unit,
+                opt(refr.initial_rms.map(|v| format!("{v:.3}"))),
+                i.rms_tip_in,
+                if refr.design.is_empty() { "–" } else { &refr.design },
+            );
+        }
+        // planform variables in the study's units: lengths in its length unit, sweep in degrees
+        let to_unit = match r.length_unit.as_str() {
+            "in" => 1.0 / 0.0254,
+            "ft" => 1.0 / 0.3048,
+            _ => 1.0,
+        };
+        md += "\n| planform variable | lower | initial | final | upper | unit |\n|---|---:|---:|---:|---:|---|\n";
         let n = o.design_variable_names.len();
         for k in n.saturating_sub(4)..n {
+            let (scale, unit) = if o.design_variable_names[k].starts_with("sweep") {
+                (180.0 / std::f64::consts::PI, "deg")
+            } else {
+                (to_unit, r.length_unit.as_str())
+            };
             md += &format!(
-                "| {} | {:.5} | {:.5} | {:.5} | {:.5} |\n",
+                "| {} | {:.3} | {:.3} | {:.3} | {:.3} | {unit} |\n",
                 o.design_variable_names[k],
-                o.lower[k],
-                i.design_variables[k],
-                f.design_variables[k],
-                o.upper[k]
+                scale * o.lower[k],
+                scale * i.design_variables[k],
+                scale * f.design_variables[k],
+                scale * o.upper[k]
             );
         }
         let at_bound = |x: &[f64]| {
@@ -272,7 +301,7 @@ pub fn summary(r: &RunResults) -> String {
                 .count()
         };
         md += &format!(
-            "\n{} of {} design variables end at a bound. Planform variables in SI (m, rad).\n\n![convergence](convergence.png)\n\n![PSD initial and final](psd_optimization.png)\n\n![thickness](thickness.png)\n",
+            "\n{} of {} design variables end at a bound.\n\n![convergence](convergence.png)\n\n![PSD initial and final](psd_optimization.png)\n\n![thickness](thickness.png)\n",
             at_bound(&f.design_variables),
             n
         );

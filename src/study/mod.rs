@@ -13,8 +13,8 @@ pub mod sweep;
 pub use fidelity::AeroModel;
 pub use schema::{
     AeroSpec, AirfoilSpec, ClampSpec, DlmSpec, FidelitySpec, FlightSpec, FlutterSpec, GustSpec,
-    LengthUnit, MaterialSpec, MeshSpec, OptimizationSpec, OutputSpec, StructureSpec, StudyFile,
-    SweepCombine, SweepParameter, SweepSpec, WingSpec,
+    LengthUnit, MaterialSpec, MeshSpec, OptimizationSpec, OutputSpec, ReferenceSpec, StructureSpec,
+    StudyFile, SweepCombine, SweepParameter, SweepSpec, WingSpec,
 };
 
 use crate::structure::{airfoil_thickness, Clamp, Orthotropic, PlateMesh, PlateModel};

@@ -94,6 +94,9 @@ pub struct OptimizationSpec {
     pub sweep_c4_deg: [f64; 2],
     pub root_chord: [f64; 2],
     pub tip_chord: [f64; 2],
+    /// Published results to compare with in the report (side by side).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<ReferenceSpec>,
     /// Optional flutter margin: every p-k root at `speed_factor` × the flight speed has damping
     /// g ≤ `damping_max`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -112,6 +115,24 @@ fn default_max_iterations() -> usize {
 }
 fn default_tolerance() -> f64 {
     1e-4
+}
+
+/// Published results of the same optimization, for the report's side-by-side table.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ReferenceSpec {
+    /// Where the numbers come from.
+    pub source: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub iterations: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass_change_percent: Option<f64>,
+    /// RMS of the constrained output at the initial design (report units).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial_rms: Option<f64>,
+    /// What the reference's optimum looks like (free text).
+    #[serde(default)]
+    pub design: String,
 }
 
 /// The flutter-margin constraint of an optimization.
