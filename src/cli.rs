@@ -1209,7 +1209,7 @@ fn sweep_metrics(
     case: &crate::study::sweep::SweepCase,
     dir: &Path,
     optimize_case: bool,
-) -> Result<Vec<crate::report::sweep::Metric>> {
+) -> Result<(Vec<crate::report::sweep::Metric>, Option<String>)> {
     use crate::report::sweep::Metric;
     let metric = |name: &str, unit: &str, value: f64| Metric {
         name: name.to_string(),
@@ -1257,8 +1257,9 @@ fn sweep_metrics(
             "-",
             if o.converged { 1.0 } else { 0.0 },
         ));
+        return Ok((out, Some(o.message)));
     }
-    Ok(out)
+    Ok((out, None))
 }
 
 /// `gustkit sweep`: every case of the study's sweep in parallel (rayon), each case's result
@@ -1307,9 +1308,9 @@ pub fn sweep(file: &Path, reports: &Path, resume: bool) -> Result<()> {
             }
             let t = Instant::now();
             let case_dir = dir.join(format!("cases/case_{:04}", case.index));
-            let (metrics, error) = match sweep_metrics(case, &case_dir, spec.optimize) {
-                Ok(m) => (m, None),
-                Err(e) => (Vec::new(), Some(format!("{e:#}"))),
+            let (metrics, message, error) = match sweep_metrics(case, &case_dir, spec.optimize) {
+                Ok((m, message)) => (m, message, None),
+                Err(e) => (Vec::new(), None, Some(format!("{e:#}"))),
             };
             let r = CaseResult {
                 index: case.index,
@@ -1317,6 +1318,7 @@ pub fn sweep(file: &Path, reports: &Path, resume: bool) -> Result<()> {
                 study_hash: hash,
                 metrics,
                 error,
+                message,
                 wall_time_s: t.elapsed().as_secs_f64(),
             };
             write_atomic(&path, serde_json::to_string_pretty(&r)?.as_bytes())?;

@@ -478,6 +478,15 @@ fn run_optimization_and_resume() {
         err.contains("results.json") && err.contains("mass_kg"),
         "{err}"
     );
+    // a checkpoint of another problem: the study changed since it was written
+    let mut changed = v.clone();
+    changed["optimization"]["rms_max"] = 1.4.into();
+    std::fs::write(&file, changed.to_string()).unwrap();
+    let o = run(&["--resume"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("another problem"), "{err}");
+    std::fs::write(&file, v.to_string()).unwrap();
     // a corrupted checkpoint
     std::fs::write(dir.join("opt_small/checkpoint.json"), "{not json").unwrap();
     let o = run(&["--resume"]);

@@ -226,10 +226,21 @@ pub fn minimize(
                 evaluations,
             ));
         }
+        // the subproblem could not meet the linearized constraints within the bounds
+        let infeasible = if viol >= params.tolerance && step.elastic > 1e-8 {
+            format!(
+                "; the linearized constraints cannot be met within the bounds (largest violation {viol:.3e}): the problem looks infeasible"
+            )
+        } else {
+            String::new()
+        };
         if iteration >= params.max_iterations {
             return Ok(finish(
                 false,
-                format!("iteration limit {} reached", params.max_iterations),
+                format!(
+                    "iteration limit {} reached{infeasible}",
+                    params.max_iterations
+                ),
                 history,
                 evaluations,
             ));
@@ -316,7 +327,7 @@ pub fn minimize(
                     "line search stalled ({failed} of its trial points could not be evaluated; the last: {reason})"
                 ),
                 None => "line search stalled (no decrease of the merit function along the step)".into(),
-            };
+            } + &infeasible;
             return Ok(finish(converged, message, history, evaluations));
         };
         let grads_new = problem

@@ -29,6 +29,9 @@ pub struct CaseResult {
     /// Why the case failed (e.g. the flight condition flutters), if it did.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
+    /// How the case's optimization ended (with `optimize`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub message: Option<String>,
     pub wall_time_s: f64,
 }
 
@@ -122,11 +125,19 @@ pub fn summary(r: &SweepResults) -> String {
         }
         for (n, _) in &names {
             md += &match SweepResults::value(c, n) {
+                Some(v) if v.fract() == 0.0 && v.abs() < 1e9 => format!(" {v:.0} |"),
                 Some(v) => format!(" {v:.5} |"),
                 None => " – |".into(),
             };
         }
         md += "\n";
+    }
+    for c in r.cases.iter().filter(|c| c.message.is_some()) {
+        md += &format!(
+            "\nCase {} (optimization): {}\n",
+            c.index,
+            c.message.as_deref().unwrap_or("")
+        );
     }
     for c in r.cases.iter().filter(|c| c.error.is_some()) {
         md += &format!("\nCase {}: {}\n", c.index, c.error.as_deref().unwrap_or(""));

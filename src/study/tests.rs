@@ -141,3 +141,109 @@ fn unreadable_file_and_syntax_errors() {
     let e = Study::from_str(Path::new("x.json"), "{\"schema_version\": 1,").unwrap_err();
     assert!(e.reason.contains("EOF"), "{e}");
 }
+
+fn flagship_error(edit: impl FnOnce(&mut serde_json::Value), path: &str, reason_part: &str) {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/studies/agard445_dlm.json"
+    ))
+    .unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    edit(&mut v);
+    let e = Study::from_str(Path::new("case.json"), &v.to_string()).unwrap_err();
+    assert_eq!(e.path, path, "{e}");
+    assert!(e.reason.contains(reason_part), "{e}");
+}
+
+/// The flagship's optimization section: bounds that cannot hold, an initial design outside them,
+/// bad relative bounds, flutter margin, calibration and sweep entries name their field.
+#[test]
+fn optimization_and_sweep_errors_name_their_field() {
+    flagship_error(
+        |v| v["optimization"]["span"] = serde_json::json!([33.0, 27.0]),
+        "optimization.span",
+        "exceeds",
+    );
+    flagship_error(
+        |v| v["optimization"]["sweep_c4_deg"] = serde_json::json!([46.0, 50.0]),
+        "optimization.sweep_c4_deg",
+        "outside the bounds",
+    );
+    flagship_error(
+        |v| v["optimization"]["thickness_relative"] = serde_json::json!([1.2, 2.0]),
+        "optimization.thickness_relative",
+        "lower <= 1 <= upper",
+    );
+    flagship_error(
+        |v| v["optimization"]["flutter_margin"]["speed_factor"] = (-1.0).into(),
+        "optimization.flutter_margin.speed_factor",
+        "(0, 3]",
+    );
+    flagship_error(
+        |v| v["optimization"]["flutter_margin"]["damping"] = 0.0.into(),
+        "optimization.flutter_margin.damping",
+        "unknown field",
+    );
+    flagship_error(
+        |v| v["structure"]["thickness_scale"] = 0.0.into(),
+        "structure.thickness_scale",
+        "positive",
+    );
+    flagship_error(
+        |v| v["gust"]["calibration"]["target"] = 1.0.into(),
+        "gust.calibration.target",
+        "unknown field",
+    );
+    flagship_error(
+        |v| v["sweep"] = serde_json::json!({"parameters": [{"path": "flight.mach"}]}),
+        "sweep.parameters[0]",
+        "missing field `values`",
+    );
+}
+
+/// Sweep cases: grid order (first parameter fastest), zip, and the errors of bad sweeps.
+#[test]
+fn sweep_cases_grid_zip_and_errors() {
+    let mut v: serde_json::Value = serde_json::from_str(&agard_text()).unwrap();
+    v["sweep"] = serde_json::json!({"parameters": [
+        {"path": "flight.mach", "values": [0.3, 0.4, 0.5]},
+        {"path": "gust.turbulence.sigma_w_m_s", "values": [1.0, 2.0]}
+    ]});
+    let s = Study::from_str(Path::new("s.json"), &v.to_string()).unwrap();
+    let cases = s.sweep_cases().unwrap();
+    assert_eq!(cases.len(), 6);
+    assert_eq!(cases[4].values, vec![0.4, 2.0]);
+    let f = cases[4].study.flight_condition().unwrap();
+    assert_eq!(f.mach, 0.4);
+    assert_eq!(
+        cases[4].study.gust_settings().unwrap().turbulence.sigma(),
+        2.0
+    );
+    assert!(cases[4].study.spec.sweep.is_none());
+    v["sweep"]["combine"] = "zip".into();
+    let s = Study::from_str(Path::new("s.json"), &v.to_string()).unwrap();
+    let e = s.sweep_cases().unwrap_err();
+    assert_eq!(e.path, "sweep.combine");
+    v["sweep"]["parameters"][0]["values"] = serde_json::json!([0.3, 0.6]);
+    let s = Study::from_str(Path::new("s.json"), &v.to_string()).unwrap();
+    let cases = s.sweep_cases().unwrap();
+    assert_eq!(cases.len(), 2);
+    assert_eq!(cases[1].values, vec![0.6, 2.0]);
+    // a Mach number the DLM refuses is named with its case
+    v["sweep"]["parameters"][0]["values"] = serde_json::json!([0.3, 1.2]);
+    let s = Study::from_str(Path::new("s.json"), &v.to_string()).unwrap();
+    let e = s.sweep_cases().unwrap_err();
+    assert!(
+        e.reason.contains("case 1") && e.reason.contains("flight.mach = 1.2"),
+        "{e}"
+    );
+    // a string field is not a parameter; optimize without an optimization section
+    v["sweep"]["parameters"][0]["path"] = "wing.airfoil".into();
+    let s = Study::from_str(Path::new("s.json"), &v.to_string()).unwrap();
+    let e = s.sweep_cases().unwrap_err();
+    assert_eq!(e.path, "sweep.parameters[0].path");
+    v["sweep"]["parameters"][0]["path"] = "flight.mach".into();
+    v["sweep"]["optimize"] = true.into();
+    let s = Study::from_str(Path::new("s.json"), &v.to_string()).unwrap();
+    assert_eq!(s.sweep_cases().unwrap_err().path, "sweep.optimize");
+}
