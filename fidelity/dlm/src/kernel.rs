@@ -35,18 +35,24 @@ const DESMARAIS_A: [f64; 12] = [
 ];
 const DESMARAIS_B: f64 = 0.009054814793;
 
-/// I1 and I2 for u1 ≥ 0.
-fn integrals_nonneg<S: Scalar>(u1: S, k1: S) -> (Cplx<S>, Cplx<S>) {
+/// The Desmarais sums i0 = Σ aₙ e^{−pₙu1}/(pₙ + i k1) and its second moment j0 at u1 ≥ 0, and,
+/// if asked, the same at u1 = 0 (the terms 1/(pₙ² + k1²) are shared: upstream points need both).
+fn desmarais_sums<S: Scalar>(
+    u1: S,
+    k1: S,
+    with_zero: bool,
+) -> ((Cplx<S>, Cplx<S>), (Cplx<S>, Cplx<S>)) {
     // e^{−p_n u1} for p_n = 2ⁿ b by repeated squaring of e^{−2 b u1}
     let mut q = (u1 * (-2.0 * DESMARAIS_B)).exp();
     let k2 = k1 * k1;
-    let mut i0 = Cplx::<S>::zero();
-    let mut j0 = Cplx::<S>::zero();
+    let (mut i0, mut j0) = (Cplx::<S>::zero(), Cplx::<S>::zero());
+    let (mut z0, mut zj) = (Cplx::<S>::zero(), Cplx::<S>::zero());
     let mut p = 2.0 * DESMARAIS_B;
     for a in DESMARAIS_A {
         let den = k2 + p * p;
         let inv = S::one() / den;
-        let w = q * inv * a;
+        let ainv = inv * a;
+        let w = q * ainv;
         // ∫ e^{−(p + i k1) u} = e^{−(p+ik1)u1}/(p + i k1): (p − i k1)/(p² + k1²)
         i0 = i0 + Cplx::new(w * p, -(w * k1));
         // second moment for I2
@@ -56,9 +62,20 @@ fn integrals_nonneg<S: Scalar>(u1: S, k1: S) -> (Cplx<S>, Cplx<S>) {
                 wd * (S::cst(p * p) - k2 + u1 * den * p),
                 -(wd * k1 * (S::cst(2.0 * p) + u1 * den)),
             );
+        if with_zero {
+            z0 = z0 + Cplx::new(ainv * p, -(ainv * k1));
+            let wz = ainv * inv;
+            zj = zj + Cplx::new(wz * (S::cst(p * p) - k2), -(wz * k1 * (2.0 * p)));
+        }
         q = q * q;
         p *= 2.0;
     }
+    ((i0, j0), (z0, zj))
+}
+
+/// I1 and I2 at u1 ≥ 0 from the Desmarais sums.
+fn assemble<S: Scalar>(u1: S, k1: S, i0: Cplx<S>, j0: Cplx<S>) -> (Cplx<S>, Cplx<S>) {
+    let k2 = k1 * k1;
     let s = (u1 * u1 + 1.0).sqrt();
     let g = S::one() - u1 / s;
     let e = Cplx::expi_neg(k1 * u1);
@@ -74,10 +91,17 @@ fn integrals_nonneg<S: Scalar>(u1: S, k1: S) -> (Cplx<S>, Cplx<S>) {
 /// I1(u1, k1) and I2(u1, k1) for any u1.
 pub fn integrals<S: Scalar>(u1: S, k1: S) -> (Cplx<S>, Cplx<S>) {
     if u1.re() >= 0.0 {
-        integrals_nonneg(u1, k1)
+        let ((i0, j0), _) = desmarais_sums(u1, k1, false);
+        assemble(u1, k1, i0, j0)
     } else {
-        let (a1, a2) = integrals_nonneg(S::zero(), k1);
-        let (b1, b2) = integrals_nonneg(-u1, k1);
+        // u1 < 0: Re I(u1) = 2 Re I(0) − Re I(−u1), Im I(u1) = Im I(−u1)
+        let neg = -u1;
+        let ((i0, j0), (z0, zj)) = desmarais_sums(neg, k1, true);
+        let (b1, b2) = assemble(neg, k1, i0, j0);
+        // at u1 = 0: e = 1, g = 1, u1/s³ = 0
+        let ik1 = Cplx::new(S::zero(), k1);
+        let a1 = Cplx::real(S::one()) - ik1 * z0;
+        let a2 = (Cplx::real(S::cst(2.0)) - ik1 * z0 + zj.scale(k1 * k1)).scale_f(1.0 / 3.0);
         (
             Cplx::new(a1.re * 2.0 - b1.re, b1.im),
             Cplx::new(a2.re * 2.0 - b2.re, b2.im),
