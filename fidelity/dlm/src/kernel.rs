@@ -37,11 +37,7 @@ const DESMARAIS_B: f64 = 0.009054814793;
 
 /// The Desmarais sums i0 = Σ aₙ e^{−pₙu1}/(pₙ + i k1) and its second moment j0 at u1 ≥ 0, and,
 /// if asked, the same at u1 = 0 (the terms 1/(pₙ² + k1²) are shared: upstream points need both).
-fn desmarais_sums<S: Scalar>(
-    u1: S,
-    k1: S,
-    with_zero: bool,
-) -> ((Cplx<S>, Cplx<S>), (Cplx<S>, Cplx<S>)) {
+fn desmarais_sums<S: Scalar>(u1: S, k1: S, with_zero: bool) -> [(Cplx<S>, Cplx<S>); 2] {
     // e^{−p_n u1} for p_n = 2ⁿ b by repeated squaring of e^{−2 b u1}
     let mut q = (u1 * (-2.0 * DESMARAIS_B)).exp();
     let k2 = k1 * k1;
@@ -70,7 +66,7 @@ fn desmarais_sums<S: Scalar>(
         q = q * q;
         p *= 2.0;
     }
-    ((i0, j0), (z0, zj))
+    [(i0, j0), (z0, zj)]
 }
 
 /// I1 and I2 at u1 ≥ 0 from the Desmarais sums.
@@ -91,12 +87,12 @@ fn assemble<S: Scalar>(u1: S, k1: S, i0: Cplx<S>, j0: Cplx<S>) -> (Cplx<S>, Cplx
 /// I1(u1, k1) and I2(u1, k1) for any u1.
 pub fn integrals<S: Scalar>(u1: S, k1: S) -> (Cplx<S>, Cplx<S>) {
     if u1.re() >= 0.0 {
-        let ((i0, j0), _) = desmarais_sums(u1, k1, false);
+        let [(i0, j0), _] = desmarais_sums(u1, k1, false);
         assemble(u1, k1, i0, j0)
     } else {
         // u1 < 0: Re I(u1) = 2 Re I(0) − Re I(−u1), Im I(u1) = Im I(−u1)
         let neg = -u1;
-        let ((i0, j0), (z0, zj)) = desmarais_sums(neg, k1, true);
+        let [(i0, j0), (z0, zj)] = desmarais_sums(neg, k1, true);
         let (b1, b2) = assemble(neg, k1, i0, j0);
         // at u1 = 0: e = 1, g = 1, u1/s³ = 0
         let ik1 = Cplx::new(S::zero(), k1);
