@@ -1079,10 +1079,16 @@ pub fn optimize(
         tolerance: o.tolerance,
         ..Default::default()
     };
+    // the study defines the problem; its iteration limit does not (a run may be continued with a
+    // higher one)
+    let mut defining = study.spec.clone();
+    if let Some(o) = defining.optimization.as_mut() {
+        o.max_iterations = 0;
+    }
     let problem_id = format!(
         "{}:{:016x}",
         study.spec.name,
-        fnv(&serde_json::to_string(&study.spec)?)
+        fnv(&serde_json::to_string(&defining)?)
     );
     let checkpoint = if resume {
         let path = dir.join("checkpoint.json");

@@ -478,6 +478,23 @@ fn run_optimization_and_resume() {
         err.contains("results.json") && err.contains("mass_kg"),
         "{err}"
     );
+    // a run stopped early (here by its iteration limit, as a killed run stops at its last
+    // checkpoint) and continued with --resume ends where the uninterrupted run ends, bit for bit
+    let mut short = v.clone();
+    short["optimization"]["max_iterations"] = 4.into();
+    std::fs::write(&file, short.to_string()).unwrap();
+    let o = run(&[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(results()["iterations"], 4);
+    std::fs::write(&file, v.to_string()).unwrap();
+    let o = run(&["--resume"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let resumed = results();
+    assert_eq!(
+        resumed["final"]["design_variables"],
+        r["final"]["design_variables"]
+    );
+    assert_eq!(resumed["iterations"], r["iterations"]);
     // a checkpoint of another problem: the study changed since it was written
     let mut changed = v.clone();
     changed["optimization"]["rms_max"] = 1.4.into();

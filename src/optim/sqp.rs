@@ -108,7 +108,12 @@ pub fn minimize(
                     c.z.len()
                 )));
             }
-            if c.params != *params {
+            // the iteration limit may be raised to continue a run that reached it
+            let same_settings = SqpParams {
+                max_iterations: params.max_iterations,
+                ..c.params.clone()
+            } == *params;
+            if !same_settings {
                 return Err(SqpError::Checkpoint(
                     "it was written with other optimizer settings".into(),
                 ));
