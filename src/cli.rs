@@ -1208,14 +1208,19 @@ pub fn optimize(
     })
 }
 
-/// The metrics of one sweep case: mass and first frequency; RMS of every gust output; flutter
-/// speed (with a flutter section; none found in the range gives no value); the optimum (with
-/// `optimize`).
+/// The metrics of one sweep case, as far as they could be computed: mass and first frequency;
+/// flutter speed (with a flutter section; none found in the range gives no value); RMS of every
+/// gust output; the optimum (with `optimize`). A stage that fails (e.g. the flight condition
+/// flutters, so there is no RMS) ends the case with its error and keeps what came before.
 fn sweep_metrics(
     case: &crate::study::sweep::SweepCase,
     dir: &Path,
     optimize_case: bool,
-) -> Result<(Vec<crate::report::sweep::Metric>, Option<String>)> {
+) -> (
+    Vec<crate::report::sweep::Metric>,
+    Option<String>,
+    Option<String>,
+) {
     use crate::report::sweep::Metric;
     let metric = |name: &str, unit: &str, value: f64| Metric {
         name: name.to_string(),
@@ -1223,49 +1228,58 @@ fn sweep_metrics(
         value,
     };
     let study = &case.study;
-    let (_, _, summary) = analyze(study)?;
-    let mut out = vec![
-        metric("mass", "kg", summary.mass_kg),
-        metric("f1", "Hz", summary.frequencies_hz[0]),
-    ];
-    if study.spec.gust.is_some() {
-        let settings = study.gust_settings()?;
-        let x = study.initial_design()?.to_vec();
-        let ev = crate::pipeline::evaluate(study, &settings, &x)?;
-        for (o, rms) in settings.outputs.iter().zip(&ev.rms_m) {
-            out.push(metric(&format!("RMS {}", o.name), o.quantity.unit(), *rms));
-        }
+    let mut out = Vec::new();
+    let mut message = None;
+    let mut stages = || -> Result<()> {
+        let (plate, modes, summary) = analyze(study)?;
+        out.push(metric("mass", "kg", summary.mass_kg));
+        out.push(metric("f1", "Hz", summary.frequencies_hz[0]));
         if study.spec.flutter.is_some() {
+            let aero = crate::study::AeroModel::new(study, &plate)?;
+            let table = aero
+                .gafs(&plate, &modes)
+                .map_err(|e| anyhow::anyhow!("aero: {e}"))?;
             let pk = crate::flutter::PkProblem {
-                omega_n: ev.modes.omega(),
-                damping_ratio: ev.modes.damping_ratio,
-                table: &ev.table,
-                density: ev.aero.flight.density,
+                omega_n: modes.omega(),
+                damping_ratio: modes.damping_ratio,
+                table: &table,
+                density: aero.flight.density,
             };
             let r = pk.sweep(&study.flutter_velocities()?)?;
             if let Some(v) = r.flutter_speed_m_s {
                 out.push(metric("flutter speed", "m/s", v));
             }
         }
-    }
-    if optimize_case {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-        let o = optimize(study, dir, false, true)?;
-        out.push(metric("optimum mass", "kg", o.final_.mass_kg));
-        out.push(metric(
-            &format!("optimum RMS {}", o.output),
-            &o.unit,
-            o.final_.rms_tip_in,
-        ));
-        out.push(metric("iterations", "-", o.iterations as f64));
-        out.push(metric(
-            "converged",
-            "-",
-            if o.converged { 1.0 } else { 0.0 },
-        ));
-        return Ok((out, Some(o.message)));
-    }
-    Ok((out, None))
+        if study.spec.gust.is_some() {
+            let settings = study.gust_settings()?;
+            let x = study.initial_design()?.to_vec();
+            let ev = crate::pipeline::evaluate(study, &settings, &x)?;
+            for (o, rms) in settings.outputs.iter().zip(&ev.rms_m) {
+                out.push(metric(&format!("RMS {}", o.name), o.quantity.unit(), *rms));
+            }
+        }
+        if optimize_case {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create {}", dir.display()))?;
+            let o = optimize(study, dir, false, true)?;
+            out.push(metric("optimum mass", "kg", o.final_.mass_kg));
+            out.push(metric(
+                &format!("optimum RMS {}", o.output),
+                &o.unit,
+                o.final_.rms_tip_in,
+            ));
+            out.push(metric("iterations", "-", o.iterations as f64));
+            out.push(metric(
+                "converged",
+                "-",
+                if o.converged { 1.0 } else { 0.0 },
+            ));
+            message = Some(o.message);
+        }
+        Ok(())
+    };
+    let error = stages().err().map(|e| format!("{e:#}"));
+    (out, message, error)
 }
 
 /// `gustkit sweep`: every case of the study's sweep in parallel (rayon), each case's result
@@ -1314,10 +1328,7 @@ pub fn sweep(file: &Path, reports: &Path, resume: bool) -> Result<()> {
             }
             let t = Instant::now();
             let case_dir = dir.join(format!("cases/case_{:04}", case.index));
-            let (metrics, message, error) = match sweep_metrics(case, &case_dir, spec.optimize) {
-                Ok((m, message)) => (m, message, None),
-                Err(e) => (Vec::new(), None, Some(format!("{e:#}"))),
-            };
+            let (metrics, message, error) = sweep_metrics(case, &case_dir, spec.optimize);
             let r = CaseResult {
                 index: case.index,
                 values: case.values.clone(),
