@@ -69,8 +69,8 @@ fn desmarais_sums<S: Scalar>(u1: S, k1: S, with_zero: bool) -> [(Cplx<S>, Cplx<S
     [(i0, j0), (z0, zj)]
 }
 
-/// I1 and I2 at u1 ≥ 0 from the Desmarais sums.
-fn assemble<S: Scalar>(u1: S, k1: S, i0: Cplx<S>, j0: Cplx<S>) -> (Cplx<S>, Cplx<S>) {
+/// I1 and I2 at u1 ≥ 0 from the Desmarais sums, and the phase e^{−i k1 u1}.
+fn assemble<S: Scalar>(u1: S, k1: S, i0: Cplx<S>, j0: Cplx<S>) -> (Cplx<S>, Cplx<S>, Cplx<S>) {
     let k2 = k1 * k1;
     let s = (u1 * u1 + 1.0).sqrt();
     let g = S::one() - u1 / s;
@@ -81,11 +81,17 @@ fn assemble<S: Scalar>(u1: S, k1: S, i0: Cplx<S>, j0: Cplx<S>) -> (Cplx<S>, Cplx
     let i2 = e
         * (two_plus * Cplx::real(g) - Cplx::real(u1 / (s * s * s)) - ik1 * i0 + j0.scale(k2))
             .scale_f(1.0 / 3.0);
-    (i1, i2)
+    (i1, i2, e)
 }
 
 /// I1(u1, k1) and I2(u1, k1) for any u1.
 pub fn integrals<S: Scalar>(u1: S, k1: S) -> (Cplx<S>, Cplx<S>) {
+    let (i1, i2, _) = integrals_and_phase(u1, k1);
+    (i1, i2)
+}
+
+/// I1(u1, k1), I2(u1, k1) and the phase e^{−i k1 u1} the kernel needs with them.
+fn integrals_and_phase<S: Scalar>(u1: S, k1: S) -> (Cplx<S>, Cplx<S>, Cplx<S>) {
     if u1.re() >= 0.0 {
         let [(i0, j0), _] = desmarais_sums(u1, k1, false);
         assemble(u1, k1, i0, j0)
@@ -93,7 +99,7 @@ pub fn integrals<S: Scalar>(u1: S, k1: S) -> (Cplx<S>, Cplx<S>) {
         // u1 < 0: Re I(u1) = 2 Re I(0) − Re I(−u1), Im I(u1) = Im I(−u1)
         let neg = -u1;
         let [(i0, j0), (z0, zj)] = desmarais_sums(neg, k1, true);
-        let (b1, b2) = assemble(neg, k1, i0, j0);
+        let (b1, b2, e_neg) = assemble(neg, k1, i0, j0);
         // at u1 = 0: e = 1, g = 1, u1/s³ = 0
         let ik1 = Cplx::new(S::zero(), k1);
         let a1 = Cplx::real(S::one()) - ik1 * z0;
@@ -101,6 +107,8 @@ pub fn integrals<S: Scalar>(u1: S, k1: S) -> (Cplx<S>, Cplx<S>) {
         (
             Cplx::new(a1.re * 2.0 - b1.re, b1.im),
             Cplx::new(a2.re * 2.0 - b2.re, b2.im),
+            // e^{−i k1 u1} = conj(e^{−i k1 (−u1)})
+            Cplx::new(e_neg.re, -e_neg.im),
         )
     }
 }
@@ -189,8 +197,7 @@ impl<S: Scalar> KernelPoint<S> {
                 k20,
             } => {
                 let k1 = r1 * kd;
-                let (i1, i2) = integrals(u1, k1);
-                let ek = Cplx::expi_neg(k1 * u1);
+                let (i1, i2, ek) = integrals_and_phase(u1, k1);
                 let k1v = -i1 - ek.scale(mr_r / su);
                 let k2v = i2.scale_f(3.0)
                     + (ek * Cplx::new(S::zero(), k1)).scale(mr_r * mr_r / su)
