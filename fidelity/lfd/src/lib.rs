@@ -1,0 +1,8 @@
+//! The CFD fidelity of gustkit (work in progress): a finite-volume Euler solver whose residual is
+//! written once over a generic scalar ([`gustkit_core::scalar::Scalar`]), so that exact Jacobians
+//! and the linearized frequency-domain (LFD) operators come from the same code.
+//!
+//! So far: the perfect-gas state ([`gas`]) and the differentiable Roe flux ([`flux`]).
+
+pub mod flux;
+pub mod gas;
