@@ -1,0 +1,208 @@
+//! The finite-volume residual R(q) = Σ_faces F, written once over the generic scalar so that its
+//! exact Jacobian (dual numbers) comes from the same function. First-order reconstruction so far
+//! (the face states are the cell states); boundaries: slip wall and symmetry plane (pressure
+//! only), far field (the Roe flux against the free stream, which lets characteristics leave).
+
+use crate::flux::Roe;
+use crate::gas::{primitive, NVAR};
+use crate::mesh::{Boundary, Mesh, Side};
+use gustkit_core::scalar::Scalar;
+
+/// A cell state.
+pub type State<S> = [S; NVAR];
+
+/// The discrete Euler operator on a mesh.
+#[derive(Clone, Debug)]
+pub struct Euler {
+    pub mesh: Mesh,
+    pub roe: Roe,
+    /// Free-stream state at the far field (non-dimensional: ρ∞ = 1, a∞ = 1).
+    pub q_inf: [f64; NVAR],
+    /// Area vector of every face (left to right).
+    pub areas: Vec<[f64; 3]>,
+}
+
+impl Euler {
+    pub fn new(mesh: Mesh, q_inf: [f64; NVAR]) -> Self {
+        let areas = (0..mesh.faces.len()).map(|f| mesh.area(f)).collect();
+        Self {
+            mesh,
+            roe: Roe::default(),
+            q_inf,
+            areas,
+        }
+    }
+
+    /// The flux through face `f` out of its left cell, for the left state `ql` and, for interior
+    /// faces, the right state `qr`.
+    pub fn face_flux<S: Scalar>(&self, f: usize, ql: &State<S>, qr: Option<&State<S>>) -> State<S> {
+        let s = self.areas[f].map(S::cst);
+        match (self.mesh.faces[f].right, qr) {
+            (Side::Cell(_), Some(qr)) => self.roe.flux(ql, qr, s, S::zero()),
+            (Side::Boundary(Boundary::FarField), _) => {
+                self.roe.flux(ql, &self.q_inf.map(S::cst), s, S::zero())
+            }
+            (Side::Boundary(Boundary::Wall | Boundary::Symmetry), _) => {
+                let p = primitive(ql).p;
+                [S::zero(), p * s[0], p * s[1], p * s[2], S::zero()]
+            }
+            (Side::Cell(_), None) => panic!("interior face {f} needs its right state"),
+        }
+    }
+
+    /// R_i = Σ of the fluxes out of cell i.
+    pub fn residual<S: Scalar>(&self, q: &[State<S>]) -> Vec<State<S>> {
+        let mut r = vec![[S::zero(); NVAR]; self.mesh.n_cells];
+        for (fi, f) in self.mesh.faces.iter().enumerate() {
+            let right = match f.right {
+                Side::Cell(c) => Some(&q[c]),
+                Side::Boundary(_) => None,
+            };
+            let flux = self.face_flux(fi, &q[f.left], right);
+            for k in 0..NVAR {
+                r[f.left][k] += flux[k];
+            }
+            if let Side::Cell(c) = f.right {
+                for k in 0..NVAR {
+                    r[c][k] -= flux[k];
+                }
+            }
+        }
+        r
+    }
+}
+
+/// The non-dimensional free stream (ρ = 1, a = 1, p = 1/γ) at Mach `mach` and angle of attack
+/// `alpha` (radians) in the x-y plane.
+pub fn free_stream(mach: f64, alpha: f64) -> [f64; NVAR] {
+    crate::gas::conservative(
+        1.0,
+        [mach * alpha.cos(), mach * alpha.sin(), 0.0],
+        1.0 / crate::gas::GAMMA,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::airfoil::Section;
+    use crate::mesh::o_mesh;
+    use gustkit_core::scalar::Dual;
+    use gustkit_testkit::{fd_check, rand_vec};
+
+    fn airfoil_mesh() -> Mesh {
+        let sec = Section::naca64a010();
+        // the contour about the mid-chord so that the far-field circle is centred on the section
+        o_mesh(
+            &|t| {
+                let p = sec.contour(t);
+                [p[0] - 0.5, p[1]]
+            },
+            48,
+            16,
+            50.0,
+            0.004,
+            0.05,
+        )
+    }
+
+    fn perturbed(e: &Euler, seed: u64, size: f64) -> Vec<State<f64>> {
+        let r = rand_vec(e.mesh.n_cells * NVAR, seed);
+        (0..e.mesh.n_cells)
+            .map(|c| std::array::from_fn(|k| e.q_inf[k] * (1.0 + size * r[c * NVAR + k])))
+            .collect()
+    }
+
+    /// A uniform flow is preserved to round-off where the boundaries allow it: with the wall
+    /// replaced by far field, every cell's residual vanishes (the cells are closed); with the wall,
+    /// only the cells next to it see a residual.
+    #[test]
+    fn uniform_flow_is_preserved() {
+        let mut mesh = airfoil_mesh();
+        assert!(mesh.volumes().iter().all(|v| *v > 0.0), "inverted cells");
+        let q_inf = free_stream(0.4, 1f64.to_radians());
+        let e = Euler::new(mesh.clone(), q_inf);
+        let scale = q_inf[1].abs() * 50.0 * 0.05;
+        let r = e.residual(&vec![q_inf; mesh.n_cells]);
+        let mut wall_cells = vec![false; mesh.n_cells];
+        for f in &mesh.faces {
+            if f.right == Side::Boundary(Boundary::Wall) {
+                wall_cells[f.left] = true;
+            }
+        }
+        for (c, rc) in r.iter().enumerate() {
+            if !wall_cells[c] {
+                assert!(
+                    rc.iter().all(|v| v.abs() < 1e-13 * scale),
+                    "cell {c}: {rc:?}"
+                );
+            }
+        }
+        for f in &mut mesh.faces {
+            if f.right == Side::Boundary(Boundary::Wall) {
+                f.right = Side::Boundary(Boundary::FarField);
+            }
+        }
+        let e = Euler::new(mesh.clone(), q_inf);
+        let r = e.residual(&vec![q_inf; mesh.n_cells]);
+        assert!(r.iter().flatten().all(|v| v.abs() < 1e-13 * scale));
+    }
+
+    /// Interior fluxes cancel in pairs: Σ_cells R = Σ of the boundary fluxes, to round-off.
+    #[test]
+    fn residual_is_conservative() {
+        let e = Euler::new(airfoil_mesh(), free_stream(0.4, 0.0));
+        let q = perturbed(&e, 3, 0.05);
+        let r = e.residual(&q);
+        let mut total = [0.0; NVAR];
+        let mut boundary = [0.0; NVAR];
+        for rc in &r {
+            for k in 0..NVAR {
+                total[k] += rc[k];
+            }
+        }
+        for (fi, f) in e.mesh.faces.iter().enumerate() {
+            if let Side::Boundary(_) = f.right {
+                let fl = e.face_flux(fi, &q[f.left], None);
+                for k in 0..NVAR {
+                    boundary[k] += fl[k];
+                }
+            }
+        }
+        let scale = r.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+        for k in 0..NVAR {
+            assert!((total[k] - boundary[k]).abs() < 1e-12 * scale * r.len() as f64);
+        }
+    }
+
+    /// The residual differentiated by dual numbers along a random state direction agrees with
+    /// central differences (Richardson) to 1e-8 in every component tested: the exact Jacobian
+    /// product that Newton–Krylov and the LFD operator will use.
+    #[test]
+    fn jacobian_product_matches_finite_differences() {
+        let e = Euler::new(airfoil_mesh(), free_stream(0.4, 1f64.to_radians()));
+        let q = perturbed(&e, 5, 0.05);
+        let dir = perturbed(&e, 9, 1.0);
+        let qd: Vec<State<Dual<1>>> = q
+            .iter()
+            .zip(&dir)
+            .map(|(a, d)| std::array::from_fn(|k| Dual::new(a[k], [d[k] * 1e-2])))
+            .collect();
+        let jv = e.residual(&qd);
+        for &cell in &[0usize, 7, 48 * 8 + 3, e.mesh.n_cells - 1] {
+            for k in 0..NVAR {
+                let f = |x: &[f64]| {
+                    let qt: Vec<State<f64>> = q
+                        .iter()
+                        .zip(&dir)
+                        .map(|(a, d)| std::array::from_fn(|j| a[j] + x[0] * d[j] * 1e-2))
+                        .collect();
+                    e.residual(&qt)[cell][k]
+                };
+                let exact = jv[cell][k].d[0];
+                let rep = fd_check(&f, &[0.0], 0, exact, exact.abs().max(1e-8));
+                assert!(rep.best_rel_error < 1e-8, "cell {cell} var {k}: {rep:?}");
+            }
+        }
+    }
+}
