@@ -14,3 +14,4 @@ pub mod flux;
 pub mod gas;
 pub mod mesh;
 pub mod residual;
+pub mod steady;

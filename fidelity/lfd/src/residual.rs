@@ -1,7 +1,8 @@
 //! The finite-volume residual R(q) = Σ_faces F, written once over the generic scalar so that its
 //! exact Jacobian (dual numbers) comes from the same function. First-order reconstruction so far
-//! (the face states are the cell states); boundaries: slip wall and symmetry plane (pressure
-//! only), far field (the Roe flux against the free stream, which lets characteristics leave).
+//! (the face states are the cell states); boundaries: slip wall and symmetry plane (no flow
+//! through the face: pressure and its work), far field (the Roe flux against the free stream,
+//! which lets characteristics leave). Face volume fluxes carry grid motion and gusts (FVM).
 
 use crate::flux::Roe;
 use crate::gas::{primitive, NVAR};
@@ -20,12 +21,16 @@ pub struct Euler {
     pub q_inf: [f64; NVAR],
     /// Area vector of every face (left to right).
     pub areas: Vec<[f64; 3]>,
+    /// Normal volume flux of every face, (ẋ_G − u_G) · S: grid motion (ALE) and, by the Field
+    /// Velocity Method (paper Eq. 2), minus the gust velocity. Zero on a static grid without gust.
+    pub face_vg: Vec<f64>,
 }
 
 impl Euler {
     pub fn new(mesh: Mesh, q_inf: [f64; NVAR]) -> Self {
-        let areas = (0..mesh.faces.len()).map(|f| mesh.area(f)).collect();
+        let areas: Vec<[f64; 3]> = (0..mesh.faces.len()).map(|f| mesh.area(f)).collect();
         Self {
+            face_vg: vec![0.0; areas.len()],
             mesh,
             roe: Roe::default(),
             q_inf,
@@ -33,18 +38,28 @@ impl Euler {
         }
     }
 
+    /// A steady, uniform gust u_G on the static grid (Field Velocity Method): every face's
+    /// volume flux becomes −u_G · S.
+    pub fn set_uniform_gust(&mut self, u_g: [f64; 3]) {
+        for (vg, s) in self.face_vg.iter_mut().zip(&self.areas) {
+            *vg = -(u_g[0] * s[0] + u_g[1] * s[1] + u_g[2] * s[2]);
+        }
+    }
+
     /// The flux through face `f` out of its left cell, for the left state `ql` and, for interior
     /// faces, the right state `qr`.
     pub fn face_flux<S: Scalar>(&self, f: usize, ql: &State<S>, qr: Option<&State<S>>) -> State<S> {
         let s = self.areas[f].map(S::cst);
+        let vg = S::cst(self.face_vg[f]);
         match (self.mesh.faces[f].right, qr) {
-            (Side::Cell(_), Some(qr)) => self.roe.flux(ql, qr, s, S::zero()),
+            (Side::Cell(_), Some(qr)) => self.roe.flux(ql, qr, s, vg),
             (Side::Boundary(Boundary::FarField), _) => {
-                self.roe.flux(ql, &self.q_inf.map(S::cst), s, S::zero())
+                self.roe.flux(ql, &self.q_inf.map(S::cst), s, vg)
             }
             (Side::Boundary(Boundary::Wall | Boundary::Symmetry), _) => {
+                // no flow through the (moving) face: pressure force and its work p (ẋ − u_G)·S
                 let p = primitive(ql).p;
-                [S::zero(), p * s[0], p * s[1], p * s[2], S::zero()]
+                [S::zero(), p * s[0], p * s[1], p * s[2], p * vg]
             }
             (Side::Cell(_), None) => panic!("interior face {f} needs its right state"),
         }
