@@ -4,14 +4,19 @@
 //!
 //! So far: the perfect-gas state ([`gas`]), the differentiable Roe flux ([`flux`]), the
 //! finite-volume mesh with its built-in O-mesh ([`mesh`]), the NACA 64A010 section from its
-//! published ordinates ([`airfoil`]) and the first-order residual with wall, symmetry and
-//! far-field boundaries ([`residual`]). Still to come (the CFD issues): second-order
-//! reconstruction, the Newton–Krylov steady solver, ALE and the Field Velocity Method, the time
-//! domain, mesh readers, the LFD operators and the `Aerodynamics` implementation.
+//! published ordinates ([`airfoil`]), first- and second-order residuals (least-squares
+//! reconstruction, [`reconstruct`]) with wall, symmetry and far-field boundaries and face volume
+//! fluxes for grid motion and Field-Velocity-Method gusts ([`residual`]), restarted GMRES
+//! ([`krylov`]) and the steady Newton / Newton–Krylov solver with pseudo-transient continuation
+//! ([`steady`]). Still to come (the CFD issues): moving meshes with the geometric conservation
+//! law, the time domain (BDF2, dual time), convecting gusts, mesh readers and VTK output, the
+//! study runner, the LFD operators and the `Aerodynamics` implementation.
 
 pub mod airfoil;
 pub mod flux;
 pub mod gas;
+pub mod krylov;
 pub mod mesh;
+pub mod reconstruct;
 pub mod residual;
 pub mod steady;

@@ -1,12 +1,13 @@
 //! The finite-volume residual R(q) = Σ_faces F, written once over the generic scalar so that its
-//! exact Jacobian (dual numbers) comes from the same function. First-order reconstruction so far
-//! (the face states are the cell states); boundaries: slip wall and symmetry plane (no flow
+//! exact Jacobian (dual numbers) comes from the same function. Face states of first or second
+//! order (least-squares reconstruction, [`crate::reconstruct`]); boundaries: slip wall and symmetry plane (no flow
 //! through the face: pressure and its work), far field (the Roe flux against the free stream,
 //! which lets characteristics leave). Face volume fluxes carry grid motion and gusts (FVM).
 
 use crate::flux::Roe;
 use crate::gas::{primitive, NVAR};
 use crate::mesh::{Boundary, Mesh, Side};
+use crate::reconstruct::{prim, Lsq};
 use gustkit_core::scalar::Scalar;
 
 /// A cell state.
@@ -24,6 +25,19 @@ pub struct Euler {
     /// Normal volume flux of every face, (ẋ_G − u_G) · S: grid motion (ALE) and, by the Field
     /// Velocity Method (paper Eq. 2), minus the gust velocity. Zero on a static grid without gust.
     pub face_vg: Vec<f64>,
+    /// Spatial order of the face states.
+    pub order: Order,
+    /// Least-squares gradient geometry (second order).
+    pub lsq: Lsq,
+}
+
+/// Spatial order of the scheme.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Order {
+    /// Face states are the cell states.
+    First,
+    /// Face states reconstructed linearly from least-squares gradients of (ρ, u, v, w, p).
+    Second,
 }
 
 impl Euler {
@@ -31,6 +45,8 @@ impl Euler {
         let areas: Vec<[f64; 3]> = (0..mesh.faces.len()).map(|f| mesh.area(f)).collect();
         Self {
             face_vg: vec![0.0; areas.len()],
+            order: Order::Second,
+            lsq: Lsq::new(&mesh),
             mesh,
             roe: Roe::default(),
             q_inf,
@@ -65,15 +81,48 @@ impl Euler {
         }
     }
 
-    /// R_i = Σ of the fluxes out of cell i.
+    /// R_i = Σ of the fluxes out of cell i, at the scheme's order.
     pub fn residual<S: Scalar>(&self, q: &[State<S>]) -> Vec<State<S>> {
+        self.residual_and_fluxes(q, self.order).0
+    }
+
+    /// The residual at a given order (the first-order one preconditions the second) and the flux
+    /// through every face (out of its left cell).
+    pub fn residual_and_fluxes<S: Scalar>(
+        &self,
+        q: &[State<S>],
+        order: Order,
+    ) -> (Vec<State<S>>, Vec<State<S>>) {
         let mut r = vec![[S::zero(); NVAR]; self.mesh.n_cells];
-        for (fi, f) in self.mesh.faces.iter().enumerate() {
-            let right = match f.right {
-                Side::Cell(c) => Some(&q[c]),
-                Side::Boundary(_) => None,
-            };
-            let flux = self.face_flux(fi, &q[f.left], right);
+        let second = match order {
+            Order::First => None,
+            Order::Second => {
+                let w: Vec<State<S>> = q.iter().map(prim).collect();
+                let g = self.lsq.gradients(&w);
+                Some((w, g))
+            }
+        };
+        let state = |c: usize, fi: usize| -> State<S> {
+            match &second {
+                None => q[c],
+                Some((w, g)) => self.lsq.face_state(&w[c], &g[c], c, fi),
+            }
+        };
+        let fluxes: Vec<State<S>> = self
+            .mesh
+            .faces
+            .iter()
+            .enumerate()
+            .map(|(fi, f)| {
+                let ql = state(f.left, fi);
+                let qr = match f.right {
+                    Side::Cell(c) => Some(state(c, fi)),
+                    Side::Boundary(_) => None,
+                };
+                self.face_flux(fi, &ql, qr.as_ref())
+            })
+            .collect();
+        for (f, flux) in self.mesh.faces.iter().zip(&fluxes) {
             for k in 0..NVAR {
                 r[f.left][k] += flux[k];
             }
@@ -83,7 +132,7 @@ impl Euler {
                 }
             }
         }
-        r
+        (r, fluxes)
     }
 }
 
@@ -163,30 +212,32 @@ mod tests {
         assert!(r.iter().flatten().all(|v| v.abs() < 1e-13 * scale));
     }
 
-    /// Interior fluxes cancel in pairs: Σ_cells R = Σ of the boundary fluxes, to round-off.
+    /// Interior fluxes cancel in pairs: Σ_cells R = Σ of the boundary fluxes, to round-off, at
+    /// both orders.
     #[test]
     fn residual_is_conservative() {
         let e = Euler::new(airfoil_mesh(), free_stream(0.4, 0.0));
         let q = perturbed(&e, 3, 0.05);
-        let r = e.residual(&q);
-        let mut total = [0.0; NVAR];
-        let mut boundary = [0.0; NVAR];
-        for rc in &r {
-            for k in 0..NVAR {
-                total[k] += rc[k];
-            }
-        }
-        for (fi, f) in e.mesh.faces.iter().enumerate() {
-            if let Side::Boundary(_) = f.right {
-                let fl = e.face_flux(fi, &q[f.left], None);
+        for order in [Order::First, Order::Second] {
+            let (r, fluxes) = e.residual_and_fluxes(&q, order);
+            let mut total = [0.0; NVAR];
+            let mut boundary = [0.0; NVAR];
+            for rc in &r {
                 for k in 0..NVAR {
-                    boundary[k] += fl[k];
+                    total[k] += rc[k];
                 }
             }
-        }
-        let scale = r.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
-        for k in 0..NVAR {
-            assert!((total[k] - boundary[k]).abs() < 1e-12 * scale * r.len() as f64);
+            for (f, fl) in e.mesh.faces.iter().zip(&fluxes) {
+                if let Side::Boundary(_) = f.right {
+                    for k in 0..NVAR {
+                        boundary[k] += fl[k];
+                    }
+                }
+            }
+            let scale = r.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+            for k in 0..NVAR {
+                assert!((total[k] - boundary[k]).abs() < 1e-12 * scale * r.len() as f64);
+            }
         }
     }
 
