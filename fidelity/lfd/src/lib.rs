@@ -7,10 +7,11 @@
 //! published ordinates ([`airfoil`]), first- and second-order residuals (least-squares
 //! reconstruction, [`reconstruct`]) with wall, symmetry and far-field boundaries and face volume
 //! fluxes for grid motion and Field-Velocity-Method gusts ([`residual`]), restarted GMRES
-//! ([`krylov`]) and the steady Newton / Newton–Krylov solver with pseudo-transient continuation
-//! ([`steady`]). Still to come (the CFD issues): moving meshes with the geometric conservation
-//! law, the time domain (BDF2, dual time), convecting gusts, mesh readers and VTK output, the
-//! study runner, the LFD operators and the `Aerodynamics` implementation.
+//! ([`krylov`]), the steady Newton / Newton–Krylov solver with pseudo-transient continuation
+//! ([`steady`]) and the BDF2 time domain with dual-time subiterations under prescribed gusts
+//! ([`unsteady`]). Still to come (the CFD issues): moving meshes with the geometric conservation
+//! law and prescribed rigid motion, 1−cos gusts, mesh readers and VTK output, the study runner,
+//! the LFD operators and the `Aerodynamics` implementation.
 
 pub mod airfoil;
 pub mod flux;
@@ -20,3 +21,4 @@ pub mod mesh;
 pub mod reconstruct;
 pub mod residual;
 pub mod steady;
+pub mod unsteady;

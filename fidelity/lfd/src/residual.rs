@@ -29,6 +29,22 @@ pub struct Euler {
     pub order: Order,
     /// Least-squares gradient geometry (second order).
     pub lsq: Lsq,
+    /// Cell volumes.
+    pub volumes: Vec<f64>,
+}
+
+/// A prescribed gust field u_G(x, t), entering the face volume fluxes (Field Velocity Method).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Gust {
+    /// Steady and uniform.
+    Uniform([f64; 3]),
+    /// Vertical (y) gust convected with the free stream: w = amplitude · sin(ω (t − (x − x0)/U)).
+    Sine {
+        amplitude: f64,
+        omega: f64,
+        convection: f64,
+        x0: f64,
+    },
 }
 
 /// Spatial order of the scheme.
@@ -45,6 +61,7 @@ impl Euler {
         let areas: Vec<[f64; 3]> = (0..mesh.faces.len()).map(|f| mesh.area(f)).collect();
         Self {
             face_vg: vec![0.0; areas.len()],
+            volumes: mesh.volumes(),
             order: Order::Second,
             lsq: Lsq::new(&mesh),
             mesh,
@@ -57,8 +74,37 @@ impl Euler {
     /// A steady, uniform gust u_G on the static grid (Field Velocity Method): every face's
     /// volume flux becomes −u_G · S.
     pub fn set_uniform_gust(&mut self, u_g: [f64; 3]) {
-        for (vg, s) in self.face_vg.iter_mut().zip(&self.areas) {
-            *vg = -(u_g[0] * s[0] + u_g[1] * s[1] + u_g[2] * s[2]);
+        self.set_gust(&Gust::Uniform(u_g), 0.0);
+    }
+
+    /// The face volume fluxes −∫ u_G · dS of a gust field at time `t` on the static grid. A
+    /// convected vertical gust depends on x only, so it is integrated exactly along each face's
+    /// x-extent (faces with a y-component of their normal are extruded edges on the 2-D meshes):
+    /// the fluxes of every closed cell then sum to zero, as ∇·u_G = 0 requires.
+    pub fn set_gust(&mut self, gust: &Gust, t: f64) {
+        for (fi, f) in self.mesh.faces.iter().enumerate() {
+            let s = self.areas[fi];
+            self.face_vg[fi] = match *gust {
+                Gust::Uniform(u) => -(u[0] * s[0] + u[1] * s[1] + u[2] * s[2]),
+                Gust::Sine {
+                    amplitude,
+                    omega,
+                    convection,
+                    x0,
+                } => {
+                    let xs = f.nodes.iter().map(|&n| self.mesh.nodes[n][0]);
+                    let (xa, xb) = xs.fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
+                    // mean of sin(φ(x)) over [xa, xb], φ = ω (t − (x − x0)/U)
+                    let phase = |x: f64| omega * (t - (x - x0) / convection);
+                    let dphi = phase(xb) - phase(xa);
+                    let mean = if dphi.abs() < 1e-8 {
+                        phase(0.5 * (xa + xb)).sin()
+                    } else {
+                        (phase(xa).cos() - phase(xb).cos()) / dphi
+                    };
+                    -amplitude * mean * s[1]
+                }
+            };
         }
     }
 

@@ -61,6 +61,14 @@ pub enum SteadyError {
     Linear { reason: String, history: Vec<f64> },
 }
 
+/// The physical time term V c (q − q_ref) of an implicit step: BDF1 c = 1/Δt, q_ref = qⁿ;
+/// BDF2 c = 3/(2Δt), q_ref = (4qⁿ − qⁿ⁻¹)/3 (static mesh).
+#[derive(Clone, Debug)]
+pub struct TimeTerm {
+    pub c: f64,
+    pub q_ref: Vec<State<f64>>,
+}
+
 /// The Jacobian ∂R/∂q as 5 × 5 blocks: (row cell, column cell, block).
 pub type Blocks = Vec<(usize, usize, [[f64; NVAR]; NVAR])>;
 
@@ -119,10 +127,34 @@ impl Euler {
         q0: Vec<State<f64>>,
         params: &SteadyParams,
     ) -> Result<(Vec<State<f64>>, SteadyInfo), SteadyError> {
+        self.solve_implicit(q0, params, None)
+    }
+
+    /// Converges R(q) + V c (q − q_ref) = 0 from `q0`: the steady problem, or with a physical
+    /// time term one implicit (BDF) time step solved by dual-time (pseudo-transient) Newton.
+    pub fn solve_implicit(
+        &self,
+        q0: Vec<State<f64>>,
+        params: &SteadyParams,
+        time: Option<&TimeTerm>,
+    ) -> Result<(Vec<State<f64>>, SteadyInfo), SteadyError> {
         let n = self.mesh.n_cells;
         let norm = |r: &[State<f64>]| r.iter().flatten().map(|v| v * v).sum::<f64>().sqrt();
+        let total = |q: &[State<f64>]| -> Vec<State<f64>> {
+            let mut r = self.residual(q);
+            if let Some(t) = time {
+                for c in 0..n {
+                    for k in 0..NVAR {
+                        r[c][k] += self.volumes[c] * t.c * (q[c][k] - t.q_ref[c][k]);
+                    }
+                }
+            }
+            r
+        };
+        // the physical time term's diagonal, V c
+        let diag_time = |c: usize| time.map_or(0.0, |t| self.volumes[c] * t.c);
         let mut q = q0;
-        let mut r = self.residual(&q);
+        let mut r = total(&q);
         let r0 = norm(&r);
         let mut history = vec![r0];
         let mut cfl = params.cfl0;
@@ -141,7 +173,11 @@ impl Euler {
             let mut triplets: Vec<Triplet<usize, usize, f64>> = Vec::new();
             for (c, rad) in radius.iter().enumerate() {
                 for k in 0..NVAR {
-                    triplets.push(Triplet::new(c * NVAR + k, c * NVAR + k, rad / cfl));
+                    triplets.push(Triplet::new(
+                        c * NVAR + k,
+                        c * NVAR + k,
+                        rad / cfl + diag_time(c),
+                    ));
                 }
             }
             for (row, col, b) in self.jacobian(&q) {
@@ -178,7 +214,10 @@ impl Euler {
                             .collect();
                         let jv = self.residual(&qd);
                         (0..n * NVAR)
-                            .map(|i| radius[i / NVAR] / cfl * v[i] + jv[i / NVAR][i % NVAR].d[0])
+                            .map(|i| {
+                                let c = i / NVAR;
+                                (radius[c] / cfl + diag_time(c)) * v[i] + jv[c][i % NVAR].d[0]
+                            })
                             .collect()
                     };
                     let eta = (rn / r0).clamp(1e-12, 1e-2);
@@ -199,7 +238,7 @@ impl Euler {
                 });
                 match bad {
                     None => {
-                        let rt = self.residual(&trial);
+                        let rt = total(&trial);
                         break (trial, rt);
                     }
                     Some(cell) if step < 1e-3 => {
