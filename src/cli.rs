@@ -195,6 +195,9 @@ fn gust_results(study: &Study) -> Result<GustResults> {
 
 /// `gustkit run`: every analysis the study defines, with its report.
 pub fn run(file: &Path, reports: &Path, resume: bool) -> Result<()> {
+    if is_cfd_study(file) {
+        return crate::cfd::run(file, reports);
+    }
     let study = Study::load(file)?;
     let t0 = Instant::now();
     let (model, modes, summary) = analyze(&study)?;
@@ -249,6 +252,14 @@ pub fn run(file: &Path, reports: &Path, resume: bool) -> Result<()> {
     Ok(())
 }
 
+/// Whether a JSON file is a CFD verification study (a top-level `cfd` section).
+fn is_cfd_study(file: &Path) -> bool {
+    std::fs::read_to_string(file)
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .is_some_and(|v| v.get("cfd").is_some())
+}
+
 /// `gustkit report RUN_DIR`: every figure and the summary again, from results.json alone (or, for
 /// a sweep folder, from sweep_results.json).
 pub fn report(dir: &Path) -> Result<()> {
@@ -258,6 +269,20 @@ pub fn report(dir: &Path) -> Result<()> {
             "sweep report of {} re-rendered from {}",
             r.study,
             dir.join("sweep_results.json").display()
+        );
+        return Ok(());
+    }
+    let results = dir.join("results.json");
+    if is_cfd_study(&results) {
+        let text = std::fs::read_to_string(&results)?;
+        let de = &mut serde_json::Deserializer::from_str(&text);
+        let r: crate::cfd::CfdResults = serde_path_to_error::deserialize(de)
+            .map_err(|e| anyhow::anyhow!("{}: {}: {}", results.display(), e.path(), e.inner()))?;
+        crate::cfd::render(dir, &r)?;
+        println!(
+            "report of {} re-rendered from {}",
+            r.study,
+            results.display()
         );
         return Ok(());
     }

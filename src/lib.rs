@@ -3,6 +3,7 @@
 //! The pipeline runs design vector → wing → plate model → modes → (aerodynamics) → gust response,
 //! and back again for gradients. See README.md for the architecture.
 
+pub mod cfd;
 pub mod cli;
 pub mod flutter;
 pub mod gust;

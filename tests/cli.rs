@@ -644,3 +644,90 @@ fn sweep_grid_resume_report_and_errors() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The CFD verification studies on coarse meshes through `gustkit run`: Table 1 in results.json
+/// with at least 10 agreeing digits (`table1`, `digits_cx`, `digits_cz`), the gust run's lift
+/// history with one amplitude per period, the figures, `gustkit report` on the run folder, and
+/// bad CFD input named by its JSON path.
+#[test]
+fn cfd_verification_studies() {
+    let dir = scratch("cfd");
+    let load = |name: &str| -> serde_json::Value {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("studies")
+            .join(name);
+        serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+    };
+    let run = |v: &serde_json::Value, file: &str| {
+        let f = dir.join(file);
+        std::fs::write(&f, v.to_string()).unwrap();
+        gustkit()
+            .args(["run", f.to_str().unwrap(), "--reports"])
+            .arg(&dir)
+            .output()
+            .unwrap()
+    };
+    let mut steady = load("verify_naca64a010_steady_gust.json");
+    steady["cfd"]["mesh"] =
+        serde_json::json!({"n_around": 32, "n_radial": 12, "first_spacing_chords": 0.02});
+    let o = run(&steady, "steady.json");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = dir.join("verify_naca64a010_steady_gust");
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    let s = &r["steady_gust"];
+    assert_eq!(s["table1"].as_array().unwrap().len(), 2);
+    assert!(s["digits_cx"].as_f64().unwrap() >= 10.0, "{s}");
+    assert!(s["digits_cz"].as_f64().unwrap() >= 10.0, "{s}");
+    assert!(s["table1"][0]["cz"].as_f64().unwrap() > 0.0);
+    for f in ["residuals.png", "pressure.svg", "summary.md"] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    std::fs::remove_file(out.join("pressure.png")).unwrap();
+    let o = gustkit().args(["report"]).arg(&out).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.join("pressure.png").is_file());
+
+    let mut time = load("verify_naca64a010_time_gust.json");
+    time["cfd"]["mesh"] =
+        serde_json::json!({"n_around": 24, "n_radial": 8, "first_spacing_chords": 0.05});
+    time["cfd"]["time_gust"]["periods"] = 2.into();
+    time["cfd"]["time_gust"]["steps_per_period"] = 12.into();
+    let o = run(&time, "time.json");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let r: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("verify_naca64a010_time_gust/results.json")).unwrap(),
+    )
+    .unwrap();
+    let t = &r["time_gust"];
+    assert_eq!(t["lift_history"].as_array().unwrap().len(), 25);
+    assert_eq!(t["amplitudes"].as_array().unwrap().len(), 2);
+    assert!(dir
+        .join("verify_naca64a010_time_gust/lift_history.png")
+        .is_file());
+
+    // bad input, named by its path
+    for (edit, path) in [
+        (
+            Box::new(|v: &mut serde_json::Value| v["cfd"]["mach"] = 1.2.into())
+                as Box<dyn Fn(&mut serde_json::Value)>,
+            "cfd.mach",
+        ),
+        (
+            Box::new(|v: &mut serde_json::Value| v["cfd"]["airfoil"] = "naca0012".into()),
+            "cfd.airfoil",
+        ),
+        (
+            Box::new(|v: &mut serde_json::Value| v["cfd"]["mesh"]["n_radail"] = 3.into()),
+            "cfd.mesh.n_radail",
+        ),
+    ] {
+        let mut v = steady.clone();
+        edit(&mut v);
+        let o = run(&v, "bad.json");
+        assert!(!o.status.success());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(path) && err.contains("bad.json"), "{err}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -547,3 +547,117 @@ impl Figure for ThicknessMaps {
         Ok(())
     }
 }
+
+/// One curve of a [`LinePlot`]: label and (x, y) points.
+pub type Series = (String, Vec<(f64, f64)>);
+
+/// A plain x-y line plot (residual histories, lift histories, pressure distributions).
+pub struct LinePlot {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub series: Vec<Series>,
+    /// Logarithmic y axis (values ≤ 0 are left out).
+    pub log_y: bool,
+    /// Draw the y axis downwards (pressure coefficients).
+    pub flip_y: bool,
+}
+
+impl Figure for LinePlot {
+    fn size(&self) -> (u32, u32) {
+        (1000, 560)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing {}: {e}", self.title);
+        area.fill(&WHITE).map_err(err)?;
+        let keep =
+            |p: &&(f64, f64)| p.0.is_finite() && p.1.is_finite() && (!self.log_y || p.1 > 0.0);
+        let pts = || self.series.iter().flat_map(|s| s.1.iter().filter(keep));
+        if pts().next().is_none() {
+            return Ok(());
+        }
+        let (x0, x1) = (
+            pts().map(|p| p.0).fold(f64::MAX, f64::min),
+            pts().map(|p| p.0).fold(f64::MIN, f64::max),
+        );
+        let (y0, y1) = (
+            pts().map(|p| p.1).fold(f64::MAX, f64::min),
+            pts().map(|p| p.1).fold(f64::MIN, f64::max),
+        );
+        let x1 = if x1 > x0 { x1 } else { x0 + 1.0 };
+        let mut chart = ChartBuilder::on(area);
+        chart
+            .caption(&self.title, ("sans-serif", 20))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(80);
+        if self.log_y {
+            let (lo, hi) = (y0 * 0.5, y1 * 2.0);
+            let mut c = chart
+                .build_cartesian_2d(x0..x1, (lo..hi).log_scale())
+                .map_err(err)?;
+            c.configure_mesh()
+                .x_desc(self.x_label.as_str())
+                .y_desc(self.y_label.as_str())
+                .y_label_formatter(&|v| format!("{v:.0e}"))
+                .label_style(("sans-serif", 13))
+                .draw()
+                .map_err(err)?;
+            for (i, (label, p)) in self.series.iter().enumerate() {
+                let color = Palette99::pick(i).to_rgba();
+                c.draw_series(LineSeries::new(
+                    p.iter().filter(keep).copied(),
+                    color.stroke_width(2),
+                ))
+                .map_err(err)?
+                .label(label.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+                });
+            }
+            c.configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 13))
+                .draw()
+                .map_err(err)?;
+        } else {
+            let pad = 0.05 * (y1 - y0).max(1e-12);
+            let (lo, hi) = (y0 - pad, y1 + pad);
+            let flip = self.flip_y;
+            let f = move |y: f64| if flip { -y } else { y };
+            let (blo, bhi) = if flip { (-hi, -lo) } else { (lo, hi) };
+            let mut c = chart.build_cartesian_2d(x0..x1, blo..bhi).map_err(err)?;
+            c.configure_mesh()
+                .x_desc(self.x_label.as_str())
+                .y_desc(self.y_label.as_str())
+                .y_label_formatter(&move |v| format!("{:.3}", f(*v)))
+                .label_style(("sans-serif", 13))
+                .draw()
+                .map_err(err)?;
+            for (i, (label, p)) in self.series.iter().enumerate() {
+                let color = Palette99::pick(i).to_rgba();
+                c.draw_series(LineSeries::new(
+                    p.iter().filter(keep).map(|q| (q.0, f(q.1))),
+                    color.stroke_width(2),
+                ))
+                .map_err(err)?
+                .label(label.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+                });
+            }
+            c.configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 13))
+                .draw()
+                .map_err(err)?;
+        }
+        Ok(())
+    }
+}

@@ -3,6 +3,7 @@
 
 pub mod aero;
 pub mod scalar;
+pub mod theory;
 
 pub use aero::{
     check_reduced_frequencies, AeroError, AeroSurface, Aerodynamics, FlightCondition, GafGradient,

@@ -20,7 +20,8 @@ pub struct SteadyParams {
     pub cfl0: f64,
     pub cfl_max: f64,
     pub max_iterations: usize,
-    /// Stop when ‖R‖ ≤ tolerance · ‖R₀‖ (or ‖R‖ ≤ 1e-15 per cell).
+    /// Stop when ‖R‖ ≤ tolerance · ‖R₀‖, or when the residual stagnates at round-off below
+    /// 1e-11 ‖R₀‖.
     pub tolerance: f64,
 }
 
@@ -160,7 +161,10 @@ impl Euler {
         let mut cfl = params.cfl0;
         for it in 0..params.max_iterations {
             let rn = *history.last().expect("starts with r0");
-            if rn <= params.tolerance * r0 || rn <= 1e-15 * n as f64 {
+            // converged, or stagnating at round-off below 1e-11 of the initial residual
+            let stagnant =
+                history.len() >= 3 && rn <= 1e-11 * r0 && rn > 0.5 * history[history.len() - 3];
+            if rn <= params.tolerance * r0 || rn == 0.0 || stagnant {
                 return Ok((
                     q,
                     SteadyInfo {
