@@ -348,6 +348,7 @@ fn time_gust(c: &CfdSpec, t: &TimeGustSpec) -> Result<(usize, TimeGustResults)> 
         &mut e,
         q0,
         Some(&gust),
+        None,
         dt,
         t.periods * t.steps_per_period,
         &params,

@@ -58,6 +58,26 @@ pub fn face_center<S: Scalar>(pts: &[[S; 3]]) -> [S; 3] {
     std::array::from_fn(|i| pts.iter().fold(S::zero(), |a, p| a + p[i]) / pts.len() as f64)
 }
 
+/// Volume swept by a face moving from node positions `a` to `b` (signed: positive along its area
+/// vector), the volume of the polyhedron between the two positions computed by the divergence
+/// theorem with the same face formulas as the cells. The side quads of an edge shared by two faces
+/// of a cell cancel, so the swept volumes of a cell's faces sum to its volume change exactly (the
+/// discrete geometric conservation law).
+pub fn swept_volume(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    let flux = |pts: &[[f64; 3]]| {
+        let s = face_area(pts);
+        let c = face_center(pts);
+        c[0] * s[0] + c[1] * s[1] + c[2] * s[2]
+    };
+    let n = a.len();
+    let mut v = flux(b) - flux(a);
+    for i in 0..n {
+        let j = (i + 1) % n;
+        v += flux(&[a[i], a[j], b[j], b[i]]);
+    }
+    v / 3.0
+}
+
 impl Mesh {
     /// Area vector of face `f`.
     pub fn area(&self, f: usize) -> [f64; 3] {

@@ -71,6 +71,17 @@ impl Euler {
         }
     }
 
+    /// Moves the mesh nodes to `nodes`: face areas, cell volumes and the reconstruction geometry
+    /// follow (the face volume fluxes are set by the caller, see [`crate::unsteady`]).
+    pub fn move_nodes(&mut self, nodes: Vec<[f64; 3]>) {
+        self.mesh.nodes = nodes;
+        self.areas = (0..self.mesh.faces.len())
+            .map(|f| self.mesh.area(f))
+            .collect();
+        self.volumes = self.mesh.volumes();
+        self.lsq = Lsq::new(&self.mesh);
+    }
+
     /// A steady, uniform gust u_G on the static grid (Field Velocity Method): every face's
     /// volume flux becomes −u_G · S.
     pub fn set_uniform_gust(&mut self, u_g: [f64; 3]) {
@@ -82,9 +93,15 @@ impl Euler {
     /// x-extent (faces with a y-component of their normal are extruded edges on the 2-D meshes):
     /// the fluxes of every closed cell then sum to zero, as ∇·u_G = 0 requires.
     pub fn set_gust(&mut self, gust: &Gust, t: f64) {
+        self.face_vg = self.gust_fluxes(gust, t);
+    }
+
+    /// −∫ u_G · dS of every face at time `t` (see [`Euler::set_gust`]).
+    pub fn gust_fluxes(&self, gust: &Gust, t: f64) -> Vec<f64> {
+        let mut out = vec![0.0; self.mesh.faces.len()];
         for (fi, f) in self.mesh.faces.iter().enumerate() {
             let s = self.areas[fi];
-            self.face_vg[fi] = match *gust {
+            out[fi] = match *gust {
                 Gust::Uniform(u) => -(u[0] * s[0] + u[1] * s[1] + u[2] * s[2]),
                 Gust::Sine {
                     amplitude,
@@ -106,6 +123,7 @@ impl Euler {
                 }
             };
         }
+        out
     }
 
     /// The flux through face `f` out of its left cell, for the left state `ql` and, for interior

@@ -20,8 +20,8 @@ pub struct SteadyParams {
     pub cfl0: f64,
     pub cfl_max: f64,
     pub max_iterations: usize,
-    /// Stop when ‖R‖ ≤ tolerance · ‖R₀‖, or when the residual stagnates at round-off below
-    /// 1e-11 ‖R₀‖.
+    /// Stop when ‖R‖ ≤ tolerance · ‖R₀‖, when ‖R‖ reaches round-off (1e-15 of the fluxes that
+    /// cancel in it), or when it stagnates below 1e-11 ‖R₀‖.
     pub tolerance: f64,
 }
 
@@ -102,6 +102,20 @@ impl Euler {
         blocks
     }
 
+    /// ‖Σ_faces |F|‖ over the cells: the size of the fluxes whose sum is the residual.
+    fn flux_scale(&self, q: &[State<f64>]) -> f64 {
+        let (_, fluxes) = self.residual_and_fluxes(q, Order::First);
+        let mut per_cell = vec![0.0; self.mesh.n_cells];
+        for (f, fl) in self.mesh.faces.iter().zip(&fluxes) {
+            let a: f64 = fl.iter().map(|v| v.abs()).sum();
+            per_cell[f.left] += a;
+            if let Side::Cell(c) = f.right {
+                per_cell[c] += a;
+            }
+        }
+        per_cell.iter().map(|v| v * v).sum::<f64>().sqrt()
+    }
+
     /// Local pseudo time steps V / Δt for CFL 1: Σ_faces (|u·n − v_g| + a) |S| of each cell.
     fn spectral_radius(&self, q: &[State<f64>]) -> Vec<f64> {
         let mut s = vec![0.0; self.mesh.n_cells];
@@ -158,13 +172,15 @@ impl Euler {
         let mut r = total(&q);
         let r0 = norm(&r);
         let mut history = vec![r0];
+        // round-off level of the residual: ε times the size of the fluxes that cancel in it
+        let floor = 1e-15 * self.flux_scale(&q);
         let mut cfl = params.cfl0;
         for it in 0..params.max_iterations {
             let rn = *history.last().expect("starts with r0");
             // converged, or stagnating at round-off below 1e-11 of the initial residual
             let stagnant =
                 history.len() >= 3 && rn <= 1e-11 * r0 && rn > 0.5 * history[history.len() - 3];
-            if rn <= params.tolerance * r0 || rn == 0.0 || stagnant {
+            if rn <= params.tolerance * r0 || rn <= floor || stagnant {
                 return Ok((
                     q,
                     SteadyInfo {
