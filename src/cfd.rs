@@ -216,7 +216,7 @@ impl CfdStudyFile {
     }
 }
 
-fn build(c: &CfdSpec, q_inf: State<f64>) -> Euler {
+fn build(c: &CfdSpec, q_inf: State<f64>) -> Result<Euler> {
     let sec = Section::naca64a010();
     let m = &c.mesh;
     let mesh = o_mesh(
@@ -230,11 +230,13 @@ fn build(c: &CfdSpec, q_inf: State<f64>) -> Euler {
         m.first_spacing_chords / m.far_field_chords,
         1.0,
     );
+    mesh.check()
+        .map_err(|err| anyhow::anyhow!("cfd.mesh: {err}"))?;
     let mut e = Euler::new(mesh, q_inf);
     if c.order == "first" {
         e.order = Order::First;
     }
-    e
+    Ok(e)
 }
 
 /// Wall C_p against x/c, upper and lower surface.
@@ -261,7 +263,7 @@ fn pressure(e: &Euler, q: &[State<f64>], mach: f64, label: &str) -> PressureDist
     }
 }
 
-fn steady_gust(c: &CfdSpec, s: &SteadyGustSpec) -> Result<(usize, SteadyGustResults)> {
+fn steady_gust(c: &CfdSpec, s: &SteadyGustSpec, dir: &Path) -> Result<(usize, SteadyGustResults)> {
     let alpha = s.alpha_deg.to_radians();
     let (w, m_red) = (c.mach * alpha.sin(), c.mach * alpha.cos());
     let q_dyn = 0.5 * c.mach * c.mach;
@@ -275,11 +277,11 @@ fn steady_gust(c: &CfdSpec, s: &SteadyGustSpec) -> Result<(usize, SteadyGustResu
     let mut cells = 0;
     for gust in [false, true] {
         let e = if gust {
-            let mut e = build(c, free_stream(m_red, 0.0));
+            let mut e = build(c, free_stream(m_red, 0.0))?;
             e.set_gust(&Gust::Uniform([0.0, w, 0.0]), 0.0);
             e
         } else {
-            build(c, free_stream(c.mach, alpha))
+            build(c, free_stream(c.mach, alpha))?
         };
         cells = e.mesh.n_cells;
         let (q, info) = e
@@ -304,6 +306,13 @@ fn steady_gust(c: &CfdSpec, s: &SteadyGustSpec) -> Result<(usize, SteadyGustResu
             residual_history: info.residual_history,
         });
         pressures.push(pressure(&e, &q, c.mach, name));
+        let vtk = gustkit_lfd::vtk::flow_vtk(&e.mesh, &q, c.mach, name);
+        let file = if gust {
+            "flow_gust.vtk"
+        } else {
+            "flow_aoa.vtk"
+        };
+        write_atomic(&dir.join(file), vtk.as_bytes())?;
     }
     let digits = |a: f64, b: f64| -> f64 {
         if a == b {
@@ -326,8 +335,8 @@ fn steady_gust(c: &CfdSpec, s: &SteadyGustSpec) -> Result<(usize, SteadyGustResu
     ))
 }
 
-fn time_gust(c: &CfdSpec, t: &TimeGustSpec) -> Result<(usize, TimeGustResults)> {
-    let mut e = build(c, free_stream(c.mach, 0.0));
+fn time_gust(c: &CfdSpec, t: &TimeGustSpec, dir: &Path) -> Result<(usize, TimeGustResults)> {
+    let mut e = build(c, free_stream(c.mach, 0.0))?;
     let (q0, _) = e
         .solve_steady(vec![e.q_inf; e.mesh.n_cells], &SteadyParams::default())
         .map_err(|err| anyhow::anyhow!("cfd.time_gust (initial steady state): {err}"))?;
@@ -354,6 +363,8 @@ fn time_gust(c: &CfdSpec, t: &TimeGustSpec) -> Result<(usize, TimeGustResults)> 
         &params,
     )
     .map_err(|err| anyhow::anyhow!("cfd.time_gust: {err}"))?;
+    let vtk = gustkit_lfd::vtk::flow_vtk(&e.mesh, &q, c.mach, "last time level of the gust run");
+    write_atomic(&dir.join("flow_final.vtk"), vtk.as_bytes())?;
     let q_dyn = 0.5 * c.mach * c.mach;
     let lift: Vec<(f64, f64)> = samples
         .iter()
@@ -403,7 +414,7 @@ pub fn summary(r: &CfdResults) -> String {
             );
         }
         md += &format!(
-            "\nAgreeing significant digits: C_x {:.1}, C_z {:.1} (the paper: 12 and 11).\n\n![residuals](residuals.png)\n\n![pressure](pressure.png)\n",
+            "\nAgreeing significant digits: C_x {:.1}, C_z {:.1} (the paper: 12 and 11).\n\n![residuals](residuals.png)\n\n![pressure](pressure.png)\n\nFlow fields for ParaView: `flow_aoa.vtk`, `flow_gust.vtk`.\n",
             s.digits_cx, s.digits_cz
         );
     }
@@ -416,7 +427,7 @@ pub fn summary(r: &CfdResults) -> String {
             md += &format!("| {} | {:.5} |\n", i + 1, a);
         }
         md += &format!(
-            "\nSears's incompressible amplitude with the Prandtl–Glauert factor: {:.5} (last period / Sears-PG = {:.3}).\n\n![lift](lift_history.png)\n\n![pressure](pressure_final.png)\n",
+            "\nSears's incompressible amplitude with the Prandtl–Glauert factor: {:.5} (last period / Sears-PG = {:.3}).\n\n![lift](lift_history.png)\n\n![pressure](pressure_final.png)\n\nFlow field at the last step for ParaView: `flow_final.vtk`.\n",
             t.sears_pg_amplitude,
             t.amplitudes.last().copied().unwrap_or(f64::NAN) / t.sears_pg_amplitude
         );
@@ -516,7 +527,7 @@ pub fn run(file: &Path, reports: &Path) -> Result<()> {
     let mut cells = 0;
     let steady = match &s.cfd.steady_gust {
         Some(g) => {
-            let (n, r) = steady_gust(&s.cfd, g)?;
+            let (n, r) = steady_gust(&s.cfd, g, &dir)?;
             cells = n;
             println!(
                 "Table 1: C_x {:.15e} / {:.15e}, C_z {:.15e} / {:.15e}: {:.1} and {:.1} digits",
@@ -533,7 +544,7 @@ pub fn run(file: &Path, reports: &Path) -> Result<()> {
     };
     let time = match &s.cfd.time_gust {
         Some(g) => {
-            let (n, r) = time_gust(&s.cfd, g)?;
+            let (n, r) = time_gust(&s.cfd, g, &dir)?;
             cells = n;
             println!(
                 "gust C_L amplitude per period {:?}; Sears-PG {:.5}",

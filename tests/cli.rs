@@ -680,7 +680,13 @@ fn cfd_verification_studies() {
     assert!(s["digits_cx"].as_f64().unwrap() >= 10.0, "{s}");
     assert!(s["digits_cz"].as_f64().unwrap() >= 10.0, "{s}");
     assert!(s["table1"][0]["cz"].as_f64().unwrap() > 0.0);
-    for f in ["residuals.png", "pressure.svg", "summary.md"] {
+    for f in [
+        "residuals.png",
+        "pressure.svg",
+        "summary.md",
+        "flow_aoa.vtk",
+        "flow_gust.vtk",
+    ] {
         assert!(out.join(f).is_file(), "{f}");
     }
     std::fs::remove_file(out.join("pressure.png")).unwrap();

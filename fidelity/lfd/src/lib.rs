@@ -22,3 +22,4 @@ pub mod reconstruct;
 pub mod residual;
 pub mod steady;
 pub mod unsteady;
+pub mod vtk;

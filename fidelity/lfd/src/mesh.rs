@@ -28,12 +28,27 @@ pub enum Side {
     Boundary(Boundary),
 }
 
-/// A mesh: nodes, the faces with their neighbour cells, and the number of cells.
+/// A mesh: nodes, the faces with their neighbour cells, the number of cells and, for output, each
+/// cell's nodes in VTK order (hexahedra: bottom quad, then the top quad above it).
 #[derive(Clone, Debug)]
 pub struct Mesh {
     pub nodes: Vec<[f64; 3]>,
     pub faces: Vec<Face>,
     pub n_cells: usize,
+    pub cells: Vec<Vec<usize>>,
+}
+
+/// Why a mesh cannot be used.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum MeshError {
+    #[error("cell {cell} is inverted or degenerate (volume {volume:e}, mean {mean:e})")]
+    BadVolume { cell: usize, volume: f64, mean: f64 },
+    #[error(
+        "cell {cell} is not closed (its face area vectors sum to {sum:e}, face size {size:e})"
+    )]
+    Open { cell: usize, sum: f64, size: f64 },
+    #[error("face {face} has zero area or joins cell {cell} to itself")]
+    BadFace { face: usize, cell: usize },
 }
 
 /// Area vector of a polygonal face (|S| = area, normal by the right-hand rule of the node order),
@@ -99,6 +114,50 @@ impl Mesh {
             }
         }
         v
+    }
+
+    /// Checks that every cell has a positive volume (above 1e-12 of the mean), is closed, and
+    /// that every face has an area and two different cells.
+    pub fn check(&self) -> Result<(), MeshError> {
+        for (fi, f) in self.faces.iter().enumerate() {
+            let a = self.area(fi);
+            let same = matches!(f.right, Side::Cell(r) if r == f.left);
+            if a.iter().all(|v| *v == 0.0) || same || f.left >= self.n_cells {
+                return Err(MeshError::BadFace {
+                    face: fi,
+                    cell: f.left,
+                });
+            }
+        }
+        let v = self.volumes();
+        let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
+        if let Some((cell, &volume)) = v
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !(**v > 1e-12 * mean.abs()))
+        {
+            return Err(MeshError::BadVolume { cell, volume, mean });
+        }
+        let mut size = vec![0.0f64; self.n_cells];
+        for (fi, f) in self.faces.iter().enumerate() {
+            let a = self.area(fi);
+            let m = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+            size[f.left] = size[f.left].max(m);
+            if let Side::Cell(r) = f.right {
+                size[r] = size[r].max(m);
+            }
+        }
+        for (cell, c) in self.closure().iter().enumerate() {
+            let sum = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+            if sum > 1e-10 * size[cell] {
+                return Err(MeshError::Open {
+                    cell,
+                    sum,
+                    size: size[cell],
+                });
+            }
+        }
+        Ok(())
     }
 
     /// Σ of outward area vectors of every cell (zero for closed cells).
@@ -241,10 +300,28 @@ pub fn o_mesh(
             }
         }
     }
+    let cells = (0..n_radial)
+        .flat_map(|j| {
+            (0..n_around).map(move |i| {
+                // the bottom quad turns about +z, towards the top one (VTK's orientation)
+                vec![
+                    id(i, j, 0),
+                    id(i, j + 1, 0),
+                    id(i + 1, j + 1, 0),
+                    id(i + 1, j, 0),
+                    id(i, j, 1),
+                    id(i, j + 1, 1),
+                    id(i + 1, j + 1, 1),
+                    id(i + 1, j, 1),
+                ]
+            })
+        })
+        .collect();
     Mesh {
         nodes,
         faces,
         n_cells: n_around * n_radial,
+        cells,
     }
 }
 
@@ -318,6 +395,51 @@ mod tests {
             let s = m.area(fi);
             let d: f64 = (0..3).map(|i| (fc[i] - centre[f.left][i]) * s[i]).sum();
             assert!(d > 0.0, "face {fi} points into its left cell");
+        }
+    }
+
+    /// A valid mesh passes the checks; an inverted cell (two nodes of a ring swapped) and a
+    /// collapsed one are errors that name the cell.
+    #[test]
+    fn mesh_checks_name_bad_cells() {
+        let m = o_mesh(&circle(0.5), 12, 5, 10.0, 0.02, 0.1);
+        assert_eq!(m.check(), Ok(()));
+        let mut bad = m.clone();
+        // collapse the outer ring of one cell onto its inner ring: zero volume
+        for k in 0..2 {
+            let (inner, outer) = ((k * 6) * 12 + 3, (k * 6 + 1) * 12 + 3);
+            bad.nodes[outer] = bad.nodes[inner];
+        }
+        // a collapsed cell: its radial faces have no area, or it has no volume
+        let e = bad.check().unwrap_err();
+        assert!(
+            matches!(
+                e,
+                MeshError::BadFace { cell: 2 | 3, .. } | MeshError::BadVolume { cell: 2 | 3, .. }
+            ),
+            "{e:?}"
+        );
+        let mut inverted = m.clone();
+        for k in 0..2 {
+            let (inner, outer) = ((k * 6) * 12 + 7, (k * 6 + 1) * 12 + 7);
+            inverted.nodes.swap(inner, outer);
+        }
+        let e = inverted.check().unwrap_err();
+        assert!(matches!(e, MeshError::BadVolume { .. }), "{e:?}");
+        assert!(e.to_string().contains("inverted"));
+    }
+
+    /// The cells' node lists follow VTK's hexahedron orientation: the bottom quad's area vector
+    /// points towards the top quad.
+    #[test]
+    fn hexahedra_in_vtk_order() {
+        let m = o_mesh(&circle(0.5), 12, 5, 10.0, 0.02, 0.1);
+        for c in &m.cells {
+            let bottom: Vec<[f64; 3]> = c[..4].iter().map(|&n| m.nodes[n]).collect();
+            let top: Vec<[f64; 3]> = c[4..].iter().map(|&n| m.nodes[n]).collect();
+            let (s, b, t) = (face_area(&bottom), face_center(&bottom), face_center(&top));
+            let d: f64 = (0..3).map(|i| s[i] * (t[i] - b[i])).sum();
+            assert!(d > 0.0);
         }
     }
 
