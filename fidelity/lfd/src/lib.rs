@@ -18,6 +18,7 @@ pub mod flux;
 pub mod gas;
 pub mod krylov;
 pub mod mesh;
+pub mod readers;
 pub mod reconstruct;
 pub mod residual;
 pub mod steady;
