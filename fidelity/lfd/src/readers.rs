@@ -326,6 +326,9 @@ pub fn read_su2(
     }
 }
 
+/// A Gmsh element: its (dimension, entity), its nodes (indices into the node list), its line.
+type GmshElement = ((usize, usize), Vec<usize>, usize);
+
 /// Parses a Gmsh mesh in the MSH 4.1 ASCII format: `$PhysicalNames`, `$Entities` (physical tags
 /// of the entities), `$Nodes` and `$Elements`. The cells are the elements of the highest
 /// dimension; the elements one dimension lower are boundary faces, named by the physical name of
@@ -429,7 +432,7 @@ pub fn read_gmsh(
     // elements, grouped by dimension with the (dim, entity) they lie on
     let el0 = section("$Elements")?;
     let blocks = nums(lines[el0].0, lines[el0].1)?[0] as usize;
-    let mut by_dim: Vec<Vec<((usize, usize), Vec<usize>, usize)>> = vec![Vec::new(); 4];
+    let mut by_dim: Vec<Vec<GmshElement>> = vec![Vec::new(); 4];
     let mut row = el0 + 1;
     for _ in 0..blocks {
         let (ln, l) = lines[row];
