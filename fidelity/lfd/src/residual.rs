@@ -45,6 +45,57 @@ pub enum Gust {
         convection: f64,
         x0: f64,
     },
+    /// Discrete vertical "1 − cos" gust of length `length` convected with the free stream, its
+    /// front at x0 at t = 0: w = amplitude/2 · (1 − cos(2π s / length)) for s = U t − (x − x0) in
+    /// [0, length], zero elsewhere.
+    OneMinusCos {
+        amplitude: f64,
+        length: f64,
+        convection: f64,
+        x0: f64,
+    },
+}
+
+impl Gust {
+    /// ∫ w dx over [xa, xb] of the vertical component at time t, exactly (the gusts depend on x
+    /// only).
+    pub fn integral(&self, xa: f64, xb: f64, t: f64) -> f64 {
+        match *self {
+            Gust::Uniform(u) => u[1] * (xb - xa),
+            Gust::Sine {
+                amplitude,
+                omega,
+                convection,
+                x0,
+            } => {
+                // φ(x) = ω (t − (x − x0)/U), dφ/dx = −ω/U
+                let phase = |x: f64| omega * (t - (x - x0) / convection);
+                let k = omega / convection;
+                if k * (xb - xa).abs() < 1e-12 {
+                    amplitude * phase(0.5 * (xa + xb)).sin() * (xb - xa)
+                } else {
+                    amplitude * (phase(xb).cos() - phase(xa).cos()) / k
+                }
+            }
+            Gust::OneMinusCos {
+                amplitude,
+                length,
+                convection,
+                x0,
+            } => {
+                // in s = U t − (x − x0): the gust occupies x ∈ [U t + x0 − length, U t + x0]
+                let (lo, hi) = (convection * t + x0 - length, convection * t + x0);
+                let (a, b) = (xa.max(lo), xb.min(hi));
+                if b <= a {
+                    return 0.0;
+                }
+                let kk = 2.0 * std::f64::consts::PI / length;
+                let s = |x: f64| convection * t - (x - x0);
+                // ∫ (1 − cos(kk s)) dx with ds = −dx
+                amplitude * 0.5 * ((b - a) + ((kk * s(b)).sin() - (kk * s(a)).sin()) / kk)
+            }
+        }
+    }
 }
 
 /// Spatial order of the scheme.
@@ -103,23 +154,17 @@ impl Euler {
             let s = self.areas[fi];
             out[fi] = match *gust {
                 Gust::Uniform(u) => -(u[0] * s[0] + u[1] * s[1] + u[2] * s[2]),
-                Gust::Sine {
-                    amplitude,
-                    omega,
-                    convection,
-                    x0,
-                } => {
+                _ => {
+                    // the face's mean of w times S_y: faces with a y-component of their normal are
+                    // extruded edges, uniform along their x-extent, integrated exactly
                     let xs = f.nodes.iter().map(|&n| self.mesh.nodes[n][0]);
                     let (xa, xb) = xs.fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
-                    // mean of sin(φ(x)) over [xa, xb], φ = ω (t − (x − x0)/U)
-                    let phase = |x: f64| omega * (t - (x - x0) / convection);
-                    let dphi = phase(xb) - phase(xa);
-                    let mean = if dphi.abs() < 1e-8 {
-                        phase(0.5 * (xa + xb)).sin()
+                    // (a face without x-extent has S_y = 0 and takes no gust flux)
+                    if xb - xa <= 0.0 {
+                        0.0
                     } else {
-                        (phase(xa).cos() - phase(xb).cos()) / dphi
-                    };
-                    -amplitude * mean * s[1]
+                        -gust.integral(xa, xb, t) / (xb - xa) * s[1]
+                    }
                 }
             };
         }
