@@ -32,7 +32,12 @@ pub struct CfdStudyFile {
 pub struct CfdSpec {
     /// Built-in section: "naca64a010" (from its NACA Report 903 ordinates).
     pub airfoil: String,
-    pub mesh: OMeshSpec,
+    /// The built-in O-mesh about the airfoil, or …
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mesh: Option<OMeshSpec>,
+    /// … a mesh file (chord 1 along x, the wall around the airfoil).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mesh_file: Option<MeshFileSpec>,
     /// "first" or "second" (default) order.
     #[serde(default = "default_order")]
     pub order: String,
@@ -63,6 +68,22 @@ pub struct OMeshSpec {
 
 fn default_far() -> f64 {
     50.0
+}
+
+/// A mesh file: Gmsh 4.1 (`.msh`) or SU2 (`.su2`), its markers mapped to boundary conditions
+/// ("wall", "far_field", "symmetry"); 2-D meshes are extruded to `span`.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshFileSpec {
+    /// Relative to the study file.
+    pub path: String,
+    pub markers: std::collections::BTreeMap<String, String>,
+    #[serde(default = "default_span")]
+    pub span: f64,
+}
+
+fn default_span() -> f64 {
+    1.0
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -179,26 +200,46 @@ impl CfdStudyFile {
         if !(c.mach > 0.0 && c.mach < 1.0) {
             return bad("cfd.mach", format!("must lie in (0, 1) (got {})", c.mach));
         }
-        let m = &c.mesh;
-        if m.n_around < 8 || m.n_radial < 2 {
-            return bad("cfd.mesh", "need n_around >= 8 and n_radial >= 2".into());
+        match (&c.mesh, &c.mesh_file) {
+            (Some(_), None) | (None, Some(_)) => {}
+            _ => {
+                return bad(
+                    "cfd",
+                    "give exactly one of mesh (built-in) and mesh_file".into(),
+                )
+            }
         }
-        if !(m.far_field_chords >= 5.0) {
-            return bad(
-                "cfd.mesh.far_field_chords",
-                format!("must be at least 5 (got {})", m.far_field_chords),
-            );
+        if let Some(f) = &c.mesh_file {
+            for (name, kind) in &f.markers {
+                if !["wall", "far_field", "symmetry"].contains(&kind.as_str()) {
+                    return bad(
+                        &format!("cfd.mesh_file.markers.{name}"),
+                        format!("'{kind}' is not a boundary condition (wall, far_field, symmetry)"),
+                    );
+                }
+            }
         }
-        if !(m.first_spacing_chords > 0.0
-            && m.first_spacing_chords * (m.n_radial as f64) < m.far_field_chords)
-        {
-            return bad(
-                "cfd.mesh.first_spacing_chords",
-                format!(
-                    "must be positive and below far_field_chords / n_radial (got {})",
-                    m.first_spacing_chords
-                ),
-            );
+        if let Some(m) = &c.mesh {
+            if m.n_around < 8 || m.n_radial < 2 {
+                return bad("cfd.mesh", "need n_around >= 8 and n_radial >= 2".into());
+            }
+            if !(m.far_field_chords >= 5.0) {
+                return bad(
+                    "cfd.mesh.far_field_chords",
+                    format!("must be at least 5 (got {})", m.far_field_chords),
+                );
+            }
+            if !(m.first_spacing_chords > 0.0
+                && m.first_spacing_chords * (m.n_radial as f64) < m.far_field_chords)
+            {
+                return bad(
+                    "cfd.mesh.first_spacing_chords",
+                    format!(
+                        "must be positive and below far_field_chords / n_radial (got {})",
+                        m.first_spacing_chords
+                    ),
+                );
+            }
         }
         if let Some(t) = &c.time_gust {
             if t.periods == 0 || t.steps_per_period < 4 || !(t.reduced_frequency > 0.0) {
@@ -216,10 +257,25 @@ impl CfdStudyFile {
     }
 }
 
-fn build(c: &CfdSpec, q_inf: State<f64>) -> Result<Euler> {
+fn build(c: &CfdSpec, base: &Path, q_inf: State<f64>) -> Result<Euler> {
+    let mesh = match (&c.mesh, &c.mesh_file) {
+        (Some(m), _) => builtin_mesh(m),
+        (None, Some(f)) => file_mesh(f, base)?,
+        (None, None) => bail!("cfd: no mesh"),
+    };
+    mesh.check()
+        .map_err(|err| anyhow::anyhow!("cfd.mesh: {err}"))?;
+    let mut e = Euler::new(mesh, q_inf);
+    if c.order == "first" {
+        e.order = Order::First;
+    }
+    Ok(e)
+}
+
+/// The built-in O-mesh about the NACA 64A010, mid-chord at the origin.
+fn builtin_mesh(m: &OMeshSpec) -> gustkit_lfd::mesh::Mesh {
     let sec = Section::naca64a010();
-    let m = &c.mesh;
-    let mesh = o_mesh(
+    o_mesh(
         &|t| {
             let p = sec.contour(t);
             [p[0] - 0.5, p[1]]
@@ -229,14 +285,32 @@ fn build(c: &CfdSpec, q_inf: State<f64>) -> Result<Euler> {
         m.far_field_chords,
         m.first_spacing_chords / m.far_field_chords,
         1.0,
-    );
-    mesh.check()
-        .map_err(|err| anyhow::anyhow!("cfd.mesh: {err}"))?;
-    let mut e = Euler::new(mesh, q_inf);
-    if c.order == "first" {
-        e.order = Order::First;
-    }
-    Ok(e)
+    )
+}
+
+/// Reads a mesh file with its marker map.
+fn file_mesh(f: &MeshFileSpec, base: &Path) -> Result<gustkit_lfd::mesh::Mesh> {
+    let path = base.parent().unwrap_or(Path::new(".")).join(&f.path);
+    let text = std::fs::read_to_string(&path)
+        .with_context(|| format!("cfd.mesh_file.path: cannot read {}", path.display()))?;
+    let markers = f
+        .markers
+        .iter()
+        .map(|(name, kind)| {
+            let b = match kind.as_str() {
+                "wall" => Boundary::Wall,
+                "far_field" => Boundary::FarField,
+                _ => Boundary::Symmetry,
+            };
+            (name.clone(), b)
+        })
+        .collect();
+    let mesh = if f.path.ends_with(".su2") {
+        gustkit_lfd::readers::read_su2(&text, &markers, f.span)
+    } else {
+        gustkit_lfd::readers::read_gmsh(&text, &markers, f.span)
+    };
+    mesh.map_err(|e| anyhow::anyhow!("cfd.mesh_file: {}: {e}", path.display()))
 }
 
 /// Wall C_p against x/c, upper and lower surface.
@@ -263,7 +337,12 @@ fn pressure(e: &Euler, q: &[State<f64>], mach: f64, label: &str) -> PressureDist
     }
 }
 
-fn steady_gust(c: &CfdSpec, s: &SteadyGustSpec, dir: &Path) -> Result<(usize, SteadyGustResults)> {
+fn steady_gust(
+    c: &CfdSpec,
+    s: &SteadyGustSpec,
+    base: &Path,
+    dir: &Path,
+) -> Result<(usize, SteadyGustResults)> {
     let alpha = s.alpha_deg.to_radians();
     let (w, m_red) = (c.mach * alpha.sin(), c.mach * alpha.cos());
     let q_dyn = 0.5 * c.mach * c.mach;
@@ -277,11 +356,11 @@ fn steady_gust(c: &CfdSpec, s: &SteadyGustSpec, dir: &Path) -> Result<(usize, St
     let mut cells = 0;
     for gust in [false, true] {
         let e = if gust {
-            let mut e = build(c, free_stream(m_red, 0.0))?;
+            let mut e = build(c, base, free_stream(m_red, 0.0))?;
             e.set_gust(&Gust::Uniform([0.0, w, 0.0]), 0.0);
             e
         } else {
-            build(c, free_stream(c.mach, alpha))?
+            build(c, base, free_stream(c.mach, alpha))?
         };
         cells = e.mesh.n_cells;
         let (q, info) = e
@@ -335,8 +414,13 @@ fn steady_gust(c: &CfdSpec, s: &SteadyGustSpec, dir: &Path) -> Result<(usize, St
     ))
 }
 
-fn time_gust(c: &CfdSpec, t: &TimeGustSpec, dir: &Path) -> Result<(usize, TimeGustResults)> {
-    let mut e = build(c, free_stream(c.mach, 0.0))?;
+fn time_gust(
+    c: &CfdSpec,
+    t: &TimeGustSpec,
+    base: &Path,
+    dir: &Path,
+) -> Result<(usize, TimeGustResults)> {
+    let mut e = build(c, base, free_stream(c.mach, 0.0))?;
     let (q0, _) = e
         .solve_steady(vec![e.q_inf; e.mesh.n_cells], &SteadyParams::default())
         .map_err(|err| anyhow::anyhow!("cfd.time_gust (initial steady state): {err}"))?;
@@ -397,10 +481,17 @@ fn time_gust(c: &CfdSpec, t: &TimeGustSpec, dir: &Path) -> Result<(usize, TimeGu
 
 /// The markdown summary of a CFD verification run.
 pub fn summary(r: &CfdResults) -> String {
-    let m = &r.cfd.mesh;
+    let mesh = match (&r.cfd.mesh, &r.cfd.mesh_file) {
+        (Some(m), _) => format!(
+            "NACA 64A010 (NACA Report 903 ordinates), O-mesh {} × {} = {} cells, far field at {} chords, first cell {} chords",
+            m.n_around, m.n_radial, r.cells, m.far_field_chords, m.first_spacing_chords
+        ),
+        (None, Some(f)) => format!("mesh file {} ({} cells)", f.path, r.cells),
+        (None, None) => String::new(),
+    };
     let mut md = format!(
-        "# {}\n\n{}\n\nNACA 64A010 (NACA Report 903 ordinates), O-mesh {} × {} = {} cells, far field at {} chords, first cell {} chords; {} order, Roe flux; M = {}.\n",
-        r.study, r.description, m.n_around, m.n_radial, r.cells, m.far_field_chords, m.first_spacing_chords, r.cfd.order, r.cfd.mach
+        "# {}\n\n{}\n\n{mesh}; {} order, Roe flux; M = {}.\n",
+        r.study, r.description, r.cfd.order, r.cfd.mach
     );
     if let Some(s) = &r.steady_gust {
         md += &format!(
@@ -527,7 +618,7 @@ pub fn run(file: &Path, reports: &Path) -> Result<()> {
     let mut cells = 0;
     let steady = match &s.cfd.steady_gust {
         Some(g) => {
-            let (n, r) = steady_gust(&s.cfd, g, &dir)?;
+            let (n, r) = steady_gust(&s.cfd, g, file, &dir)?;
             cells = n;
             println!(
                 "Table 1: C_x {:.15e} / {:.15e}, C_z {:.15e} / {:.15e}: {:.1} and {:.1} digits",
@@ -544,7 +635,7 @@ pub fn run(file: &Path, reports: &Path) -> Result<()> {
     };
     let time = match &s.cfd.time_gust {
         Some(g) => {
-            let (n, r) = time_gust(&s.cfd, g, &dir)?;
+            let (n, r) = time_gust(&s.cfd, g, file, &dir)?;
             cells = n;
             println!(
                 "gust C_L amplitude per period {:?}; Sears-PG {:.5}",

@@ -694,6 +694,46 @@ fn cfd_verification_studies() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(out.join("pressure.png").is_file());
 
+    // the same mesh from an SU2 file gives the same forces
+    let sec = gustkit_lfd::airfoil::Section::naca64a010();
+    let m = gustkit_lfd::mesh::o_mesh(
+        &|t| {
+            let p = sec.contour(t);
+            [p[0] - 0.5, p[1]]
+        },
+        32,
+        12,
+        50.0,
+        0.02 / 50.0,
+        1.0,
+    );
+    std::fs::write(dir.join("mesh.su2"), gustkit_lfd::readers::write_su2_2d(&m)).unwrap();
+    let mut from_file = steady.clone();
+    from_file["name"] = "steady_from_file".into();
+    from_file["cfd"].as_object_mut().unwrap().remove("mesh");
+    from_file["cfd"]["mesh_file"] = serde_json::json!({
+        "path": "mesh.su2",
+        "markers": {"wall": "wall", "farfield": "far_field"}
+    });
+    let o = run(&from_file, "from_file.json");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rf: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("steady_from_file/results.json")).unwrap(),
+    )
+    .unwrap();
+    for key in ["cx", "cz"] {
+        let (a, b) = (
+            s["table1"][0][key].as_f64().unwrap(),
+            rf["steady_gust"]["table1"][0][key].as_f64().unwrap(),
+        );
+        assert!((a - b).abs() <= 1e-9 * a.abs(), "{key}: {a} vs {b}");
+    }
+    let mut bad_marker = from_file.clone();
+    bad_marker["cfd"]["mesh_file"]["markers"]["farfield"] = "outflow".into();
+    let o = run(&bad_marker, "bad_marker.json");
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("cfd.mesh_file.markers.farfield"));
+
     let mut time = load("verify_naca64a010_time_gust.json");
     time["cfd"]["mesh"] =
         serde_json::json!({"n_around": 24, "n_radial": 8, "first_spacing_chords": 0.05});
