@@ -168,6 +168,16 @@ impl Euler {
         };
         // the physical time term's diagonal, V c
         let diag_time = |c: usize| time.map_or(0.0, |t| self.volumes[c] * t.c);
+        if let Some(cell) = q0.iter().position(|s| {
+            let w = primitive(s);
+            !(w.rho > 0.0 && w.p > 0.0)
+        }) {
+            return Err(SteadyError::NonPhysical {
+                iteration: 0,
+                cell,
+                history: Vec::new(),
+            });
+        }
         let mut q = q0;
         let mut r = total(&q);
         let r0 = norm(&r);
@@ -359,6 +369,34 @@ mod tests {
                 assert!((av[c][k] - jv[c][k].d[0]).abs() <= 1e-13 * scale);
             }
         }
+    }
+
+    /// A solve that runs out of iterations and a non-physical state are errors that carry the
+    /// residual history.
+    #[test]
+    fn failures_report_their_history() {
+        let e = airfoil_euler(24, 8, free_stream(0.4, 0.02));
+        let params = SteadyParams {
+            max_iterations: 2,
+            ..SteadyParams::default()
+        };
+        match e.solve_steady(vec![e.q_inf; e.mesh.n_cells], &params) {
+            Err(SteadyError::NoConvergence {
+                iterations: 2,
+                history,
+            }) => {
+                assert_eq!(history.len(), 3)
+            }
+            other => panic!("{other:?}"),
+        }
+        let mut q = vec![e.q_inf; e.mesh.n_cells];
+        q[5][4] = -1.0; // negative energy: negative pressure
+        let err = e.solve_steady(q, &SteadyParams::default()).unwrap_err();
+        assert!(
+            matches!(err, SteadyError::NonPhysical { cell: 5, .. }),
+            "{err:?}"
+        );
+        assert!(err.to_string().contains("residual history"));
     }
 
     /// Paper Table 1: NACA 64A010, M = 0.4, 1° angle of attack set at the far field, against the
