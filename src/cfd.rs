@@ -7,7 +7,7 @@ use crate::report::{save_figure, write_atomic};
 use anyhow::{bail, Context, Result};
 use gustkit_lfd::airfoil::Section;
 use gustkit_lfd::gas::{primitive, GAMMA};
-use gustkit_lfd::mesh::{o_mesh, Boundary, Side};
+use gustkit_lfd::mesh::{Boundary, Side};
 use gustkit_lfd::residual::{free_stream, Euler, Gust, Order, State};
 use gustkit_lfd::steady::SteadyParams;
 use gustkit_lfd::unsteady::{harmonic_fit, march};
@@ -275,11 +275,7 @@ fn build(c: &CfdSpec, base: &Path, q_inf: State<f64>) -> Result<Euler> {
 /// The built-in O-mesh about the NACA 64A010, mid-chord at the origin.
 fn builtin_mesh(m: &OMeshSpec) -> gustkit_lfd::mesh::Mesh {
     let sec = Section::naca64a010();
-    o_mesh(
-        &|t| {
-            let p = sec.contour(t);
-            [p[0] - 0.5, p[1]]
-        },
+    sec.o_mesh(
         m.n_around,
         m.n_radial,
         m.far_field_chords,

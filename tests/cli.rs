@@ -696,17 +696,7 @@ fn cfd_verification_studies() {
 
     // the same mesh from an SU2 file gives the same forces
     let sec = gustkit_lfd::airfoil::Section::naca64a010();
-    let m = gustkit_lfd::mesh::o_mesh(
-        &|t| {
-            let p = sec.contour(t);
-            [p[0] - 0.5, p[1]]
-        },
-        32,
-        12,
-        50.0,
-        0.02 / 50.0,
-        1.0,
-    );
+    let m = sec.o_mesh(32, 12, 50.0, 0.02 / 50.0, 1.0);
     std::fs::write(dir.join("mesh.su2"), gustkit_lfd::readers::write_su2_2d(&m)).unwrap();
     let mut from_file = steady.clone();
     from_file["name"] = "steady_from_file".into();

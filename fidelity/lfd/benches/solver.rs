@@ -3,7 +3,6 @@
 //! Newton–Krylov solve at M = 0.4, α = 1°. Run with `cargo bench -p gustkit-lfd --bench solver`.
 
 use gustkit_lfd::airfoil::Section;
-use gustkit_lfd::mesh::o_mesh;
 use gustkit_lfd::residual::{free_stream, Euler, Order};
 use gustkit_lfd::steady::SteadyParams;
 use std::time::Instant;
@@ -21,17 +20,7 @@ fn main() {
     );
     for level in 0..4 {
         let s = 1usize << level;
-        let mesh = o_mesh(
-            &|t| {
-                let p = sec.contour(t);
-                [p[0] - 0.5, p[1]]
-            },
-            32 * s,
-            16 * s,
-            50.0,
-            0.0004 / s as f64,
-            1.0,
-        );
+        let mesh = sec.o_mesh(32 * s, 16 * s, 50.0, 0.0004 / s as f64, 1.0);
         let e = Euler::new(mesh, free_stream(0.4, 1f64.to_radians()));
         let n = e.mesh.n_cells;
         let q = vec![e.q_inf; n];

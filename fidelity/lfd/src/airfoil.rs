@@ -95,6 +95,32 @@ impl Section {
             + ((u * u * u - u) * self.m[i] + (t * t * t - t) * self.m[i + 1]) * h * h / 6.0
     }
 
+    /// The built-in O-mesh around the section (chord 1, mid-chord at the origin; see
+    /// [`crate::mesh::o_mesh`] for the other arguments): its `n_around` wall points run from the
+    /// upper to the lower trailing-edge corner, so the blunt base is one face and the mesh is
+    /// symmetric about the chord line (a symmetric section has no lift at zero incidence).
+    pub fn o_mesh(
+        &self,
+        n_around: usize,
+        n_radial: usize,
+        r_far: f64,
+        first: f64,
+        dz: f64,
+    ) -> crate::mesh::Mesh {
+        let stretch = n_around as f64 / (n_around - 1) as f64;
+        crate::mesh::o_mesh(
+            &|t| {
+                let p = self.contour(t * stretch);
+                [p[0] - 0.5, p[1]]
+            },
+            n_around,
+            n_radial,
+            r_far,
+            first,
+            dz,
+        )
+    }
+
     /// The closed contour, counter-clockwise from the upper trailing edge: τ ∈ [0, ½] runs over
     /// the upper surface from the trailing edge to the leading edge, (½, 1) back along the lower
     /// one; chordwise positions x = (1 + cos 2πτ)/2 cluster points at both edges.

@@ -224,7 +224,7 @@ pub fn o_mesh(
     for i in 0..n_around {
         let t = i as f64 / n_around as f64;
         let b = body(t);
-        let ang = 2.0 * std::f64::consts::PI * t;
+        let ang = 2.0 * std::f64::consts::PI * (i as f64 + 0.5) / n_around as f64;
         let far = [r_far * ang.cos(), r_far * ang.sin()];
         for (j, sj) in s.iter().enumerate() {
             for k in 0..2 {

@@ -259,24 +259,13 @@ pub fn free_stream(mach: f64, alpha: f64) -> [f64; NVAR] {
 mod tests {
     use super::*;
     use crate::airfoil::Section;
-    use crate::mesh::o_mesh;
     use gustkit_core::scalar::Dual;
     use gustkit_testkit::{fd_check, rand_vec};
 
     fn airfoil_mesh() -> Mesh {
         let sec = Section::naca64a010();
         // the contour about the mid-chord so that the far-field circle is centred on the section
-        o_mesh(
-            &|t| {
-                let p = sec.contour(t);
-                [p[0] - 0.5, p[1]]
-            },
-            48,
-            16,
-            50.0,
-            0.004,
-            0.05,
-        )
+        sec.o_mesh(48, 16, 50.0, 0.004, 0.05)
     }
 
     fn perturbed(e: &Euler, seed: u64, size: f64) -> Vec<State<f64>> {
@@ -365,7 +354,9 @@ mod tests {
             .collect();
         let jv = e.residual(&qd);
         for &cell in &[0usize, 7, 48 * 8 + 3, e.mesh.n_cells - 1] {
-            for k in 0..NVAR {
+            // the spanwise momentum of the extruded 2-D flow stays zero: its derivative is
+            // round-off and is not compared
+            for k in [0, 1, 2, 4] {
                 let f = |x: &[f64]| {
                     let qt: Vec<State<f64>> = q
                         .iter()

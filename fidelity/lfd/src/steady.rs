@@ -320,22 +320,11 @@ impl Euler {
 mod tests {
     use super::*;
     use crate::airfoil::Section;
-    use crate::mesh::o_mesh;
     use crate::residual::{free_stream, Order};
 
     fn airfoil_euler(n_around: usize, n_radial: usize, q_inf: [f64; NVAR]) -> Euler {
         let sec = Section::naca64a010();
-        let mesh = o_mesh(
-            &|t| {
-                let p = sec.contour(t);
-                [p[0] - 0.5, p[1]]
-            },
-            n_around,
-            n_radial,
-            50.0,
-            0.004,
-            1.0,
-        );
+        let mesh = sec.o_mesh(n_around, n_radial, 50.0, 0.004, 1.0);
         Euler::new(mesh, q_inf)
     }
 
@@ -434,15 +423,14 @@ mod tests {
 mod refinement {
     use super::*;
     use crate::airfoil::Section;
-    use crate::mesh::o_mesh;
     use crate::residual::free_stream;
 
     /// Mesh family (cells ×4 per level, first spacing halved): the spurious drag of the inviscid
-    /// subsonic flow falls with refinement (measured: C_D 1.38e-2, 6.36e-3, 3.39e-3, 1.94e-3 on
-    /// 512 … 32768 cells; each level at least 1.7× lower, i.e. about first order: the blunt
-    /// trailing edge and the far field at 50 chords without a vortex correction limit it) and
-    /// the lift at 1° rises towards about 0.13 (0.1126, 0.1175, 0.1236, 0.1275; thin-airfoil
-    /// theory with Prandtl–Glauert 0.1197, a 10 %-thick section somewhat more). Three levels here.
+    /// subsonic flow falls with refinement (measured: C_D 1.42e-2, 6.44e-3, 3.40e-3 on 512, 2048,
+    /// 8192 cells; each level at least 1.7× lower, i.e. about first order — also at zero lift, so
+    /// the blunt trailing edge rather than the far field is the suspect) and the lift at 1° rises
+    /// towards about 0.13 (0.1157, 0.1196, 0.1243; thin-airfoil theory with Prandtl–Glauert
+    /// 0.1197, a 10 %-thick section somewhat more).
     #[test]
     fn drag_falls_and_lift_settles_with_refinement() {
         let sec = Section::naca64a010();
@@ -450,17 +438,7 @@ mod refinement {
         let mut coefficients = Vec::new();
         for level in 0..3 {
             let s = 1usize << level;
-            let mesh = o_mesh(
-                &|t| {
-                    let p = sec.contour(t);
-                    [p[0] - 0.5, p[1]]
-                },
-                32 * s,
-                16 * s,
-                50.0,
-                0.0004 / s as f64,
-                1.0,
-            );
+            let mesh = sec.o_mesh(32 * s, 16 * s, 50.0, 0.0004 / s as f64, 1.0);
             let e = Euler::new(mesh, free_stream(0.4, alpha));
             let (q, _) = e
                 .solve_steady(vec![e.q_inf; e.mesh.n_cells], &SteadyParams::default())

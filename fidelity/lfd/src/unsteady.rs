@@ -140,17 +140,7 @@ mod tests {
 
     fn mesh(n_around: usize, n_radial: usize) -> crate::mesh::Mesh {
         let sec = Section::naca64a010();
-        o_mesh(
-            &|t| {
-                let p = sec.contour(t);
-                [p[0] - 0.5, p[1]]
-            },
-            n_around,
-            n_radial,
-            50.0,
-            0.0004,
-            1.0,
-        )
+        sec.o_mesh(n_around, n_radial, 50.0, 0.0004, 1.0)
     }
 
     /// A convected sinusoidal gust integrated exactly over the faces is divergence free cell by
