@@ -429,8 +429,10 @@ fn time_gust(
         convection: c.mach,
         x0: 0.0,
     };
+    // one factorization of the preconditioner per time step
     let params = SteadyParams {
         tolerance: 1e-9,
+        refactor_every: 1000,
         ..SteadyParams::default()
     };
     let (q, samples) = march(

@@ -20,6 +20,9 @@ pub struct SteadyParams {
     pub cfl0: f64,
     pub cfl_max: f64,
     pub max_iterations: usize,
+    /// Second order: refactor the first-order preconditioner every this many Newton iterations
+    /// (1: every iteration; a stale preconditioner costs GMRES iterations, never accuracy).
+    pub refactor_every: usize,
     /// Stop when ‖R‖ ≤ tolerance · ‖R₀‖, when ‖R‖ reaches round-off (1e-15 of the fluxes that
     /// cancel in it), or when it stagnates below 1e-11 ‖R₀‖.
     pub tolerance: f64,
@@ -31,6 +34,7 @@ impl Default for SteadyParams {
             cfl0: 10.0,
             cfl_max: 1e12,
             max_iterations: 60,
+            refactor_every: 1,
             tolerance: 1e-13,
         }
     }
@@ -185,6 +189,7 @@ impl Euler {
         // round-off level of the residual: ε times the size of the fluxes that cancel in it
         let floor = 1e-15 * self.flux_scale(&q);
         let mut cfl = params.cfl0;
+        let mut precond: Option<faer::sparse::linalg::solvers::Lu<usize, f64>> = None;
         for it in 0..params.max_iterations {
             let rn = *history.last().expect("starts with r0");
             // converged, or stagnating at round-off below 1e-11 of the initial residual
@@ -200,33 +205,46 @@ impl Euler {
                 ));
             }
             let radius = self.spectral_radius(&q);
-            let mut triplets: Vec<Triplet<usize, usize, f64>> = Vec::new();
-            for (c, rad) in radius.iter().enumerate() {
-                for k in 0..NVAR {
-                    triplets.push(Triplet::new(
-                        c * NVAR + k,
-                        c * NVAR + k,
-                        rad / cfl + diag_time(c),
-                    ));
-                }
-            }
-            for (row, col, b) in self.jacobian(&q) {
-                for i in 0..NVAR {
-                    for j in 0..NVAR {
-                        if b[i][j] != 0.0 {
-                            triplets.push(Triplet::new(row * NVAR + i, col * NVAR + j, b[i][j]));
-                        }
-                    }
-                }
-            }
             let linear = |reason: String| SteadyError::Linear {
                 reason,
                 history: history.clone(),
             };
-            let a =
-                SparseColMat::<usize, f64>::try_new_from_triplets(n * NVAR, n * NVAR, &triplets)
-                    .map_err(|e| linear(format!("{e:?}")))?;
-            let lu = a.sp_lu().map_err(|e| linear(format!("{e:?}")))?;
+            let refactor = precond.is_none()
+                || self.order == Order::First
+                || it % params.refactor_every.max(1) == 0;
+            if refactor {
+                let mut triplets: Vec<Triplet<usize, usize, f64>> = Vec::new();
+                for (c, rad) in radius.iter().enumerate() {
+                    for k in 0..NVAR {
+                        triplets.push(Triplet::new(
+                            c * NVAR + k,
+                            c * NVAR + k,
+                            rad / cfl + diag_time(c),
+                        ));
+                    }
+                }
+                for (row, col, b) in self.jacobian(&q) {
+                    for i in 0..NVAR {
+                        for j in 0..NVAR {
+                            if b[i][j] != 0.0 {
+                                triplets.push(Triplet::new(
+                                    row * NVAR + i,
+                                    col * NVAR + j,
+                                    b[i][j],
+                                ));
+                            }
+                        }
+                    }
+                }
+                let a = SparseColMat::<usize, f64>::try_new_from_triplets(
+                    n * NVAR,
+                    n * NVAR,
+                    &triplets,
+                )
+                .map_err(|e| linear(format!("{e:?}")))?;
+                precond = Some(a.sp_lu().map_err(|e| linear(format!("{e:?}")))?);
+            }
+            let lu = precond.as_ref().expect("factored above");
             let solve_lu = |v: &[f64]| -> Vec<f64> {
                 let m = lu.solve(&Mat::<f64>::from_fn(v.len(), 1, |i, _| v[i]));
                 (0..v.len()).map(|i| m[(i, 0)]).collect()

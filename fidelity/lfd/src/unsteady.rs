@@ -368,6 +368,7 @@ mod tests {
         };
         let params = SteadyParams {
             tolerance: 1e-9,
+            refactor_every: 1000,
             ..SteadyParams::default()
         };
         let (_, samples) = march(
