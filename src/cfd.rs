@@ -167,11 +167,7 @@ pub struct CfdResults {
 impl CfdStudyFile {
     /// Reads and checks a CFD study; errors name the file and the JSON path.
     pub fn load(file: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(file)
-            .with_context(|| format!("cannot read {}", file.display()))?;
-        let de = &mut serde_json::Deserializer::from_str(&text);
-        let s: Self = serde_path_to_error::deserialize(de)
-            .map_err(|e| anyhow::anyhow!("{}: {}: {}", file.display(), e.path(), e.inner()))?;
+        let s: Self = crate::report::from_json(file, &crate::report::read_json(file)?)?;
         let bad = |path: &str, reason: String| -> Result<Self> {
             bail!("{}: {path}: {reason}", file.display())
         };

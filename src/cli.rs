@@ -273,25 +273,15 @@ pub fn report(dir: &Path) -> Result<()> {
         return Ok(());
     }
     let results = dir.join("results.json");
-    if is_cfd_study(&results) {
-        let text = std::fs::read_to_string(&results)?;
-        let de = &mut serde_json::Deserializer::from_str(&text);
-        let r: crate::cfd::CfdResults = serde_path_to_error::deserialize(de)
-            .map_err(|e| anyhow::anyhow!("{}: {}: {}", results.display(), e.path(), e.inner()))?;
+    let value = report::read_json(&results)?;
+    let study = if value.get("cfd").is_some() {
+        let r: crate::cfd::CfdResults = report::from_json(&results, &value)?;
         crate::cfd::render(dir, &r)?;
-        println!(
-            "report of {} re-rendered from {}",
-            r.study,
-            results.display()
-        );
-        return Ok(());
-    }
-    let r = report::run::rerender(dir)?;
-    println!(
-        "report of {} re-rendered from {}",
-        r.study,
-        dir.join("results.json").display()
-    );
+        r.study
+    } else {
+        report::run::rerender(dir, &results, &value)?.study
+    };
+    println!("report of {study} re-rendered from {}", results.display());
     Ok(())
 }
 

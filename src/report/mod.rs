@@ -27,6 +27,23 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     Ok(())
 }
 
+/// Reads and parses a JSON file; errors name the file.
+pub fn read_json(path: &Path) -> Result<serde_json::Value> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    serde_json::from_str(&text).with_context(|| format!("{}: not valid JSON", path.display()))
+}
+
+/// Deserializes JSON read from `path`; a value of the wrong shape is an error naming the file and
+/// the JSON path of the offending field.
+pub fn from_json<T: serde::de::DeserializeOwned>(
+    path: &Path,
+    value: &serde_json::Value,
+) -> Result<T> {
+    serde_path_to_error::deserialize(value)
+        .map_err(|e| anyhow::anyhow!("{}: {}: {}", path.display(), e.path(), e.inner()))
+}
+
 /// Registers the embedded DejaVu Sans font with plotters once (no system font libraries needed).
 fn register_fonts() {
     static ONCE: std::sync::Once = std::sync::Once::new();

@@ -3,10 +3,10 @@
 //! be re-drawn without re-running anything.
 
 use super::figures::{Convergence, ModeShapes, PsdPlot, PsdSeries, ThicknessMaps, VgVf};
-use super::{save_figure, write_atomic};
+use super::{from_json, save_figure, write_atomic};
 use crate::flutter::FlutterResult;
 use crate::gust::Turbulence;
-use anyhow::{Context, Result};
+use anyhow::Result;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -379,25 +379,12 @@ pub fn render(dir: &Path, r: &RunResults) -> Result<()> {
     write_atomic(&dir.join("summary.md"), summary(r).as_bytes())
 }
 
-/// `gustkit report RUN_DIR`: reads `RUN_DIR/results.json` and re-renders the report.
-pub fn rerender(dir: &Path) -> Result<RunResults> {
-    let path = dir.join("results.json");
-    let text = std::fs::read_to_string(&path)
-        .with_context(|| format!("cannot read {}", path.display()))?;
-    let value: serde_json::Value = serde_json::from_str(&text)
-        .with_context(|| format!("{}: not valid JSON", path.display()))?;
-    let wrong = |e: serde_path_to_error::Error<serde_json::Error>| {
-        anyhow::anyhow!(
-            "{}: {}: {} (not a results.json written by gustkit run?)",
-            path.display(),
-            e.path(),
-            e.inner()
-        )
-    };
-    let mut r: RunResults = serde_path_to_error::deserialize(&value).map_err(wrong)?;
+/// `gustkit report RUN_DIR`: re-renders the report from `value`, the results.json at `path`.
+pub fn rerender(dir: &Path, path: &Path, value: &serde_json::Value) -> Result<RunResults> {
+    let mut r: RunResults = from_json(path, value)?;
     // a flattened Option swallows errors in its fields: read the optimization on its own
     if value.get("converged").is_some() {
-        r.optimization = Some(serde_path_to_error::deserialize(&value).map_err(wrong)?);
+        r.optimization = Some(from_json(path, value)?);
     }
     render(dir, &r)?;
     Ok(r)

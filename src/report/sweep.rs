@@ -2,7 +2,7 @@
 //! them alone.
 
 use super::{save_figure, write_atomic, Figure};
-use anyhow::{anyhow, Context, Result};
+use anyhow::{anyhow, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -263,11 +263,7 @@ pub fn render(dir: &Path, r: &SweepResults) -> Result<()> {
 /// Reads `dir/sweep_results.json` and renders the sweep report again.
 pub fn rerender(dir: &Path) -> Result<SweepResults> {
     let path = dir.join("sweep_results.json");
-    let text = std::fs::read_to_string(&path)
-        .with_context(|| format!("cannot read {}", path.display()))?;
-    let de = &mut serde_json::Deserializer::from_str(&text);
-    let r: SweepResults = serde_path_to_error::deserialize(de)
-        .map_err(|e| anyhow!("{}: {}: {}", path.display(), e.path(), e.inner()))?;
+    let r: SweepResults = super::from_json(&path, &super::read_json(&path)?)?;
     render(dir, &r)?;
     Ok(r)
 }
