@@ -85,12 +85,8 @@ impl PkProblem<'_> {
         Ok(roots)
     }
 
-    /// s_ij = conj(y_i) x_j / (yᴴ x) (so dp = Σ s_ij dA_ij) and the coefficients (a, γ) with
-    /// dg = a Re(e) + γ Im(e), e = Σ s_ij dA_ij, at root `r`.
-    fn root_sensitivity(
-        &self,
-        r: &DampingRoot,
-    ) -> Result<(Mat<Complex64>, f64, f64), FlutterError> {
+    /// The linearization of root `r`'s damping in the inputs of its state matrix.
+    fn linearize(&self, r: &DampingRoot) -> Result<Linearization, FlutterError> {
         let v = r.velocity;
         let (a, a_k) = self.state_matrix(v, r.k)?;
         let x = eigenvector(a.as_ref(), r.p, v)?;
@@ -109,8 +105,16 @@ impl PkProblem<'_> {
         let (pr, pi) = (r.p.re, r.p.im);
         let a_re = 2.0 / pi;
         let a_im = -2.0 * pr / (pi * pi);
-        let gamma = (a_re * beta * c.re + a_im) / (1.0 - beta * c.im);
-        Ok((s, a_re, gamma))
+        Ok(Linearization {
+            s,
+            a_re,
+            gamma: (a_re * beta * c.re + a_im) / (1.0 - beta * c.im),
+            weights: self.spline_at(r.k)?.0,
+            beta,
+            qd: 0.5 * self.density * v * v,
+            // as in the state matrix: the Q_I/k term is held below k = 1e-6
+            kk: r.k.max(1e-6),
+        })
     }
 
     /// Forward mode: dg of root `r` for perturbations of ω_n² and of the GAF table.
@@ -121,30 +125,26 @@ impl PkProblem<'_> {
         d_table: &GafTable,
     ) -> Result<f64, FlutterError> {
         let n = self.omega_n.len();
-        let v = r.velocity;
-        let (s, a_re, gamma) = self.root_sensitivity(r)?;
-        let (w, _) = self.weights(r.k)?;
-        let beta = self.table.b_ref / v;
-        let qd = 0.5 * self.density * v * v;
-        let kk = r.k.max(1e-6);
+        let l = self.linearize(r)?;
         let mut e = Complex64::new(0.0, 0.0);
         for i in 0..n {
             for j in 0..n {
-                let dq: Complex64 = w
+                let dq: Complex64 = l
+                    .weights
                     .iter()
                     .enumerate()
                     .map(|(t, wt)| d_table.q_ss[t][i][j] * *wt)
                     .sum();
-                let mut dk = -qd * dq.re;
-                let mut dc = -qd * beta * dq.im / kk;
+                let mut dk = -l.qd * dq.re;
+                let mut dc = -l.qd * l.beta * dq.im / l.kk;
                 if i == j {
                     dk += d_omega2[i];
                     dc += self.damping_ratio * d_omega2[i] / self.omega_n[i];
                 }
-                e += s[(n + i, j)] * (-dk) + s[(n + i, n + j)] * (-dc);
+                e += l.s[(n + i, j)] * (-dk) + l.s[(n + i, n + j)] * (-dc);
             }
         }
-        Ok(a_re * e.re + gamma * e.im)
+        Ok(l.a_re * e.re + l.gamma * e.im)
     }
 
     /// Reverse mode: seeds on ω_n² and on the GAF table (Q_ss only; conjugate convention
@@ -155,40 +155,41 @@ impl PkProblem<'_> {
         g_bar: f64,
     ) -> Result<(Vec<f64>, GafTable), FlutterError> {
         let n = self.omega_n.len();
-        let v = r.velocity;
-        let (s, a_re, gamma) = self.root_sensitivity(r)?;
-        let (w, _) = self.weights(r.k)?;
-        let beta = self.table.b_ref / v;
-        let qd = 0.5 * self.density * v * v;
-        let kk = r.k.max(1e-6);
-        let sigma = Complex64::new(a_re, -gamma) * g_bar;
+        let l = self.linearize(r)?;
+        let sigma = Complex64::new(l.a_re, -l.gamma) * g_bar;
         let mut omega2_bar = vec![0.0; n];
         let mut table_bar = zeros_like(self.table);
         for i in 0..n {
             for j in 0..n {
                 // dg = Re(σ s_ij) dA_ij; A = [[0, I], [−K̃, −C̃]]
-                let k_bar = -(sigma * s[(n + i, j)]).re;
-                let c_bar = -(sigma * s[(n + i, n + j)]).re;
+                let k_bar = -(sigma * l.s[(n + i, j)]).re;
+                let c_bar = -(sigma * l.s[(n + i, n + j)]).re;
                 if i == j {
                     omega2_bar[i] += k_bar + c_bar * self.damping_ratio / self.omega_n[i];
                 }
-                let q_bar = Complex64::new(-qd * k_bar, -qd * beta * c_bar / kk);
-                for (t, wt) in w.iter().enumerate() {
+                let q_bar = Complex64::new(-l.qd * k_bar, -l.qd * l.beta * c_bar / l.kk);
+                for (t, wt) in l.weights.iter().enumerate() {
                     table_bar.q_ss[t][i][j] += q_bar * *wt;
                 }
             }
         }
         Ok((omega2_bar, table_bar))
     }
+}
 
-    /// Spline weights at k, clamped to the table as in the p-k iteration.
-    fn weights(&self, k: f64) -> Result<(Vec<f64>, Vec<f64>), FlutterError> {
-        let kmax = *self.table.k.last().expect("table has k");
-        let kk = k.clamp(self.table.k[0], kmax);
-        let (w, dw) = crate::gust::interp::SplineWeights::with_slope(&self.table.k, &[kk])
-            .map_err(FlutterError::Input)?;
-        Ok((w.weights[0].clone(), dw.weights[0].clone()))
-    }
+/// What the forward and reverse modes of one root's damping share: s_ij = conj(y_i) x_j / (yᴴ x)
+/// (so dp = Σ s_ij dA_ij), the coefficients (a, γ) with dg = a Re(e) + γ Im(e), e = Σ s_ij dA_ij,
+/// and the factors that map ω_n² and the GAF table into the state matrix.
+struct Linearization {
+    s: Mat<Complex64>,
+    a_re: f64,
+    gamma: f64,
+    /// Spline weights of the table at the root's k.
+    weights: Vec<f64>,
+    /// b_ref / V, ½ ρ V², and k as used in the Q_I/k damping term.
+    beta: f64,
+    qd: f64,
+    kk: f64,
 }
 
 #[cfg(test)]

@@ -93,12 +93,7 @@ impl PkProblem<'_> {
     /// Q(k) by the table's spline (clamped to its range) as (real part, imaginary part), and the
     /// slope dQ/dk the same way (zero outside the table, where Q is held).
     fn q_at(&self, k: f64) -> Result<[Mat<f64>; 4], FlutterError> {
-        let kmax = *self.table.k.last().expect("table has k");
-        let kk = k.clamp(self.table.k[0], kmax);
-        let (w, dw) =
-            SplineWeights::with_slope(&self.table.k, &[kk]).map_err(FlutterError::Input)?;
-        let inside = kk == k;
-        let (w, dw) = (&w.weights[0], &dw.weights[0]);
+        let (w, dw) = self.spline_at(k)?;
         let n = self.omega_n.len();
         let q = |w: &[f64], m: usize, j: usize| -> Complex64 {
             w.iter()
@@ -106,19 +101,27 @@ impl PkProblem<'_> {
                 .map(|(i, wi)| self.table.q_ss[i][m][j] * *wi)
                 .sum()
         };
-        let dq = |m: usize, j: usize| {
-            if inside {
-                q(dw, m, j)
-            } else {
-                Complex64::new(0.0, 0.0)
-            }
-        };
         Ok([
-            Mat::from_fn(n, n, |m, j| q(w, m, j).re),
-            Mat::from_fn(n, n, |m, j| q(w, m, j).im),
-            Mat::from_fn(n, n, |m, j| dq(m, j).re),
-            Mat::from_fn(n, n, |m, j| dq(m, j).im),
+            Mat::from_fn(n, n, |m, j| q(&w, m, j).re),
+            Mat::from_fn(n, n, |m, j| q(&w, m, j).im),
+            Mat::from_fn(n, n, |m, j| q(&dw, m, j).re),
+            Mat::from_fn(n, n, |m, j| q(&dw, m, j).im),
         ])
+    }
+
+    /// Spline weights of the table at k clamped to its range, and the weights of the slope d/dk
+    /// (zero outside the table, where the GAFs are held).
+    fn spline_at(&self, k: f64) -> Result<(Vec<f64>, Vec<f64>), FlutterError> {
+        let kmax = *self.table.k.last().expect("table has k");
+        let kk = k.clamp(self.table.k[0], kmax);
+        let (w, dw) =
+            SplineWeights::with_slope(&self.table.k, &[kk]).map_err(FlutterError::Input)?;
+        let slope = if kk == k {
+            dw.weights[0].clone()
+        } else {
+            vec![0.0; w.weights[0].len()]
+        };
+        Ok((w.weights[0].clone(), slope))
     }
 
     /// The first-order state matrix of the p-k equation at speed `v` with the aerodynamics at `k`,
