@@ -116,6 +116,16 @@ impl Mesh {
         v
     }
 
+    /// Gives every boundary face of condition `from` the condition `to` (e.g. a body's wall
+    /// replaced by far field, where a uniform flow must be preserved).
+    pub fn relabel(&mut self, from: Boundary, to: Boundary) {
+        for f in &mut self.faces {
+            if f.right == Side::Boundary(from) {
+                f.right = Side::Boundary(to);
+            }
+        }
+    }
+
     /// Checks that every cell has a positive volume (above 1e-12 of the mean), is closed, and
     /// that every face has an area and two different cells.
     pub fn check(&self) -> Result<(), MeshError> {

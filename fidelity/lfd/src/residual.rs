@@ -300,11 +300,7 @@ mod tests {
                 );
             }
         }
-        for f in &mut mesh.faces {
-            if f.right == Side::Boundary(Boundary::Wall) {
-                f.right = Side::Boundary(Boundary::FarField);
-            }
-        }
+        mesh.relabel(Boundary::Wall, Boundary::FarField);
         let e = Euler::new(mesh.clone(), q_inf);
         let r = e.residual(&vec![q_inf; mesh.n_cells]);
         assert!(r.iter().flatten().all(|v| v.abs() < 1e-13 * scale));

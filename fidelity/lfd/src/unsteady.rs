@@ -148,11 +148,7 @@ mod tests {
     #[test]
     fn gust_preserves_uniform_flow() {
         let mut m = mesh(32, 16);
-        for f in &mut m.faces {
-            if f.right == Side::Boundary(Boundary::Wall) {
-                f.right = Side::Boundary(Boundary::FarField);
-            }
-        }
+        m.relabel(Boundary::Wall, Boundary::FarField);
         let q_inf = free_stream(0.4, 0.0);
         let mut e = Euler::new(m, q_inf);
         e.set_gust(
@@ -193,11 +189,7 @@ mod tests {
             0.05,
             0.2,
         );
-        for f in &mut m.faces {
-            if f.right == Side::Boundary(Boundary::Wall) {
-                f.right = Side::Boundary(Boundary::FarField);
-            }
-        }
+        m.relabel(Boundary::Wall, Boundary::FarField);
         let x0 = m.nodes.clone();
         let per_layer = x0.len() / 2;
         let r = gustkit_testkit::rand_vec(3 * per_layer, 17);
@@ -282,11 +274,7 @@ mod tests {
         assert!((g.integral(-50.0, 50.0, 10.0) - 0.06).abs() < 1e-14);
         assert_eq!(g.integral(3.0, 9.0, 10.0), 0.0);
         let mut m = mesh(32, 16);
-        for f in &mut m.faces {
-            if f.right == Side::Boundary(Boundary::Wall) {
-                f.right = Side::Boundary(Boundary::FarField);
-            }
-        }
+        m.relabel(Boundary::Wall, Boundary::FarField);
         let q_inf = free_stream(0.4, 0.0);
         let mut e = Euler::new(m, q_inf);
         e.set_gust(&g, 10.0);
