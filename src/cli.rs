@@ -857,12 +857,7 @@ fn flutter_analysis(
     let table = aero
         .gafs(&plate, &modes)
         .map_err(|e| anyhow::anyhow!("{}: aero: {e}", file.display()))?;
-    let pk = crate::flutter::PkProblem {
-        omega_n: modes.omega(),
-        damping_ratio: modes.damping_ratio,
-        table: &table,
-        density: aero.flight.density,
-    };
+    let pk = crate::flutter::PkProblem::new(&modes, &table, aero.flight.density);
     let r = pk
         .sweep(&velocities)
         .map_err(|e| anyhow::anyhow!("{}: flutter: {e}", file.display()))?;
@@ -1254,12 +1249,7 @@ fn sweep_metrics(
             let table = aero
                 .gafs(&plate, &modes)
                 .map_err(|e| anyhow::anyhow!("aero: {e}"))?;
-            let pk = crate::flutter::PkProblem {
-                omega_n: modes.omega(),
-                damping_ratio: modes.damping_ratio,
-                table: &table,
-                density: aero.flight.density,
-            };
+            let pk = crate::flutter::PkProblem::new(&modes, &table, aero.flight.density);
             let r = pk.sweep(&study.flutter_velocities()?)?;
             if let Some(v) = r.flutter_speed_m_s {
                 out.push(metric("flutter speed", "m/s", v));

@@ -81,12 +81,7 @@ pub struct Evaluation {
 
 impl Evaluation {
     fn pk(&self) -> PkProblem<'_> {
-        PkProblem {
-            omega_n: self.modes.omega(),
-            damping_ratio: self.modes.damping_ratio,
-            table: &self.table,
-            density: self.aero.flight.density,
-        }
+        PkProblem::new(&self.modes, &self.table, self.aero.flight.density)
     }
 
     /// The p-k roots at every speed up to the margin speed of `m`, and the KS aggregate of their
@@ -404,12 +399,7 @@ pub fn check_stability(
     table: &GafTable,
     flight: &gustkit_core::FlightCondition,
 ) -> Result<()> {
-    let pk = crate::flutter::PkProblem {
-        omega_n: modes.omega(),
-        damping_ratio: modes.damping_ratio,
-        table,
-        density: flight.density,
-    };
+    let pk = crate::flutter::PkProblem::new(modes, table, flight.density);
     let speeds: Vec<f64> = (0..12)
         .map(|i| flight.velocity * (0.2 + 0.8 * i as f64 / 11.0))
         .collect();

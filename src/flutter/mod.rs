@@ -66,6 +66,18 @@ struct Root {
     extrapolated: bool,
 }
 
+impl<'a> PkProblem<'a> {
+    /// The p-k problem of a modal model with the GAF table of its modes, at air density `density`.
+    pub fn new(modes: &crate::structure::Modes, table: &'a GafTable, density: f64) -> Self {
+        Self {
+            omega_n: modes.omega(),
+            damping_ratio: modes.damping_ratio,
+            table,
+            density,
+        }
+    }
+}
+
 impl PkProblem<'_> {
     fn check(&self) -> Result<(), FlutterError> {
         if self.table.n_modes() != self.omega_n.len() {
