@@ -1,4 +1,58 @@
-//! Restarted GMRES with right preconditioning (modified Gram–Schmidt Arnoldi, Givens rotations).
+//! Restarted GMRES with right preconditioning (modified Gram–Schmidt Arnoldi, Givens rotations),
+//! generic over the field: real for Newton–Krylov, complex for the LFD equations.
+
+use num_complex::Complex64;
+use std::ops::{Add, Div, Mul, Neg, Sub};
+
+/// The field GMRES works in (f64 or Complex64).
+pub trait Field:
+    Copy
+    + Send
+    + Sync
+    + std::fmt::Debug
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+    + Mul<f64, Output = Self>
+{
+    fn zero() -> Self;
+    fn from_re(v: f64) -> Self;
+    fn conj(self) -> Self;
+    /// |x|², real.
+    fn norm_sqr(self) -> f64;
+}
+
+impl Field for f64 {
+    fn zero() -> Self {
+        0.0
+    }
+    fn from_re(v: f64) -> Self {
+        v
+    }
+    fn conj(self) -> Self {
+        self
+    }
+    fn norm_sqr(self) -> f64 {
+        self * self
+    }
+}
+
+impl Field for Complex64 {
+    fn zero() -> Self {
+        Complex64::new(0.0, 0.0)
+    }
+    fn from_re(v: f64) -> Self {
+        Complex64::new(v, 0.0)
+    }
+    fn conj(self) -> Self {
+        Complex64::conj(&self)
+    }
+    fn norm_sqr(self) -> f64 {
+        Complex64::norm_sqr(&self)
+    }
+}
 
 /// How a GMRES solve went: iterations and the relative residual after each.
 #[derive(Clone, Debug)]
@@ -17,23 +71,30 @@ pub struct GmresError {
     pub history: Vec<f64>,
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
+/// The inner product bᴴ a.
+fn dot<T: Field>(a: &[T], b: &[T]) -> T {
+    a.iter()
+        .zip(b)
+        .fold(T::zero(), |s, (x, y)| s + y.conj() * *x)
+}
+
+fn norm<T: Field>(a: &[T]) -> f64 {
+    a.iter().map(|x| x.norm_sqr()).sum::<f64>().sqrt()
 }
 
 /// Solves A x = b to ‖b − A x‖ ≤ `tol` ‖b‖ from x = 0, with `op` = A and `prec` ≈ A⁻¹ applied on
 /// the right, restarting every `restart` iterations, at most `max_iter` iterations.
-pub fn gmres(
-    op: &dyn Fn(&[f64]) -> Vec<f64>,
-    prec: &dyn Fn(&[f64]) -> Vec<f64>,
-    b: &[f64],
+pub fn gmres<T: Field>(
+    op: &dyn Fn(&[T]) -> Vec<T>,
+    prec: &dyn Fn(&[T]) -> Vec<T>,
+    b: &[T],
     tol: f64,
     restart: usize,
     max_iter: usize,
-) -> Result<(Vec<f64>, GmresInfo), GmresError> {
+) -> Result<(Vec<T>, GmresInfo), GmresError> {
     let n = b.len();
-    let bnorm = dot(b, b).sqrt();
-    let mut x = vec![0.0; n];
+    let bnorm = norm(b);
+    let mut x = vec![T::zero(); n];
     let mut history = Vec::new();
     if bnorm == 0.0 {
         return Ok((
@@ -48,8 +109,8 @@ pub fn gmres(
     loop {
         // r = b − A x
         let ax = op(&x);
-        let r: Vec<f64> = b.iter().zip(&ax).map(|(a, c)| a - c).collect();
-        let beta = dot(&r, &r).sqrt();
+        let r: Vec<T> = b.iter().zip(&ax).map(|(a, c)| *a - *c).collect();
+        let beta = norm(&r);
         if beta <= tol * bnorm {
             history.push(beta / bnorm);
             return Ok((
@@ -60,49 +121,55 @@ pub fn gmres(
                 },
             ));
         }
-        let mut v: Vec<Vec<f64>> = vec![r.iter().map(|a| a / beta).collect()];
-        let mut z: Vec<Vec<f64>> = Vec::new();
-        let mut h: Vec<Vec<f64>> = Vec::new(); // h[j] is column j (length j + 2)
-        let (mut cs, mut sn): (Vec<f64>, Vec<f64>) = (Vec::new(), Vec::new());
-        let mut g = vec![beta];
+        let mut v: Vec<Vec<T>> = vec![r.iter().map(|a| *a * (1.0 / beta)).collect()];
+        let mut z: Vec<Vec<T>> = Vec::new();
+        let mut h: Vec<Vec<T>> = Vec::new(); // h[j] is column j (length j + 2)
+                                             // complex Givens rotations [[c, s], [−s̄, c]] with c real
+        let (mut cs, mut sn): (Vec<f64>, Vec<T>) = (Vec::new(), Vec::new());
+        let mut g = vec![T::from_re(beta)];
         let mut converged = false;
         for j in 0..restart {
             let zj = prec(&v[j]);
             let mut w = op(&zj);
             z.push(zj);
-            let mut col = vec![0.0; j + 2];
+            let mut col = vec![T::zero(); j + 2];
             for i in 0..=j {
                 col[i] = dot(&w, &v[i]);
                 for (wk, vk) in w.iter_mut().zip(&v[i]) {
-                    *wk -= col[i] * vk;
+                    *wk = *wk - col[i] * *vk;
                 }
             }
-            col[j + 1] = dot(&w, &w).sqrt();
+            let next_norm = norm(&w);
+            col[j + 1] = T::from_re(next_norm);
             // apply the earlier rotations, then a new one to zero col[j + 1]
             for i in 0..j {
-                let t = cs[i] * col[i] + sn[i] * col[i + 1];
-                col[i + 1] = -sn[i] * col[i] + cs[i] * col[i + 1];
+                let t = col[i] * cs[i] + sn[i] * col[i + 1];
+                col[i + 1] = -(sn[i].conj() * col[i]) + col[i + 1] * cs[i];
                 col[i] = t;
             }
-            let d = col[j].hypot(col[j + 1]);
-            let (c, s) = if d == 0.0 {
-                (1.0, 0.0)
+            let (a, bb) = (col[j], col[j + 1]);
+            let (an, bn) = (a.norm_sqr().sqrt(), bb.norm_sqr().sqrt());
+            let d = an.hypot(bn);
+            let (c, s, r) = if d == 0.0 {
+                (1.0, T::zero(), T::zero())
+            } else if an == 0.0 {
+                (0.0, bb.conj() * (1.0 / bn), T::from_re(bn))
             } else {
-                (col[j] / d, col[j + 1] / d)
+                let phase = a * (1.0 / an);
+                (an / d, phase * bb.conj() * (1.0 / d), phase * d)
             };
-            let next_norm = col[j + 1];
-            col[j] = d;
-            col[j + 1] = 0.0;
+            col[j] = r;
+            col[j + 1] = T::zero();
             cs.push(c);
             sn.push(s);
-            g.push(-s * g[j]);
-            g[j] *= c;
+            g.push(-(s.conj() * g[j]));
+            g[j] = g[j] * c;
             h.push(col);
             total += 1;
-            let rel = g[j + 1].abs() / bnorm;
+            let rel = g[j + 1].norm_sqr().sqrt() / bnorm;
             history.push(rel);
             if next_norm > 0.0 {
-                v.push(w.iter().map(|a| a / next_norm).collect());
+                v.push(w.iter().map(|a| *a * (1.0 / next_norm)).collect());
             }
             if rel <= tol || next_norm == 0.0 || total >= max_iter {
                 converged = rel <= tol || next_norm == 0.0;
@@ -111,17 +178,17 @@ pub fn gmres(
         }
         // y from the triangular system, x += Z y
         let m = h.len();
-        let mut y = vec![0.0; m];
+        let mut y = vec![T::zero(); m];
         for i in (0..m).rev() {
             let mut s = g[i];
             for k in i + 1..m {
-                s -= h[k][i] * y[k];
+                s = s - h[k][i] * y[k];
             }
             y[i] = s / h[i][i];
         }
         for (yk, zk) in y.iter().zip(&z) {
             for (xi, zi) in x.iter_mut().zip(zk) {
-                *xi += yk * zi;
+                *xi = *xi + *yk * *zi;
             }
         }
         if converged {
@@ -181,7 +248,46 @@ mod tests {
         ] {
             let (x, info) = gmres(&op, prec, &b, 1e-12, restart, 500).unwrap();
             let r: Vec<f64> = op(&x).iter().zip(&b).map(|(p, q)| p - q).collect();
-            assert!(dot(&r, &r).sqrt() <= 1e-11 * dot(&b, &b).sqrt(), "{info:?}");
+            assert!(norm(&r) <= 1e-11 * norm(&b), "{info:?}");
+        }
+        // the same system shifted by i·2 (complex, non-Hermitian) against its real 2n × 2n form
+        let shift = Complex64::new(0.0, 2.0);
+        let opc = |x: &[Complex64]| -> Vec<Complex64> {
+            (0..n)
+                .map(|i| (0..n).map(|j| x[j] * a(i, j)).sum::<Complex64>() + shift * x[i])
+                .collect()
+        };
+        let bc: Vec<Complex64> = (0..n)
+            .map(|i| Complex64::new((i as f64 * 0.37).sin(), (i as f64 * 0.11).cos()))
+            .collect();
+        let jc = |x: &[Complex64]| -> Vec<Complex64> {
+            (0..n).map(|i| x[i] / (shift + a(i, i))).collect()
+        };
+        let (xc, _) = gmres(&opc, &jc, &bc, 1e-13, 9, 500).unwrap();
+        let rc: Vec<Complex64> = opc(&xc).iter().zip(&bc).map(|(p, q)| p - q).collect();
+        assert!(norm(&rc) <= 1e-12 * norm(&bc));
+        // the real form [[A, −2I], [2I, A]] [x; y] = [Re b; Im b]
+        let opr = |v: &[f64]| -> Vec<f64> {
+            let (x, y) = v.split_at(n);
+            let (ax, ay) = (op(x), op(y));
+            (0..2 * n)
+                .map(|i| {
+                    if i < n {
+                        ax[i] - 2.0 * y[i]
+                    } else {
+                        ay[i - n] + 2.0 * x[i - n]
+                    }
+                })
+                .collect()
+        };
+        let br: Vec<f64> = bc
+            .iter()
+            .map(|c| c.re)
+            .chain(bc.iter().map(|c| c.im))
+            .collect();
+        let (xr, _) = gmres(&opr, &none, &br, 1e-14, 120, 1000).unwrap();
+        for i in 0..n {
+            assert!((xr[i] - xc[i].re).abs() < 1e-11 && (xr[n + i] - xc[i].im).abs() < 1e-11);
         }
         // a stall is an error with its history
         let e = gmres(&op, &none, &b, 1e-14, 2, 4).unwrap_err();

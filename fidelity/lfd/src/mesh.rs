@@ -78,8 +78,8 @@ pub fn face_center<S: Scalar>(pts: &[[S; 3]]) -> [S; 3] {
 /// theorem with the same face formulas as the cells. The side quads of an edge shared by two faces
 /// of a cell cancel, so the swept volumes of a cell's faces sum to its volume change exactly (the
 /// discrete geometric conservation law).
-pub fn swept_volume(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
-    let flux = |pts: &[[f64; 3]]| {
+pub fn swept_volume<S: Scalar>(a: &[[S; 3]], b: &[[S; 3]]) -> S {
+    let flux = |pts: &[[S; 3]]| {
         let s = face_area(pts);
         let c = face_center(pts);
         c[0] * s[0] + c[1] * s[1] + c[2] * s[2]
@@ -102,10 +102,15 @@ impl Mesh {
 
     /// Cell volumes by the divergence theorem, V = ⅓ Σ_faces x_f · S_f (outward S).
     pub fn volumes(&self) -> Vec<f64> {
-        let mut v = vec![0.0; self.n_cells];
-        for (fi, f) in self.faces.iter().enumerate() {
-            let pts: Vec<[f64; 3]> = f.nodes.iter().map(|&n| self.nodes[n]).collect();
-            let s = self.area(fi);
+        self.volumes_at(&self.nodes)
+    }
+
+    /// Cell volumes with the nodes at `nodes` (any scalar: volume derivatives by dual numbers).
+    pub fn volumes_at<S: Scalar>(&self, nodes: &[[S; 3]]) -> Vec<S> {
+        let mut v = vec![S::zero(); self.n_cells];
+        for f in &self.faces {
+            let pts: Vec<[S; 3]> = f.nodes.iter().map(|&n| nodes[n]).collect();
+            let s = face_area(&pts);
             let c = face_center(&pts);
             let flux = (c[0] * s[0] + c[1] * s[1] + c[2] * s[2]) / 3.0;
             v[f.left] += flux;

@@ -4,25 +4,25 @@
 //! subsonic cases are smooth.
 
 use crate::gas::{conservative, primitive, NVAR};
-use crate::mesh::{face_center, Boundary, Mesh, Side};
+use crate::mesh::{face_area, face_center, Boundary, Mesh, Side};
 use gustkit_core::scalar::Scalar;
-use nalgebra::{Matrix3, Vector3};
 
 /// Where a stencil member's value comes from.
 #[derive(Clone, Copy, Debug)]
-enum Source {
+enum Source<S> {
     Cell(usize),
     /// The cell itself mirrored across a plane with this unit normal.
-    Mirror([f64; 3]),
+    Mirror([S; 3]),
 }
 
 /// Geometry of the least-squares gradients: per cell, its stencil with the weights A⁻¹ d (so that
-/// ∇φ = Σ weight (φ_j − φ_i)), and the offsets from cell to face centres.
+/// ∇φ = Σ weight (φ_j − φ_i)), and the offsets from cell to face centres. Generic over the scalar
+/// of the node coordinates, so that mesh-motion derivatives come from the same construction.
 #[derive(Clone, Debug)]
-pub struct Lsq {
-    pub centers: Vec<[f64; 3]>,
-    pub face_centers: Vec<[f64; 3]>,
-    stencils: Vec<Vec<(Source, [f64; 3])>>,
+pub struct Lsq<S = f64> {
+    pub centers: Vec<[S; 3]>,
+    pub face_centers: Vec<[S; 3]>,
+    stencils: Vec<Vec<(Source<S>, [S; 3])>>,
 }
 
 /// Primitive variables as an array [ρ, u, v, w, p].
@@ -36,21 +36,71 @@ pub fn cons<S: Scalar>(w: &[S; NVAR]) -> [S; NVAR] {
     conservative(w[0], [w[1], w[2], w[3]], w[4])
 }
 
-impl Lsq {
+/// The inverse of a 3 × 3 matrix by cofactors (zero for a singular one: a cell without a
+/// stencil then has a zero gradient, i.e. first order).
+fn inverse3<S: Scalar>(a: &[[S; 3]; 3]) -> [[S; 3]; 3] {
+    let c = |i: usize, j: usize| {
+        let (i1, i2) = ((i + 1) % 3, (i + 2) % 3);
+        let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
+        a[i1][j1] * a[i2][j2] - a[i1][j2] * a[i2][j1]
+    };
+    let det = a[0][0] * c(0, 0) + a[0][1] * c(0, 1) + a[0][2] * c(0, 2);
+    let scale = (0..3)
+        .flat_map(|i| (0..3).map(move |j| (i, j)))
+        .fold(0.0f64, |m, (i, j)| m.max(a[i][j].re().abs()));
+    if det.re().abs() <= 1e-300 + 1e-14 * scale * scale * scale {
+        return [[S::zero(); 3]; 3];
+    }
+    // (A⁻¹)_ij = C_ji / det
+    std::array::from_fn(|i| std::array::from_fn(|j| c(j, i) / det))
+}
+
+impl Lsq<f64> {
     pub fn new(mesh: &Mesh) -> Self {
+        Self::at(mesh, &mesh.nodes)
+    }
+
+    /// The same geometry in another scalar (constants: no derivative part).
+    pub fn cast<T: Scalar>(&self) -> Lsq<T> {
+        let v3 = |x: &[f64; 3]| x.map(T::cst);
+        Lsq {
+            centers: self.centers.iter().map(v3).collect(),
+            face_centers: self.face_centers.iter().map(v3).collect(),
+            stencils: self
+                .stencils
+                .iter()
+                .map(|st| {
+                    st.iter()
+                        .map(|(src, w)| {
+                            let src = match src {
+                                Source::Cell(j) => Source::Cell(*j),
+                                Source::Mirror(n) => Source::Mirror(v3(n)),
+                            };
+                            (src, v3(w))
+                        })
+                        .collect()
+                })
+                .collect(),
+        }
+    }
+}
+
+impl<S: Scalar> Lsq<S> {
+    /// The gradient geometry of `mesh` with its nodes at `nodes`.
+    pub fn at(mesh: &Mesh, nodes: &[[S; 3]]) -> Self {
         let nc = mesh.n_cells;
-        let face_centers: Vec<[f64; 3]> = mesh
+        let face_centers: Vec<[S; 3]> = mesh
             .faces
             .iter()
             .map(|f| {
-                let pts: Vec<[f64; 3]> = f.nodes.iter().map(|&n| mesh.nodes[n]).collect();
+                let pts: Vec<[S; 3]> = f.nodes.iter().map(|&n| nodes[n]).collect();
                 face_center(&pts)
             })
             .collect();
         // cell centre: mean of its face centres
-        let mut centers = vec![[0.0; 3]; nc];
+        let mut centers = vec![[S::zero(); 3]; nc];
         let mut count = vec![0.0; nc];
-        let mut add = |c: usize, x: &[f64; 3]| {
+        let mut add = |c: usize, x: &[S; 3]| {
             for i in 0..3 {
                 centers[c][i] += x[i];
             }
@@ -63,25 +113,26 @@ impl Lsq {
             }
         }
         for (c, k) in centers.iter_mut().zip(&count) {
-            c.iter_mut().for_each(|v| *v /= k);
+            c.iter_mut().for_each(|v| *v = *v / *k);
         }
-        let mut members: Vec<Vec<(Source, [f64; 3])>> = vec![Vec::new(); nc];
+        let mut members: Vec<Vec<(Source<S>, [S; 3])>> = vec![Vec::new(); nc];
         for (fi, f) in mesh.faces.iter().enumerate() {
             let l = f.left;
             match f.right {
                 Side::Cell(r) => {
-                    let d: [f64; 3] = std::array::from_fn(|i| centers[r][i] - centers[l][i]);
+                    let d: [S; 3] = std::array::from_fn(|i| centers[r][i] - centers[l][i]);
                     members[l].push((Source::Cell(r), d));
                     members[r].push((Source::Cell(l), d.map(|v| -v)));
                 }
                 Side::Boundary(Boundary::Symmetry) => {
-                    let s = mesh.area(fi);
+                    let pts: Vec<[S; 3]> = f.nodes.iter().map(|&n| nodes[n]).collect();
+                    let s = face_area(&pts);
                     let a = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
                     let n = s.map(|v| v / a);
-                    let h: f64 = (0..3)
-                        .map(|i| (face_centers[fi][i] - centers[l][i]) * n[i])
-                        .sum();
-                    members[l].push((Source::Mirror(n), n.map(|v| 2.0 * h * v)));
+                    let h = (0..3).fold(S::zero(), |acc, i| {
+                        acc + (face_centers[fi][i] - centers[l][i]) * n[i]
+                    });
+                    members[l].push((Source::Mirror(n), n.map(|v| h * v * 2.0)));
                 }
                 // walls and the far field: one-sided stencils (a mirror at a wall would impose a
                 // zero normal gradient and lose exactness for linear fields)
@@ -91,16 +142,21 @@ impl Lsq {
         let stencils = members
             .into_iter()
             .map(|m| {
-                let mut a = Matrix3::<f64>::zeros();
+                let mut a = [[S::zero(); 3]; 3];
                 for (_, d) in &m {
-                    let v = Vector3::from(*d);
-                    a += v * v.transpose();
+                    for i in 0..3 {
+                        for j in 0..3 {
+                            a[i][j] += d[i] * d[j];
+                        }
+                    }
                 }
-                let inv = a.try_inverse().unwrap_or_else(Matrix3::zeros);
+                let inv = inverse3(&a);
                 m.into_iter()
                     .map(|(src, d)| {
-                        let w = inv * Vector3::from(d);
-                        (src, [w[0], w[1], w[2]])
+                        let w: [S; 3] = std::array::from_fn(|i| {
+                            inv[i][0] * d[0] + inv[i][1] * d[1] + inv[i][2] * d[2]
+                        });
+                        (src, w)
                     })
                     .collect()
             })
@@ -113,7 +169,7 @@ impl Lsq {
     }
 
     /// Gradients ∂w_k/∂x_i of the primitive variables of every cell.
-    pub fn gradients<S: Scalar>(&self, w: &[[S; NVAR]]) -> Vec<[[S; 3]; NVAR]> {
+    pub fn gradients(&self, w: &[[S; NVAR]]) -> Vec<[[S; 3]; NVAR]> {
         self.stencils
             .iter()
             .enumerate()
@@ -126,9 +182,9 @@ impl Lsq {
                             let un = w[c][1] * n[0] + w[c][2] * n[1] + w[c][3] * n[2];
                             [
                                 w[c][0],
-                                w[c][1] - un * (2.0 * n[0]),
-                                w[c][2] - un * (2.0 * n[1]),
-                                w[c][3] - un * (2.0 * n[2]),
+                                w[c][1] - un * n[0] * 2.0,
+                                w[c][2] - un * n[1] * 2.0,
+                                w[c][3] - un * n[2] * 2.0,
                                 w[c][4],
                             ]
                         }
@@ -146,14 +202,8 @@ impl Lsq {
     }
 
     /// The conservative state of cell `c` reconstructed at the centre of face `f`.
-    pub fn face_state<S: Scalar>(
-        &self,
-        w: &[S; NVAR],
-        g: &[[S; 3]; NVAR],
-        c: usize,
-        f: usize,
-    ) -> [S; NVAR] {
-        let d: [f64; 3] = std::array::from_fn(|i| self.face_centers[f][i] - self.centers[c][i]);
+    pub fn face_state(&self, w: &[S; NVAR], g: &[[S; 3]; NVAR], c: usize, f: usize) -> [S; NVAR] {
+        let d: [S; 3] = std::array::from_fn(|i| self.face_centers[f][i] - self.centers[c][i]);
         let wf: [S; NVAR] =
             std::array::from_fn(|k| w[k] + g[k][0] * d[0] + g[k][1] * d[1] + g[k][2] * d[2]);
         cons(&wf)

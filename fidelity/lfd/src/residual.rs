@@ -174,8 +174,24 @@ impl Euler {
     /// The flux through face `f` out of its left cell, for the left state `ql` and, for interior
     /// faces, the right state `qr`.
     pub fn face_flux<S: Scalar>(&self, f: usize, ql: &State<S>, qr: Option<&State<S>>) -> State<S> {
-        let s = self.areas[f].map(S::cst);
-        let vg = S::cst(self.face_vg[f]);
+        self.face_flux_in(
+            f,
+            ql,
+            qr,
+            self.areas[f].map(S::cst),
+            S::cst(self.face_vg[f]),
+        )
+    }
+
+    /// The flux through face `f` of area vector `s` and volume flux `vg` (see [`Geom`]).
+    fn face_flux_in<S: Scalar>(
+        &self,
+        f: usize,
+        ql: &State<S>,
+        qr: Option<&State<S>>,
+        s: [S; 3],
+        vg: S,
+    ) -> State<S> {
         match (self.mesh.faces[f].right, qr) {
             (Side::Cell(_), Some(qr)) => self.roe.flux(ql, qr, s, vg),
             (Side::Boundary(Boundary::FarField), _) => {
@@ -187,6 +203,40 @@ impl Euler {
                 [S::zero(), p * s[0], p * s[1], p * s[2], p * vg]
             }
             (Side::Cell(_), None) => panic!("interior face {f} needs its right state"),
+        }
+    }
+
+    /// The mesh's present geometry in another scalar (no derivative part).
+    pub fn geometry<S: Scalar>(&self, order: Order) -> Geom<S> {
+        Geom {
+            areas: self.areas.iter().map(|a| a.map(S::cst)).collect(),
+            face_vg: self.face_vg.iter().map(|v| S::cst(*v)).collect(),
+            lsq: (order == Order::Second).then(|| self.lsq.cast()),
+        }
+    }
+
+    /// The geometry with the nodes at `nodes` and face volume fluxes `face_vg`, both in the scalar
+    /// S: with dual numbers, the residual's exact derivatives with respect to node positions and
+    /// grid (or gust) velocities, as the mode-motion and gust right-hand sides of the LFD need.
+    pub fn geometry_at<S: Scalar>(
+        &self,
+        nodes: &[[S; 3]],
+        face_vg: Vec<S>,
+        order: Order,
+    ) -> Geom<S> {
+        let areas = self
+            .mesh
+            .faces
+            .iter()
+            .map(|f| {
+                let pts: Vec<[S; 3]> = f.nodes.iter().map(|&n| nodes[n]).collect();
+                crate::mesh::face_area(&pts)
+            })
+            .collect();
+        Geom {
+            areas,
+            face_vg,
+            lsq: (order == Order::Second).then(|| Lsq::at(&self.mesh, nodes)),
         }
     }
 
@@ -202,19 +252,26 @@ impl Euler {
         q: &[State<S>],
         order: Order,
     ) -> (Vec<State<S>>, Vec<State<S>>) {
+        self.residual_in(q, &self.geometry(order))
+    }
+
+    /// The residual and face fluxes on a given geometry (its order: second when it carries the
+    /// reconstruction geometry).
+    pub fn residual_in<S: Scalar>(
+        &self,
+        q: &[State<S>],
+        geom: &Geom<S>,
+    ) -> (Vec<State<S>>, Vec<State<S>>) {
         let mut r = vec![[S::zero(); NVAR]; self.mesh.n_cells];
-        let second = match order {
-            Order::First => None,
-            Order::Second => {
-                let w: Vec<State<S>> = q.iter().map(prim).collect();
-                let g = self.lsq.gradients(&w);
-                Some((w, g))
-            }
-        };
+        let second = geom.lsq.as_ref().map(|lsq| {
+            let w: Vec<State<S>> = q.iter().map(prim).collect();
+            let g = lsq.gradients(&w);
+            (lsq, w, g)
+        });
         let state = |c: usize, fi: usize| -> State<S> {
             match &second {
                 None => q[c],
-                Some((w, g)) => self.lsq.face_state(&w[c], &g[c], c, fi),
+                Some((lsq, w, g)) => lsq.face_state(&w[c], &g[c], c, fi),
             }
         };
         let fluxes: Vec<State<S>> = self
@@ -228,7 +285,7 @@ impl Euler {
                     Side::Cell(c) => Some(state(c, fi)),
                     Side::Boundary(_) => None,
                 };
-                self.face_flux(fi, &ql, qr.as_ref())
+                self.face_flux_in(fi, &ql, qr.as_ref(), geom.areas[fi], geom.face_vg[fi])
             })
             .collect();
         for (f, flux) in self.mesh.faces.iter().zip(&fluxes) {
@@ -243,6 +300,15 @@ impl Euler {
         }
         (r, fluxes)
     }
+}
+
+/// What the residual needs of the mesh, in a scalar S: face area vectors, face volume fluxes
+/// (ẋ_G − u_G)·S and, for second order, the reconstruction geometry.
+#[derive(Clone, Debug)]
+pub struct Geom<S> {
+    pub areas: Vec<[S; 3]>,
+    pub face_vg: Vec<S>,
+    pub lsq: Option<Lsq<S>>,
 }
 
 /// The non-dimensional free stream (ρ = 1, a = 1, p = 1/γ) at Mach `mach` and angle of attack
@@ -364,6 +430,103 @@ mod tests {
                 let exact = jv[cell][k].d[0];
                 let rep = fd_check(&f, &[0.0], 0, exact, exact.abs().max(1e-8));
                 assert!(rep.best_rel_error < 1e-8, "cell {cell} var {k}: {rep:?}");
+            }
+        }
+    }
+
+    /// The residual in the complex-step scalar (h = 1e-30) along a random state direction equals
+    /// the dual-number Jacobian product to round-off (1e-13 of the largest entry): the scalar
+    /// genericity the complex-step second derivatives of paper Eq. 20 rely on, at both orders.
+    #[test]
+    fn complex_step_equals_dual_jacobian_product() {
+        use gustkit_core::scalar::CStep;
+        let mut e = Euler::new(airfoil_mesh(), free_stream(0.4, 1f64.to_radians()));
+        e.set_gust(
+            &Gust::Sine {
+                amplitude: 0.02,
+                omega: 0.5,
+                convection: 0.4,
+                x0: 0.0,
+            },
+            0.3,
+        );
+        let q = perturbed(&e, 5, 0.05);
+        let dir = perturbed(&e, 9, 1.0);
+        let h = 1e-30;
+        for order in [Order::First, Order::Second] {
+            let qd: Vec<State<Dual<1>>> = q
+                .iter()
+                .zip(&dir)
+                .map(|(a, d)| std::array::from_fn(|k| Dual::new(a[k], [d[k]])))
+                .collect();
+            let qc: Vec<State<CStep>> = q
+                .iter()
+                .zip(&dir)
+                .map(|(a, d)| std::array::from_fn(|k| CStep::new(a[k], h * d[k])))
+                .collect();
+            let jd = e.residual_and_fluxes(&qd, order).0;
+            let jc = e.residual_and_fluxes(&qc, order).0;
+            let scale = jd.iter().flatten().fold(0.0f64, |m, v| m.max(v.d[0].abs()));
+            let worst = jd
+                .iter()
+                .flatten()
+                .zip(jc.iter().flatten())
+                .fold(0.0f64, |m, (a, b)| m.max((a.d[0] - b.im() / h).abs()));
+            assert!(worst < 1e-13 * scale, "{order:?}: {worst:e} of {scale:e}");
+        }
+    }
+
+    /// The residual's derivative with respect to node positions and face volume fluxes (dual
+    /// numbers through [`Euler::geometry_at`]) against central differences of the residual on
+    /// moved meshes, to 1e-7: the ∂R/∂x_G and ∂R/∂ẋ_G of the mode-motion LFD right-hand side.
+    #[test]
+    fn geometry_derivative_matches_finite_differences() {
+        let e = Euler::new(airfoil_mesh(), free_stream(0.4, 1f64.to_radians()));
+        let q = perturbed(&e, 5, 0.05);
+        let nn = e.mesh.nodes.len();
+        let r = rand_vec(3 * nn + e.mesh.faces.len(), 21);
+        // in-plane node motion (the same on both planes), random face volume fluxes
+        let half = nn / 2;
+        let dx = |i: usize| [r[3 * (i % half)] * 1e-3, r[3 * (i % half) + 1] * 1e-3, 0.0];
+        let dvg = |f: usize| r[3 * nn + f] * 1e-3;
+        for order in [Order::First, Order::Second] {
+            let nodes: Vec<[Dual<1>; 3]> = (0..nn)
+                .map(|i| std::array::from_fn(|k| Dual::new(e.mesh.nodes[i][k], [dx(i)[k]])))
+                .collect();
+            let vg: Vec<Dual<1>> = (0..e.mesh.faces.len())
+                .map(|f| Dual::new(0.0, [dvg(f)]))
+                .collect();
+            let g = e.geometry_at(&nodes, vg, order);
+            let qd: Vec<State<Dual<1>>> = q.iter().map(|s| s.map(Dual::cst)).collect();
+            let exact = e.residual_in(&qd, &g).0;
+            let at = |t: f64| {
+                let mut m = e.clone();
+                m.move_nodes(
+                    (0..nn)
+                        .map(|i| std::array::from_fn(|k| e.mesh.nodes[i][k] + t * dx(i)[k]))
+                        .collect(),
+                );
+                m.face_vg = (0..e.mesh.faces.len()).map(|f| t * dvg(f)).collect();
+                m.residual_and_fluxes(&q, order).0
+            };
+            let (h1, h2) = (1e-3, 5e-4);
+            let (p1, m1, p2, m2) = (at(h1), at(-h1), at(h2), at(-h2));
+            let scale = exact
+                .iter()
+                .flatten()
+                .fold(0.0f64, |m, v| m.max(v.d[0].abs()));
+            for c in 0..e.mesh.n_cells {
+                for k in [0, 1, 2, 4] {
+                    let d1 = (p1[c][k] - m1[c][k]) / (2.0 * h1);
+                    let d2 = (p2[c][k] - m2[c][k]) / (2.0 * h2);
+                    let fd = (4.0 * d2 - d1) / 3.0;
+                    let err = (fd - exact[c][k].d[0]).abs();
+                    assert!(
+                        err < 1e-7 * scale,
+                        "{order:?} cell {c} var {k}: {fd} vs {}",
+                        exact[c][k].d[0]
+                    );
+                }
             }
         }
     }
