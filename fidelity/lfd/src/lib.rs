@@ -14,9 +14,11 @@
 //! the LFD operators and the `Aerodynamics` implementation.
 
 pub mod airfoil;
+pub mod deform;
 pub mod flux;
 pub mod gas;
 pub mod krylov;
+pub mod lfd;
 pub mod mesh;
 pub mod readers;
 pub mod reconstruct;

@@ -171,6 +171,39 @@ impl Euler {
         out
     }
 
+    /// The face volume fluxes of a harmonic vertical gust of unit amplitude,
+    /// ŵ(x) = e^{−iω(x − x0)/U} (the gust w(x, t) = Re(ŵ(x) e^{iωt})), integrated exactly over each
+    /// face's x-extent like [`Euler::gust_fluxes`]: the complex amplitudes of the time-domain
+    /// fluxes, for the LFD gust right-hand side.
+    pub fn harmonic_gust_fluxes(
+        &self,
+        omega: f64,
+        convection: f64,
+        x0: f64,
+    ) -> Vec<num_complex::Complex64> {
+        use num_complex::Complex64 as C;
+        let kappa = omega / convection;
+        let w_hat = |x: f64| C::new(0.0, -kappa * (x - x0)).exp();
+        self.mesh
+            .faces
+            .iter()
+            .enumerate()
+            .map(|(fi, f)| {
+                let xs = f.nodes.iter().map(|&n| self.mesh.nodes[n][0]);
+                let (xa, xb) = xs.fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
+                if xb - xa <= 0.0 {
+                    return C::new(0.0, 0.0);
+                }
+                let mean = if kappa * (xb - xa) < 1e-12 {
+                    w_hat(0.5 * (xa + xb))
+                } else {
+                    (w_hat(xb) - w_hat(xa)) / C::new(0.0, -kappa * (xb - xa))
+                };
+                -mean * self.areas[fi][1]
+            })
+            .collect()
+    }
+
     /// The flux through face `f` out of its left cell, for the left state `ql` and, for interior
     /// faces, the right state `qr`.
     pub fn face_flux<S: Scalar>(&self, f: usize, ql: &State<S>, qr: Option<&State<S>>) -> State<S> {

@@ -8,9 +8,10 @@ use crate::krylov;
 use crate::mesh::{Boundary, Side};
 use crate::residual::{Euler, Order, State};
 use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::Lu;
 use faer::sparse::{SparseColMat, Triplet};
 use faer::Mat;
-use gustkit_core::scalar::Dual;
+use gustkit_core::scalar::{Dual, Scalar};
 
 /// Settings of the steady solver.
 #[derive(Clone, Debug, PartialEq)]
@@ -23,6 +24,9 @@ pub struct SteadyParams {
     /// Second order: refactor the first-order preconditioner every this many Newton iterations
     /// (1: every iteration; a stale preconditioner costs GMRES iterations, never accuracy).
     pub refactor_every: usize,
+    /// Time domain: keep the preconditioner of the first step for the whole march (small
+    /// amplitudes, where the Jacobian hardly changes: every step then costs GMRES iterations only).
+    pub keep_preconditioner: bool,
     /// Stop when ‖R‖ ≤ tolerance · ‖R₀‖, when ‖R‖ reaches round-off (1e-15 of the fluxes that
     /// cancel in it), or when it stagnates below 1e-11 ‖R₀‖.
     pub tolerance: f64,
@@ -35,6 +39,7 @@ impl Default for SteadyParams {
             cfl_max: 1e12,
             max_iterations: 60,
             refactor_every: 1,
+            keep_preconditioner: false,
             tolerance: 1e-13,
         }
     }
@@ -106,6 +111,40 @@ impl Euler {
         blocks
     }
 
+    /// The sparse matrix diag(shift of each cell) + ∂R₁/∂q of the first-order Jacobian `blocks`,
+    /// real (Newton) or complex (LFD: s V + ∂R₁/∂q), for faer's sparse LU.
+    pub fn shifted_matrix<T: faer::traits::ComplexField + Copy>(
+        &self,
+        blocks: &Blocks,
+        shift: &dyn Fn(usize) -> T,
+        from_real: &dyn Fn(f64) -> T,
+    ) -> Result<SparseColMat<usize, T>, String> {
+        let n = self.mesh.n_cells;
+        let mut triplets: Vec<Triplet<usize, usize, T>> =
+            Vec::with_capacity(25 * blocks.len() + 5 * n);
+        for c in 0..n {
+            let d = shift(c);
+            for k in 0..NVAR {
+                triplets.push(Triplet::new(c * NVAR + k, c * NVAR + k, d));
+            }
+        }
+        for (row, col, b) in blocks {
+            for i in 0..NVAR {
+                for j in 0..NVAR {
+                    if b[i][j] != 0.0 {
+                        triplets.push(Triplet::new(
+                            row * NVAR + i,
+                            col * NVAR + j,
+                            from_real(b[i][j]),
+                        ));
+                    }
+                }
+            }
+        }
+        SparseColMat::<usize, T>::try_new_from_triplets(n * NVAR, n * NVAR, &triplets)
+            .map_err(|e| format!("{e:?}"))
+    }
+
     /// ‖Σ_faces |F|‖ over the cells: the size of the fluxes whose sum is the residual.
     fn flux_scale(&self, q: &[State<f64>]) -> f64 {
         let (_, fluxes) = self.residual_and_fluxes(q, Order::First);
@@ -157,6 +196,20 @@ impl Euler {
         params: &SteadyParams,
         time: Option<&TimeTerm>,
     ) -> Result<(Vec<State<f64>>, SteadyInfo), SteadyError> {
+        self.solve_implicit_with(q0, params, time, &mut None)
+    }
+
+    /// [`Euler::solve_implicit`] with the preconditioner kept in `precond` between calls: one
+    /// that is there is used (and refreshed every `refactor_every` iterations unless
+    /// `keep_preconditioner`), one built here is left there for the next call.
+    pub fn solve_implicit_with(
+        &self,
+        q0: Vec<State<f64>>,
+        params: &SteadyParams,
+        time: Option<&TimeTerm>,
+        precond: &mut Option<Lu<usize, f64>>,
+    ) -> Result<(Vec<State<f64>>, SteadyInfo), SteadyError> {
+        let kept = precond.is_some() && params.keep_preconditioner;
         let n = self.mesh.n_cells;
         let norm = |r: &[State<f64>]| r.iter().flatten().map(|v| v * v).sum::<f64>().sqrt();
         let total = |q: &[State<f64>]| -> Vec<State<f64>> {
@@ -189,7 +242,6 @@ impl Euler {
         // round-off level of the residual: ε times the size of the fluxes that cancel in it
         let floor = 1e-15 * self.flux_scale(&q);
         let mut cfl = params.cfl0;
-        let mut precond: Option<faer::sparse::linalg::solvers::Lu<usize, f64>> = None;
         for it in 0..params.max_iterations {
             let rn = *history.last().expect("starts with r0");
             // converged, or stagnating at round-off below 1e-11 of the initial residual
@@ -209,53 +261,33 @@ impl Euler {
                 reason,
                 history: history.clone(),
             };
+            // (a kept preconditioner is an approximation: Newton–Krylov even at first order)
             let refactor = precond.is_none()
-                || self.order == Order::First
-                || it % params.refactor_every.max(1) == 0;
+                || (!kept
+                    && (self.order == Order::First || it % params.refactor_every.max(1) == 0));
             if refactor {
-                let mut triplets: Vec<Triplet<usize, usize, f64>> = Vec::new();
-                for (c, rad) in radius.iter().enumerate() {
-                    for k in 0..NVAR {
-                        triplets.push(Triplet::new(
-                            c * NVAR + k,
-                            c * NVAR + k,
-                            rad / cfl + diag_time(c),
-                        ));
-                    }
-                }
-                for (row, col, b) in self.jacobian(&q) {
-                    for i in 0..NVAR {
-                        for j in 0..NVAR {
-                            if b[i][j] != 0.0 {
-                                triplets.push(Triplet::new(
-                                    row * NVAR + i,
-                                    col * NVAR + j,
-                                    b[i][j],
-                                ));
-                            }
-                        }
-                    }
-                }
-                let a = SparseColMat::<usize, f64>::try_new_from_triplets(
-                    n * NVAR,
-                    n * NVAR,
-                    &triplets,
-                )
-                .map_err(|e| linear(format!("{e:?}")))?;
-                precond = Some(a.sp_lu().map_err(|e| linear(format!("{e:?}")))?);
+                let a = self
+                    .shifted_matrix(
+                        &self.jacobian(&q),
+                        &|c| radius[c] / cfl + diag_time(c),
+                        &|v| v,
+                    )
+                    .map_err(linear)?;
+                *precond = Some(a.sp_lu().map_err(|e| linear(format!("{e:?}")))?);
             }
+            let exact = self.order == Order::First && !kept;
             let lu = precond.as_ref().expect("factored above");
             let solve_lu = |v: &[f64]| -> Vec<f64> {
                 let m = lu.solve(&Mat::<f64>::from_fn(v.len(), 1, |i, _| v[i]));
                 (0..v.len()).map(|i| m[(i, 0)]).collect()
             };
             let rhs: Vec<f64> = r.iter().flatten().map(|v| -v).collect();
-            let dq: Vec<f64> = match self.order {
+            let dq: Vec<f64> = match exact {
                 // the assembled matrix is the exact Jacobian: Newton directly
-                Order::First => solve_lu(&rhs),
-                // Newton–Krylov: the exact Jacobian product of the second-order residual (dual
-                // numbers), preconditioned by the first-order Jacobian's LU
-                Order::Second => {
+                true => solve_lu(&rhs),
+                // Newton–Krylov: the exact Jacobian product of the residual (dual numbers),
+                // preconditioned by the first-order Jacobian's LU
+                false => {
                     let op = |v: &[f64]| -> Vec<f64> {
                         let qd: Vec<State<Dual<1>>> = (0..n)
                             .map(|c| std::array::from_fn(|k| Dual::new(q[c][k], [v[c * NVAR + k]])))
@@ -320,13 +352,19 @@ impl Euler {
 
     /// Pressure force on the wall faces, Σ p S (non-dimensional: ρ∞ = 1, a∞ = 1).
     pub fn wall_force(&self, q: &[State<f64>]) -> [f64; 3] {
-        let mut force = [0.0; 3];
+        self.wall_force_in(q, &self.areas)
+    }
+
+    /// Σ p S over the wall faces with face area vectors `areas`, in any scalar (the linearized
+    /// forces of paper Eqs. 8 and 14 by dual numbers).
+    pub fn wall_force_in<S: Scalar>(&self, q: &[State<S>], areas: &[[S; 3]]) -> [S; 3] {
+        let mut force = [S::zero(); 3];
         for (fi, f) in self.mesh.faces.iter().enumerate() {
             if f.right == Side::Boundary(Boundary::Wall) {
                 let p = primitive(&q[f.left]).p;
                 for i in 0..3 {
                     // the face points out of the fluid into the body
-                    force[i] += p * self.areas[fi][i];
+                    force[i] += p * areas[fi][i];
                 }
             }
         }

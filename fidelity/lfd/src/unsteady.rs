@@ -44,6 +44,7 @@ pub fn march(
     let (mut q_old, mut q) = (q0.clone(), q0);
     let mut v_old = euler.volumes.clone();
     let mut swept_old: Option<Vec<f64>> = None;
+    let mut precond = None;
     for step in 1..=steps {
         let t = step as f64 * dt;
         let v_now = euler.volumes.clone();
@@ -98,7 +99,11 @@ pub fn march(
                     .collect(),
             }
         };
-        let (q_new, info) = euler.solve_implicit(q.clone(), params, Some(&term))?;
+        if !params.keep_preconditioner {
+            precond = None;
+        }
+        let (q_new, info) =
+            euler.solve_implicit_with(q.clone(), params, Some(&term), &mut precond)?;
         samples.push(Sample {
             time: t,
             force: euler.wall_force(&q_new),
