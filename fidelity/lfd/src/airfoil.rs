@@ -121,6 +121,16 @@ impl Section {
         )
     }
 
+    /// The same section with every ordinate scaled by `factor` (e.g. 0.4: a 4 %-thick NACA
+    /// 64A004-like section from the 64A010 ordinates, for thin-airfoil comparisons).
+    pub fn scaled(&self, factor: f64) -> Self {
+        Self {
+            s: self.s.clone(),
+            y: self.y.iter().map(|v| v * factor).collect(),
+            m: self.m.iter().map(|v| v * factor).collect(),
+        }
+    }
+
     /// The closed contour, counter-clockwise from the upper trailing edge: τ ∈ [0, ½] runs over
     /// the upper surface from the trailing edge to the leading edge, (½, 1) back along the lower
     /// one; chordwise positions x = (1 + cos 2πτ)/2 cluster points at both edges.

@@ -257,8 +257,8 @@ impl Lfd {
             .collect()
     }
 
-    /// The linearized force p̂ S + p Ŝ on every wall face (paper Eqs. 8 and 14: the pressure of the
-    /// perturbed state on the perturbed face areas), by dual numbers.
+    /// The linearized force p̂ S + (p − p∞) Ŝ on every wall face (paper Eqs. 8 and 14: the gauge
+    /// pressure of the perturbed state on the perturbed face areas), by dual numbers.
     pub fn wall_face_forces(
         &self,
         q_hat: &[C64],
@@ -272,6 +272,7 @@ impl Lfd {
                 Some(xh) => std::array::from_fn(|i| Dual::new(p[i], [xh[n][i].re, xh[n][i].im])),
             }
         };
+        let p_inf = crate::gas::primitive(&self.euler.q_inf).p;
         mesh.faces
             .iter()
             .enumerate()
@@ -282,7 +283,8 @@ impl Lfd {
                     let x = q_hat[c * NVAR + k];
                     Dual::new(self.q0[c][k], [x.re, x.im])
                 });
-                let p = crate::gas::primitive(&q).p;
+                // gauge pressure, as in Euler::wall_force_in
+                let p = crate::gas::primitive(&q).p - p_inf;
                 let pts: Vec<[Dual<2>; 3]> = f.nodes.iter().map(|&n| node(n)).collect();
                 let s = crate::mesh::face_area(&pts);
                 (
@@ -520,7 +522,7 @@ mod tests {
                 i * fourier_coefficient(&state[k], omega),
                 q_hat[cell * NVAR + k],
             );
-        eprintln!("digits: {:.2}", d);
+            eprintln!("digits: {:.2}", d);
             assert!(d >= 8.0, "state {k}: {d:.1} digits");
         }
     }

@@ -16,6 +16,7 @@
 pub mod airfoil;
 pub mod deform;
 pub mod flux;
+pub mod gafs;
 pub mod gas;
 pub mod krylov;
 pub mod lfd;

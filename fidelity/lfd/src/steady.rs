@@ -350,18 +350,21 @@ impl Euler {
         })
     }
 
-    /// Pressure force on the wall faces, Σ p S (non-dimensional: ρ∞ = 1, a∞ = 1).
+    /// Pressure force on the wall faces, Σ (p − p∞) S (non-dimensional: ρ∞ = 1, a∞ = 1).
     pub fn wall_force(&self, q: &[State<f64>]) -> [f64; 3] {
         self.wall_force_in(q, &self.areas)
     }
 
-    /// Σ p S over the wall faces with face area vectors `areas`, in any scalar (the linearized
-    /// forces of paper Eqs. 8 and 14 by dual numbers).
+    /// Σ (p − p∞) S over the wall faces with face area vectors `areas`, in any scalar. The gauge
+    /// pressure changes no total force on a closed body, but it keeps the free-stream pressure out
+    /// of linearized forces on rotating faces: p∞ Ŝ·φ of a pitching body is a spurious "follower"
+    /// stiffness of size p∞ V / q∞, not an aerodynamic force.
     pub fn wall_force_in<S: Scalar>(&self, q: &[State<S>], areas: &[[S; 3]]) -> [S; 3] {
         let mut force = [S::zero(); 3];
+        let p_inf = primitive(&self.q_inf).p;
         for (fi, f) in self.mesh.faces.iter().enumerate() {
             if f.right == Side::Boundary(Boundary::Wall) {
-                let p = primitive(&q[f.left]).p;
+                let p = primitive(&q[f.left]).p - p_inf;
                 for i in 0..3 {
                     // the face points out of the fluid into the body
                     force[i] += p * areas[fi][i];
