@@ -195,8 +195,10 @@ fn gust_results(study: &Study) -> Result<GustResults> {
 
 /// `gustkit run`: every analysis the study defines, with its report.
 pub fn run(file: &Path, reports: &Path, resume: bool) -> Result<()> {
-    if is_cfd_study(file) {
-        return crate::cfd::run(file, reports);
+    match top_level_key(file, &["typical_section", "cfd"]) {
+        Some("typical_section") => return crate::section::run(file, reports),
+        Some(_) => return crate::cfd::run(file, reports),
+        None => {}
     }
     let study = Study::load(file)?;
     let t0 = Instant::now();
@@ -252,12 +254,13 @@ pub fn run(file: &Path, reports: &Path, resume: bool) -> Result<()> {
     Ok(())
 }
 
-/// Whether a JSON file is a CFD verification study (a top-level `cfd` section).
-fn is_cfd_study(file: &Path) -> bool {
-    std::fs::read_to_string(file)
+/// The first of `keys` that a JSON study file has at its top level: `typical_section` studies
+/// and CFD verification studies (`cfd`) run by their own modules.
+fn top_level_key(file: &Path, keys: &[&'static str]) -> Option<&'static str> {
+    let v = std::fs::read_to_string(file)
         .ok()
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-        .is_some_and(|v| v.get("cfd").is_some())
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())?;
+    keys.iter().copied().find(|k| v.get(*k).is_some())
 }
 
 /// `gustkit report RUN_DIR`: every figure and the summary again, from results.json alone (or, for
@@ -274,7 +277,11 @@ pub fn report(dir: &Path) -> Result<()> {
     }
     let results = dir.join("results.json");
     let value = report::read_json(&results)?;
-    let study = if value.get("cfd").is_some() {
+    let study = if value.get("models").is_some() && value.get("spec").is_some() {
+        let r: crate::section::SectionResults = report::from_json(&results, &value)?;
+        crate::section::render(dir, &r)?;
+        r.study
+    } else if value.get("cfd").is_some() {
         let r: crate::cfd::CfdResults = report::from_json(&results, &value)?;
         crate::cfd::render(dir, &r)?;
         r.study

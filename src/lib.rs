@@ -10,6 +10,7 @@ pub mod gust;
 pub mod optim;
 pub mod pipeline;
 pub mod report;
+pub mod section;
 pub mod structure;
 pub mod study;
 pub mod transfer;

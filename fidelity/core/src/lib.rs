@@ -3,6 +3,7 @@
 
 pub mod aero;
 pub mod scalar;
+pub mod strip;
 pub mod theory;
 
 pub use aero::{

@@ -2,6 +2,7 @@
 //! their integral representations (Simpson quadrature): accurate to ~1e-10, for reference values
 //! in tests and reports (Theodorsen and Sears functions).
 
+use num_complex::Complex64;
 use std::f64::consts::PI;
 
 fn simpson(f: impl Fn(f64) -> f64, a: f64, b: f64, n: usize) -> f64 {
@@ -52,12 +53,54 @@ pub fn sears(k: f64) -> (f64, f64) {
     (j0 * cr + j1 * ci, j0 * ci - j1 * cr + j1)
 }
 
+/// Strip-theory GAFs per unit span of a flat-plate section of semichord `b` (m), divided by q∞
+/// (the trait's normalization), at reduced frequency k = ωb/U: plunge h (up, m) and pitch α (nose
+/// up about the mid-chord, rad) by Theodorsen, the vertical gust (w_g/U = 1, phase zero at the
+/// mid-chord) by Sears. The circulatory parts carry the Prandtl–Glauert factor 1/β of `mach`
+/// (0 for the incompressible theory). Returns ([[L_h, L_α], [M_h, M_α]], [L_g, M_g]): row 0 the
+/// lift (the force on the plunge mode), row 1 the nose-up moment about the mid-chord.
+pub fn strip_gafs(k: f64, b: f64, mach: f64) -> ([[Complex64; 2]; 2], [Complex64; 2]) {
+    let (cr, ci) = if k == 0.0 { (1.0, 0.0) } else { theodorsen(k) };
+    let (sr, si) = if k == 0.0 { (1.0, 0.0) } else { sears(k) };
+    let c = Complex64::new(cr, ci);
+    let i = Complex64::new(0.0, 1.0);
+    let beta = (1.0 - mach * mach).sqrt();
+    // ρ = 2, U = 1 (q∞ = 1), ω = k / b; Theodorsen's a = 0 (mid-chord), h positive up
+    let (rho, u, w) = (2.0, 1.0, k / b);
+    let circ = 2.0 * PI * rho * u * b / beta;
+    // downwash at the three-quarter chord: −ḣ + U α + (b/2) α̇
+    let l_h = PI * rho * b * b * w * w - circ * c * i * w;
+    let l_a = PI * rho * b * b * u * i * w + circ * c * (u + b / 2.0 * i * w);
+    let m_h = -circ * c * i * w * b / 2.0;
+    let m_a = PI * rho * b * b * (b * b / 8.0 * w * w - u * b / 2.0 * i * w)
+        + circ * c * (u + b / 2.0 * i * w) * b / 2.0;
+    let l_g = circ * u * Complex64::new(sr, si);
+    ([[l_h, l_a], [m_h, m_a]], [l_g, l_g * b / 2.0])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     /// Tabulated values (Abramowitz & Stegun 9.1): J0(1) = 0.7651976866, J1(1) = 0.4400505857,
     /// Y0(1) = 0.0882569642, Y1(1) = −0.7812128213; Theodorsen C(0.5) ≈ 0.5979 − 0.1507 i.
+    /// Quasi-steady limits of the strip GAFs: at k = 0 the lift of a unit pitch is 2π b ρU²/q∞ =
+    /// 4πb (twice the section lift slope per unit span), acting at the quarter chord (moment
+    /// b/2 × lift), a static plunge makes no force, and the gust lift equals the pitch lift (w/U =
+    /// 1 is a unit angle of attack); the Prandtl–Glauert factor scales them by 1/β.
+    #[test]
+    fn strip_gafs_steady_limits() {
+        let b = 0.7;
+        let (ss, gs) = strip_gafs(0.0, b, 0.0);
+        let l = 4.0 * PI * b;
+        assert!((ss[0][1].re - l).abs() < 1e-12 && ss[0][1].im == 0.0);
+        assert!((ss[1][1].re - l * b / 2.0).abs() < 1e-12);
+        assert!(ss[0][0].norm() == 0.0 && ss[1][0].norm() == 0.0);
+        assert!((gs[0] - ss[0][1]).norm() < 1e-12);
+        let (ssc, _) = strip_gafs(0.0, b, 0.6);
+        assert!((ssc[0][1].re - l / 0.8).abs() < 1e-12);
+    }
+
     #[test]
     fn bessel_and_theodorsen_values() {
         assert!((j(0, 1.0) - 0.7651976866).abs() < 1e-9);

@@ -214,7 +214,7 @@ mod tests {
     use crate::airfoil::Section;
     use crate::residual::{free_stream, Euler, Order};
     use crate::steady::SteadyParams;
-    use gustkit_core::theory::{sears, theodorsen};
+    use gustkit_core::theory::strip_gafs;
 
     /// A 4 %-thick section (the 64A010 ordinates scaled) at Mach `mach`, chord 1 m, per unit span.
     pub(crate) fn thin_section(
@@ -246,27 +246,6 @@ mod tests {
             m.disp[1][i] = [p[2], 0.0, -p[0]];
         }
         m
-    }
-
-    /// Theodorsen (plunge, pitch about mid-chord) and Sears GAFs per unit span of a flat plate of
-    /// semichord b, divided by q∞, Prandtl–Glauert scaled: [[L_h, L_α], [M_h, M_α]], [L_g, M_g].
-    pub(crate) fn strip_gafs(k: f64, b: f64, mach: f64) -> ([[C64; 2]; 2], [C64; 2]) {
-        let (cr, ci) = if k == 0.0 { (1.0, 0.0) } else { theodorsen(k) };
-        let c = C64::new(cr, ci);
-        let i = C64::new(0.0, 1.0);
-        let pi = std::f64::consts::PI;
-        let beta = (1.0 - mach * mach).sqrt();
-        // U = 1, ρ = 2 so that q∞ = 1; ω = k
-        let (rho, u, w) = (2.0, 1.0, k / b);
-        let l_h = pi * rho * b * b * w * w - 2.0 * pi * rho * u * b * c * i * w / beta;
-        let l_a = pi * rho * b * b * u * i * w
-            + 2.0 * pi * rho * u * b * c * (u + b / 2.0 * i * w) / beta;
-        let m_h = -pi * rho * u * b * b * c * i * w / beta;
-        let m_a = pi * rho * b * b * (-(u * b / 2.0) * i * w + b * b / 8.0 * w * w)
-            + pi * rho * u * b * b * c * (u + b / 2.0 * i * w) / beta;
-        let (sr, si) = if k == 0.0 { (1.0, 0.0) } else { sears(k) };
-        let l_g = 2.0 * pi * rho * u * u * b * C64::new(sr, si) / beta;
-        ([[l_h, l_a], [m_h, m_a]], [l_g, l_g * b / 2.0])
     }
 
     /// The LFD GAFs through the trait for a 4 %-thick section at Mach 0.1 (plunge, pitch about

@@ -107,9 +107,13 @@ pub fn gmres<T: Field>(
     }
     let mut total = 0;
     loop {
-        // r = b − A x
-        let ax = op(&x);
-        let r: Vec<T> = b.iter().zip(&ax).map(|(a, c)| *a - *c).collect();
+        // r = b − A x (the first cycle starts from x = 0: r = b)
+        let r: Vec<T> = if total == 0 {
+            b.to_vec()
+        } else {
+            let ax = op(&x);
+            b.iter().zip(&ax).map(|(a, c)| *a - *c).collect()
+        };
         let beta = norm(&r);
         if beta <= tol * bnorm {
             history.push(beta / bnorm);

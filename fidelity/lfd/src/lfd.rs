@@ -83,12 +83,23 @@ pub struct HarmonicGust {
     pub x0: f64,
 }
 
+/// Which matrix the factored preconditioner s V + J holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Preconditioner {
+    /// The exact Jacobian of the scheme (coloured assembly): the LU solves the LFD system
+    /// directly, GMRES only polishes (one or two iterations). The default where it fits in memory.
+    Exact,
+    /// The first-order Jacobian: a sparser LU, more GMRES iterations.
+    FirstOrder,
+}
+
 /// The LFD problem about a converged steady state.
 pub struct Lfd {
     pub euler: Euler,
     pub q0: Vec<State<f64>>,
-    /// First-order Jacobian blocks at q₀ (the preconditioner's matrix).
+    /// Jacobian blocks at q₀ of the preconditioner's matrix.
     blocks: Blocks,
+    pub preconditioner: Preconditioner,
     pub params: LfdParams,
 }
 
@@ -103,13 +114,30 @@ pub struct Factored {
 pub type Field = Vec<C64>;
 
 impl Lfd {
-    /// The LFD problem of `euler` (static mesh, no gust) about its steady state `q0`.
+    /// The LFD problem of `euler` (static mesh, no gust) about its steady state `q0`, with the
+    /// exact Jacobian as preconditioner.
     pub fn new(euler: Euler, q0: Vec<State<f64>>) -> Self {
-        let blocks = euler.jacobian(&q0);
+        Self::with_preconditioner(euler, q0, Preconditioner::Exact)
+    }
+
+    /// The LFD problem with a chosen preconditioner.
+    pub fn with_preconditioner(
+        euler: Euler,
+        q0: Vec<State<f64>>,
+        preconditioner: Preconditioner,
+    ) -> Self {
+        let blocks = match preconditioner {
+            Preconditioner::FirstOrder => euler.jacobian(&q0),
+            Preconditioner::Exact => {
+                let coloring = crate::jacobian::Coloring::new(&euler, euler.order);
+                euler.jacobian_colored(&q0, &coloring, euler.order)
+            }
+        };
         Self {
             euler,
             q0,
             blocks,
+            preconditioner,
             params: LfdParams::default(),
         }
     }
@@ -543,6 +571,9 @@ mod tests {
         let mut e = lfd.euler.clone();
         let params = SteadyParams {
             keep_preconditioner: true,
+            exact_jacobian: true,
+            // no pseudo-time damping: the physical time term conditions the tiny-amplitude steps
+            cfl0: 1e12,
             tolerance: 1e-14,
             ..SteadyParams::default()
         };
@@ -557,6 +588,10 @@ mod tests {
         )
         .unwrap();
         let lift0 = lfd.euler.wall_force(&lfd.q0)[1];
+        eprintln!(
+            "newton its: {:?}",
+            samples.iter().map(|s| s.iterations).collect::<Vec<_>>()
+        );
         samples[samples.len() - steps_per_period..]
             .iter()
             .map(|s| (s.time, s.force[1] - lift0))
@@ -564,8 +599,8 @@ mod tests {
     }
 
     /// The gust LFD (BDF2 symbol) against the nonlinear march with a sine gust of amplitude 1e-6:
-    /// the lift agrees to 5 digits (the nonlinearity is ~1e-6 of the response, the transient after
-    /// 30 periods ~1e-10).
+    /// the lift agrees to 8 digits (measured 9.6: the nonlinearity at the fundamental frequency is
+    /// of second order in the amplitude, the transient after 30 periods ~1e-10).
     #[test]
     fn gust_lfd_matches_small_amplitude_time_domain() {
         let lfd = problem(32, 12, 20.0, Order::Second);
@@ -593,13 +628,13 @@ mod tests {
         let c = fourier_coefficient(&lift, omega) * C64::new(0.0, 1.0 / amp);
         let d = digits(c, lift_hat);
         eprintln!("digits: {:.2}", d);
-        assert!(d >= 5.0, "{d:.1} digits: {c} vs {lift_hat}");
+        assert!(d >= 8.0, "{d:.1} digits: {c} vs {lift_hat}");
     }
 
     /// Mode motion: pitch about the quarter chord spread through the mesh by inverse-distance
     /// weighting, moving the mesh by Re(1e-6 x̂ e^{iωt}) in the nonlinear ALE march (swept-volume
     /// GCL) against the BDF2-symbol LFD with the motion right-hand side (node positions, grid
-    /// velocities, volumes): the lift agrees to 5 digits.
+    /// velocities, volumes): the lift agrees to 6 digits (measured 7.1).
     #[test]
     fn motion_lfd_matches_small_amplitude_time_domain() {
         let lfd = problem(32, 12, 20.0, Order::Second);
@@ -631,7 +666,7 @@ mod tests {
         let c = fourier_coefficient(&lift, omega) / amp;
         let dg = digits(c, lift_hat);
         eprintln!("digits: {:.2}", dg);
-        assert!(dg >= 5.0, "{dg:.1} digits: {c} vs {lift_hat}");
+        assert!(dg >= 6.0, "{dg:.1} digits: {c} vs {lift_hat}");
     }
 
     /// k → 0: the LFD gust response at ω = 0 is the derivative of the steady lift with respect

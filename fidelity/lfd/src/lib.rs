@@ -18,6 +18,7 @@ pub mod deform;
 pub mod flux;
 pub mod gafs;
 pub mod gas;
+pub mod jacobian;
 pub mod krylov;
 pub mod lfd;
 pub mod mesh;

@@ -33,6 +33,20 @@ pub fn march(
     steps: usize,
     params: &SteadyParams,
 ) -> Result<(Vec<State<f64>>, Vec<Sample>), SteadyError> {
+    march_observed(euler, q0, gust, motion, dt, steps, params, &mut |_, _| {})
+}
+
+/// [`march`] with `observe(t, q)` called at every new time level (probes, Fourier fits).
+pub fn march_observed(
+    euler: &mut Euler,
+    q0: Vec<State<f64>>,
+    gust: Option<&Gust>,
+    motion: Option<Motion<'_>>,
+    dt: f64,
+    steps: usize,
+    params: &SteadyParams,
+    observe: &mut dyn FnMut(f64, &[State<f64>]),
+) -> Result<(Vec<State<f64>>, Vec<Sample>), SteadyError> {
     if let Some(m) = motion {
         euler.move_nodes(m(0.0));
     }
@@ -109,6 +123,7 @@ pub fn march(
             force: euler.wall_force(&q_new),
             iterations: info.iterations,
         });
+        observe(t, &q_new);
         q_old = std::mem::replace(&mut q, q_new);
         v_old = v_now;
     }
@@ -117,6 +132,13 @@ pub fn march(
 
 /// Least-squares fit a + b sin ωt + c cos ωt of (t, y) samples; returns (mean, amplitude).
 pub fn harmonic_fit(samples: &[(f64, f64)], omega: f64) -> (f64, f64) {
+    let (mean, c) = fourier_fit(samples, omega);
+    (mean, c.norm())
+}
+
+/// Least-squares fit y ≈ a + Re(ĉ e^{iωt}) of (t, y) samples (any number of periods, not
+/// necessarily whole); returns (a, ĉ).
+pub fn fourier_fit(samples: &[(f64, f64)], omega: f64) -> (f64, num_complex::Complex64) {
     let mut m = [[0.0; 3]; 3];
     let mut r = [0.0; 3];
     for &(t, y) in samples {
@@ -133,7 +155,8 @@ pub fn harmonic_fit(samples: &[(f64, f64)], omega: f64) -> (f64, f64) {
         .lu()
         .solve(&nalgebra::Vector3::from(r))
         .unwrap_or_else(nalgebra::Vector3::zeros);
-    (x[0], x[1].hypot(x[2]))
+    // b sin + c cos = Re((c − i b) e^{iωt})
+    (x[0], num_complex::Complex64::new(x[2], -x[1]))
 }
 
 #[cfg(test)]

@@ -15,6 +15,8 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::time::Instant;
 
+pub mod table2;
+
 /// A CFD verification study file.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -48,6 +50,9 @@ pub struct CfdSpec {
     /// Paper Fig. 1: a sinusoidal vertical gust in the time domain.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub time_gust: Option<TimeGustSpec>,
+    /// Paper Table 2: the LFD gust solution against the time domain.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lfd_gust: Option<table2::LfdGustSpec>,
 }
 
 fn default_order() -> String {
@@ -161,6 +166,9 @@ pub struct CfdResults {
     pub steady_gust: Option<SteadyGustResults>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub time_gust: Option<TimeGustResults>,
+    /// Paper Table 2 (with `digits_fourier` and `digits_bdf2`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub table2: Option<table2::Table2>,
     pub run_time_s: f64,
 }
 
@@ -246,14 +254,44 @@ impl CfdStudyFile {
                 );
             }
         }
-        if c.steady_gust.is_none() && c.time_gust.is_none() {
-            return bad("cfd", "nothing to run: add steady_gust or time_gust".into());
+        if let Some(t) = &c.lfd_gust {
+            if !(t.reduced_frequency > 0.0 && t.reduced_frequency.is_finite()) {
+                return bad(
+                    "cfd.lfd_gust.reduced_frequency",
+                    format!("must be positive (got {})", t.reduced_frequency),
+                );
+            }
+            if !(t.amplitude_mach > 0.0 && t.amplitude_mach < 0.1) {
+                return bad(
+                    "cfd.lfd_gust.amplitude_mach",
+                    format!(
+                        "must lie in (0, 0.1): a small perturbation (got {})",
+                        t.amplitude_mach
+                    ),
+                );
+            }
+            if t.steps_per_period < 4
+                || t.linear_steps_per_period < 4
+                || t.fit_periods == 0
+                || t.linear_periods == 0
+            {
+                return bad(
+                    "cfd.lfd_gust",
+                    "need steps_per_period and linear_steps_per_period >= 4, fit_periods and linear_periods >= 1".into(),
+                );
+            }
+        }
+        if c.steady_gust.is_none() && c.time_gust.is_none() && c.lfd_gust.is_none() {
+            return bad(
+                "cfd",
+                "nothing to run: add steady_gust, time_gust or lfd_gust".into(),
+            );
         }
         Ok(s)
     }
 }
 
-fn build(c: &CfdSpec, base: &Path, q_inf: State<f64>) -> Result<Euler> {
+pub(crate) fn build(c: &CfdSpec, base: &Path, q_inf: State<f64>) -> Result<Euler> {
     let mesh = match (&c.mesh, &c.mesh_file) {
         (Some(m), _) => builtin_mesh(m),
         (None, Some(f)) => file_mesh(f, base)?,
@@ -517,6 +555,35 @@ pub fn summary(r: &CfdResults) -> String {
             t.amplitudes.last().copied().unwrap_or(f64::NAN) / t.sears_pg_amplitude
         );
     }
+    if let Some(t) = &r.table2 {
+        md += &format!(
+            "\n## Table 2: LFD gust response against the time domain\n\nk = {}; probe cell {} at ({:.4}, {:.4}) chords from the leading edge; amplitudes per unit gust velocity (in a∞). LFD (s = iω) against the least-squares Fourier fit of a nonlinear BDF2 run with gust amplitude {:e}; LFD with the BDF2 symbol against the linearized BDF2 march.\n\n| quantity | LFD | Fourier fit | digits | LFD (BDF2 symbol) | linearized BDF2 | digits |\n|---|---|---|---:|---|---|---:|\n",
+            t.reduced_frequency, t.probe_cell, t.probe_center[0], t.probe_center[1], t.amplitude_mach
+        );
+        let z = |v: [f64; 2]| format!("{:.9} {:+.9}i", v[0], v[1]);
+        for row in &t.rows {
+            md += &format!(
+                "| {} | {} | {} | {:.1} | {} | {} | {:.1} |\n",
+                row.variable,
+                z(row.lfd),
+                z(row.fourier),
+                row.digits_fourier,
+                z(row.lfd_bdf2),
+                z(row.linear_bdf2),
+                row.digits_bdf2
+            );
+        }
+        md += &format!(
+            "\nAgreeing digits (smallest over the rows): Fourier fit {:.1} (the paper: 3–5), BDF2 symbol {:.1}.\n\nOne LFD frequency (factorization and solve, {} GMRES iterations): {:.2} s; the nonlinear time-domain run: {:.1} s ({:.0}× the LFD); the linearized march: {:.1} s.\n\n![lift](table2_lift.png)\n",
+            t.digits_fourier,
+            t.digits_bdf2,
+            t.gmres_iterations,
+            t.lfd_time_s,
+            t.time_domain_time_s,
+            t.time_domain_time_s / t.lfd_time_s,
+            t.linear_march_time_s
+        );
+    }
     md += &format!("\nRun time {:.1} s.\n", r.run_time_s);
     md
 }
@@ -595,6 +662,26 @@ pub fn render(dir: &Path, r: &CfdResults) -> Result<()> {
             ),
         )?;
     }
+    if let Some(t) = &r.table2 {
+        save_figure(
+            dir,
+            "table2_lift",
+            &LinePlot {
+                title: format!("{}: lift per unit gust, time domain vs LFD", r.study),
+                x_label: "t a∞ / c".into(),
+                y_label: "C_L / (w_g / a∞)".into(),
+                series: vec![
+                    (
+                        "time domain (mean removed)".into(),
+                        t.lift_time_domain.clone(),
+                    ),
+                    ("LFD Re(−i L̂ e^{iωt})".into(), t.lift_lfd.clone()),
+                ],
+                log_y: false,
+                flip_y: false,
+            },
+        )?;
+    }
     write_atomic(
         &dir.join("results.json"),
         serde_json::to_string_pretty(r)?.as_bytes(),
@@ -639,6 +726,22 @@ pub fn run(file: &Path, reports: &Path) -> Result<()> {
         }
         None => None,
     };
+    let table2 = match &s.cfd.lfd_gust {
+        Some(g) => {
+            let (n, t) = table2::run(&s.cfd, g, file)?;
+            cells = n;
+            println!(
+                "Table 2: LFD vs Fourier fit {:.1} digits, BDF2-symbol LFD vs linearized BDF2 {:.1} digits; one LFD frequency {:.2} s vs time domain {:.1} s ({:.0}x)",
+                t.digits_fourier,
+                t.digits_bdf2,
+                t.lfd_time_s,
+                t.time_domain_time_s,
+                t.time_domain_time_s / t.lfd_time_s
+            );
+            Some(t)
+        }
+        None => None,
+    };
     let results = CfdResults {
         study: s.name.clone(),
         description: s.description.clone(),
@@ -646,6 +749,7 @@ pub fn run(file: &Path, reports: &Path) -> Result<()> {
         cells,
         steady_gust: steady,
         time_gust: time,
+        table2,
         run_time_s: t0.elapsed().as_secs_f64(),
     };
     render(&dir, &results)?;
