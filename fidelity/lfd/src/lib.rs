@@ -1,17 +1,16 @@
-//! The CFD fidelity of gustkit (work in progress): a finite-volume Euler solver whose residual is
-//! written once over a generic scalar ([`gustkit_core::scalar::Scalar`]), so that exact Jacobians
-//! and the linearized frequency-domain (LFD) operators come from the same code.
+//! The CFD fidelity of gustkit: a finite-volume Euler solver whose residual is written once over
+//! a generic scalar ([`gustkit_core::scalar::Scalar`]: f64, dual numbers, the complex step), so
+//! that exact Jacobians and the linearized frequency-domain (LFD) operators come from the same
+//! code.
 //!
-//! So far: the perfect-gas state ([`gas`]), the differentiable Roe flux ([`flux`]), the
-//! finite-volume mesh with its built-in O-mesh ([`mesh`]), the NACA 64A010 section from its
-//! published ordinates ([`airfoil`]), first- and second-order residuals (least-squares
-//! reconstruction, [`reconstruct`]) with wall, symmetry and far-field boundaries and face volume
-//! fluxes for grid motion and Field-Velocity-Method gusts ([`residual`]), restarted GMRES
-//! ([`krylov`]), the steady Newton / Newton–Krylov solver with pseudo-transient continuation
-//! ([`steady`]) and the BDF2 time domain with dual-time subiterations under prescribed gusts
-//! ([`unsteady`]). Still to come (the CFD issues): moving meshes with the geometric conservation
-//! law and prescribed rigid motion, 1−cos gusts, mesh readers and VTK output, the study runner,
-//! the LFD operators and the `Aerodynamics` implementation.
+//! The perfect-gas state ([`gas`]), the differentiable Roe flux ([`flux`]), unstructured meshes
+//! with the built-in O-mesh ([`mesh`]), readers and VTK output ([`readers`], [`vtk`]), the NACA
+//! 64A010 from its published ordinates ([`airfoil`]), first- and second-order residuals with
+//! grid-motion and Field-Velocity-Method gust fluxes ([`residual`], [`reconstruct`]), the exact
+//! Jacobian by colouring ([`jacobian`]), GMRES over real and complex fields ([`krylov`]), the
+//! steady Newton solver ([`steady`]), the BDF2 time domain on moving meshes ([`unsteady`]), the
+//! LFD equations for gusts and mode motion ([`lfd`]), mesh deformation for mode shapes
+//! ([`deform`]) and the `Aerodynamics` implementation ([`gafs`]).
 
 pub mod airfoil;
 pub mod deform;
