@@ -17,6 +17,7 @@ pub mod deform;
 pub mod flux;
 pub mod gafs;
 pub mod gas;
+pub mod ilu;
 pub mod jacobian;
 pub mod krylov;
 pub mod lfd;
