@@ -115,7 +115,7 @@ pub struct Factored {
 }
 
 enum Factors {
-    Lu(Lu<usize, C64>),
+    Lu(Box<Lu<usize, C64>>),
     Ilu(BlockIlu<C64>),
 }
 
@@ -428,7 +428,7 @@ impl Lfd {
                 .euler
                 .shifted_matrix(&self.blocks, &|c| s * vol[c], &|v| C64::new(v, 0.0))
                 .map_err(fail)?;
-            Factors::Lu(a.sp_lu().map_err(|e| fail(format!("{e:?}")))?)
+            Factors::Lu(Box::new(a.sp_lu().map_err(|e| fail(format!("{e:?}")))?))
         };
         Ok(Factored {
             omega: s.im,
