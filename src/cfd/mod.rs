@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::time::Instant;
 
+pub mod motion;
 pub mod table2;
 
 /// A CFD verification study file.
@@ -53,6 +54,9 @@ pub struct CfdSpec {
     /// Paper Table 2: the LFD gust solution against the time domain.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lfd_gust: Option<table2::LfdGustSpec>,
+    /// Prescribed rigid pitching or plunging in the time domain, against the LFD and Theodorsen.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_motion: Option<motion::TimeMotionSpec>,
 }
 
 fn default_order() -> String {
@@ -169,6 +173,8 @@ pub struct CfdResults {
     /// Paper Table 2 (with `digits_fourier` and `digits_bdf2`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub table2: Option<table2::Table2>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_motion: Option<motion::TimeMotionResults>,
     pub run_time_s: f64,
 }
 
@@ -281,10 +287,19 @@ impl CfdStudyFile {
                 );
             }
         }
-        if c.steady_gust.is_none() && c.time_gust.is_none() && c.lfd_gust.is_none() {
+        if let Some(m) = &c.time_motion {
+            if let Err((path, reason)) = motion::check(m) {
+                return bad(&path, reason);
+            }
+        }
+        if c.steady_gust.is_none()
+            && c.time_gust.is_none()
+            && c.lfd_gust.is_none()
+            && c.time_motion.is_none()
+        {
             return bad(
                 "cfd",
-                "nothing to run: add steady_gust, time_gust or lfd_gust".into(),
+                "nothing to run: add steady_gust, time_gust, lfd_gust or time_motion".into(),
             );
         }
         Ok(s)
@@ -584,6 +599,24 @@ pub fn summary(r: &CfdResults) -> String {
             t.linear_march_time_s
         );
     }
+    if let Some(m) = &r.time_motion {
+        let z = |v: [f64; 2]| {
+            let c = num_complex::Complex64::new(v[0], v[1]);
+            format!("{:.5} ({:+.2}°)", c.norm(), c.arg().to_degrees())
+        };
+        md += &format!(
+            "\n## Prescribed {} in the time domain\n\nk = {}, BDF2 with Δt = {:.4} (chord/a∞), at most {} Newton iterations a step; the whole mesh moves rigidly.\n\n| C_L harmonic (amplitude, phase to the motion's e^{{iωt}}) | |\n|---|---:|\n| time domain, last period | {} |\n| LFD, s = iω | {} |\n| LFD, BDF2 symbol | {} |\n| Theodorsen, Prandtl–Glauert | {} |\n\nTime domain against the BDF2-symbol LFD: {:.1} digits (the motion's amplitude and the transient make the difference: the LFD is the linearization).\n\n![lift](motion_lift.png)\n",
+            m.motion,
+            m.reduced_frequency,
+            m.dt,
+            m.max_newton_iterations,
+            z(m.time_domain),
+            z(m.lfd),
+            z(m.lfd_bdf2),
+            z(m.theodorsen_pg),
+            m.digits_lfd_bdf2
+        );
+    }
     md += &format!("\nRun time {:.1} s.\n", r.run_time_s);
     md
 }
@@ -660,6 +693,20 @@ pub fn render(dir: &Path, r: &CfdResults) -> Result<()> {
                 &format!("{}: wall pressure at the last step", r.study),
                 &[&t.pressure_final],
             ),
+        )?;
+    }
+    if let Some(m) = &r.time_motion {
+        save_figure(
+            dir,
+            "motion_lift",
+            &LinePlot {
+                title: format!("{}: lift in prescribed {}", r.study, m.motion),
+                x_label: "t a∞ / c".into(),
+                y_label: "C_L".into(),
+                series: vec![("C_L".into(), m.lift_history.clone())],
+                log_y: false,
+                flip_y: false,
+            },
         )?;
     }
     if let Some(t) = &r.table2 {
@@ -742,6 +789,23 @@ pub fn run(file: &Path, reports: &Path) -> Result<()> {
         }
         None => None,
     };
+    let time_motion = match &s.cfd.time_motion {
+        Some(m) => {
+            let (n, r) = motion::run(&s.cfd, m, file)?;
+            cells = n;
+            println!(
+                "{}: C_L amplitude time domain {:.5}, LFD {:.5} (BDF2 symbol {:.5}: {:.1} digits), Theodorsen-PG {:.5}",
+                r.motion,
+                r.time_domain[0].hypot(r.time_domain[1]),
+                r.lfd[0].hypot(r.lfd[1]),
+                r.lfd_bdf2[0].hypot(r.lfd_bdf2[1]),
+                r.digits_lfd_bdf2,
+                r.theodorsen_pg[0].hypot(r.theodorsen_pg[1])
+            );
+            Some(r)
+        }
+        None => None,
+    };
     let results = CfdResults {
         study: s.name.clone(),
         description: s.description.clone(),
@@ -750,6 +814,7 @@ pub fn run(file: &Path, reports: &Path) -> Result<()> {
         steady_gust: steady,
         time_gust: time,
         table2,
+        time_motion,
         run_time_s: t0.elapsed().as_secs_f64(),
     };
     render(&dir, &results)?;
