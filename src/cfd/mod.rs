@@ -44,6 +44,9 @@ pub struct CfdSpec {
     /// "first" or "second" (default) order.
     #[serde(default = "default_order")]
     pub order: String,
+    /// Second order: "none" (default) or "van_albada" (smooth, differentiable).
+    #[serde(default = "default_limiter")]
+    pub limiter: String,
     pub mach: f64,
     /// Paper Table 1: angle of attack at the far field against the equivalent uniform gust.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -61,6 +64,10 @@ pub struct CfdSpec {
 
 fn default_order() -> String {
     "second".into()
+}
+
+fn default_limiter() -> String {
+    "none".into()
 }
 
 /// The built-in O-mesh (chord 1, lengths in chords).
@@ -207,6 +214,12 @@ impl CfdStudyFile {
                 format!("must be \"first\" or \"second\" (got '{}')", c.order),
             );
         }
+        if c.limiter != "none" && c.limiter != "van_albada" {
+            return bad(
+                "cfd.limiter",
+                format!("must be \"none\" or \"van_albada\" (got '{}')", c.limiter),
+            );
+        }
         if !(c.mach > 0.0 && c.mach < 1.0) {
             return bad("cfd.mach", format!("must lie in (0, 1) (got {})", c.mach));
         }
@@ -317,6 +330,9 @@ pub(crate) fn build(c: &CfdSpec, base: &Path, q_inf: State<f64>) -> Result<Euler
     let mut e = Euler::new(mesh, q_inf);
     if c.order == "first" {
         e.order = Order::First;
+    }
+    if c.limiter == "van_albada" {
+        e.limiter = gustkit_lfd::residual::Limiter::VanAlbada { eps: 1e-3 };
     }
     Ok(e)
 }

@@ -302,4 +302,41 @@ mod tests {
             }
         }
     }
+
+    /// Bad input named: a negative reduced frequency, modes that do not match the surface, a
+    /// Mach number other than the steady state's, and a GMRES that cannot converge (its residual
+    /// history in the error).
+    #[test]
+    fn bad_input_is_named() {
+        let mut aero = thin_section(24, 8, 0.3, Order::First);
+        let modes = rigid_modes(&aero);
+        let flight = FlightCondition {
+            mach: 0.3,
+            velocity: 100.0,
+            density: 1.2,
+            b_ref: 0.5,
+            x_ref: 0.0,
+        };
+        let e = aero
+            .gafs(&flight, &modes, &[0.1, -0.2])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("k[1]"), "{e}");
+        let short = ModalSurface::zeros(2, 3);
+        let e = aero.gafs(&flight, &short, &[0.1]).unwrap_err().to_string();
+        assert!(e.contains("aerodynamic surface has"), "{e}");
+        let mut other = flight;
+        other.mach = 0.5;
+        let e = aero.gafs(&other, &modes, &[0.1]).unwrap_err().to_string();
+        assert!(e.contains("mach"), "{e}");
+        aero.lfd = Lfd::with_preconditioner(
+            aero.lfd.euler.clone(),
+            aero.lfd.q0.clone(),
+            crate::lfd::Preconditioner::BlockIlu,
+        );
+        aero.lfd.params.max_iterations = 2;
+        aero.lfd.params.tolerance = 1e-14;
+        let e = aero.gafs(&flight, &modes, &[0.5]).unwrap_err().to_string();
+        assert!(e.contains("GMRES stalled") && e.contains("history"), "{e}");
+    }
 }
