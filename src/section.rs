@@ -12,7 +12,7 @@
 use crate::flutter::{FlutterResult, PkProblem};
 use crate::gust::{self, FrequencyGrid, GustProblem, Turbulence};
 use crate::report::figures::{LinePlot, PsdPlot, PsdSeries, VgVf};
-use crate::report::{save_figure, write_atomic};
+use crate::report::save_figure;
 use anyhow::{bail, Context, Result};
 use gustkit_core::strip::StripSection;
 use gustkit_core::{Aerodynamics, FlightCondition, GafTable, ModalSurface};
@@ -98,22 +98,12 @@ fn default_order() -> String {
 #[serde(deny_unknown_fields)]
 pub struct SectionGust {
     pub turbulence: Turbulence,
-    #[serde(default = "default_omega_min")]
+    #[serde(default = "crate::study::schema::default_omega_min")]
     pub omega_min_rad_s: f64,
-    #[serde(default = "default_points")]
+    #[serde(default = "crate::study::schema::default_points")]
     pub points: usize,
-    #[serde(default = "default_max_tail")]
+    #[serde(default = "crate::study::schema::default_max_tail")]
     pub max_tail: f64,
-}
-
-fn default_omega_min() -> f64 {
-    1e-2
-}
-fn default_points() -> usize {
-    1500
-}
-fn default_max_tail() -> f64 {
-    1e-3
 }
 
 /// p-k sweep speeds.
@@ -597,9 +587,5 @@ pub fn render(dir: &Path, r: &SectionResults) -> Result<()> {
             )?;
         }
     }
-    write_atomic(
-        &dir.join("results.json"),
-        serde_json::to_string_pretty(r)?.as_bytes(),
-    )?;
-    write_atomic(&dir.join("summary.md"), summary(r).as_bytes())
+    crate::report::write_results(dir, r, &summary(r))
 }

@@ -745,11 +745,7 @@ pub fn render(dir: &Path, r: &CfdResults) -> Result<()> {
             },
         )?;
     }
-    write_atomic(
-        &dir.join("results.json"),
-        serde_json::to_string_pretty(r)?.as_bytes(),
-    )?;
-    write_atomic(&dir.join("summary.md"), summary(r).as_bytes())
+    crate::report::write_results(dir, r, &summary(r))
 }
 
 /// `gustkit run` of a CFD verification study.

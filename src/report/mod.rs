@@ -28,6 +28,15 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 }
 
 /// Reads and parses a JSON file; errors name the file.
+/// Writes a run's `results.json` (pretty JSON of `results`) and `summary.md`, atomically.
+pub fn write_results(dir: &Path, results: &impl serde::Serialize, summary: &str) -> Result<()> {
+    write_atomic(
+        &dir.join("results.json"),
+        serde_json::to_string_pretty(results)?.as_bytes(),
+    )?;
+    write_atomic(&dir.join("summary.md"), summary.as_bytes())
+}
+
 pub fn read_json(path: &Path) -> Result<serde_json::Value> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;

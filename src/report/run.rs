@@ -3,7 +3,7 @@
 //! be re-drawn without re-running anything.
 
 use super::figures::{Convergence, ModeShapes, PsdPlot, PsdSeries, ThicknessMaps, VgVf};
-use super::{from_json, save_figure, write_atomic};
+use super::{from_json, save_figure};
 use crate::flutter::FlutterResult;
 use crate::gust::Turbulence;
 use anyhow::Result;
@@ -372,11 +372,7 @@ pub fn render(dir: &Path, r: &RunResults) -> Result<()> {
             },
         )?;
     }
-    write_atomic(
-        &dir.join("results.json"),
-        serde_json::to_string_pretty(r)?.as_bytes(),
-    )?;
-    write_atomic(&dir.join("summary.md"), summary(r).as_bytes())
+    crate::report::write_results(dir, r, &summary(r))
 }
 
 /// `gustkit report RUN_DIR`: re-renders the report from `value`, the results.json at `path`.

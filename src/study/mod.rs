@@ -7,7 +7,7 @@
 
 pub mod design;
 pub mod fidelity;
-mod schema;
+pub(crate) mod schema;
 pub mod sweep;
 
 pub use fidelity::AeroModel;

@@ -200,13 +200,13 @@ pub struct CalibrationSpec {
     pub source: String,
 }
 
-fn default_omega_min() -> f64 {
+pub(crate) fn default_omega_min() -> f64 {
     1e-3
 }
-fn default_points() -> usize {
+pub(crate) fn default_points() -> usize {
     2000
 }
-fn default_max_tail() -> f64 {
+pub(crate) fn default_max_tail() -> f64 {
     1e-3
 }
 

@@ -241,6 +241,19 @@ pub fn check_reduced_frequencies(k: &[f64]) -> Result<(), AeroError> {
     Ok(())
 }
 
+/// The checks every GAF request shares: a physical flight condition, a valid reduced-frequency
+/// list and mode shapes sampled on all `n_points` surface points.
+pub fn check_request(
+    flight: &FlightCondition,
+    modes: &ModalSurface,
+    k: &[f64],
+    n_points: usize,
+) -> Result<(), AeroError> {
+    flight.validate()?;
+    check_reduced_frequencies(k)?;
+    modes.check(n_points)
+}
+
 /// An aerodynamic model that supplies GAFs and their reverse-mode derivatives.
 pub trait Aerodynamics: Send + Sync {
     /// Points where this model wants structural displacements.

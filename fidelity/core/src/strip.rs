@@ -3,7 +3,7 @@
 //! mode fitted from its displacements along the chord. It runs the same gust and flutter pipeline
 //! as the DLM and the LFD, as the classical baseline of a typical section.
 
-use crate::aero::check_reduced_frequencies;
+use crate::aero::check_request;
 use crate::theory::strip_gafs;
 use crate::{
     AeroError, AeroSurface, Aerodynamics, FlightCondition, GafGradient, GafTable, ModalSurface,
@@ -89,9 +89,7 @@ impl StripSection {
         modes: &ModalSurface,
         k: &[f64],
     ) -> Result<(), AeroError> {
-        flight.validate()?;
-        check_reduced_frequencies(k)?;
-        modes.check(self.surface.points.len())?;
+        check_request(flight, modes, k, self.surface.points.len())?;
         if (flight.b_ref - self.b).abs() > 1e-9 * self.b {
             return Err(AeroError::Input(format!(
                 "b_ref: the strip section's semichord is {} m, the flight condition's reference {} m",

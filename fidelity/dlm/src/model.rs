@@ -16,8 +16,7 @@ use faer::linalg::solvers::Solve;
 use faer::{c64, Mat};
 use gustkit_core::scalar::{Dual, Scalar};
 use gustkit_core::{
-    check_reduced_frequencies, AeroError, AeroSurface, Aerodynamics, FlightCondition, GafGradient,
-    GafTable, ModalSurface,
+    AeroError, AeroSurface, Aerodynamics, FlightCondition, GafGradient, GafTable, ModalSurface,
 };
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -209,15 +208,14 @@ impl Dlm {
         modes: &ModalSurface,
         k: &[f64],
     ) -> Result<(), AeroError> {
-        flight.validate()?;
+        gustkit_core::aero::check_request(flight, modes, k, self.surface.points.len())?;
         if !(flight.mach < 1.0) {
             return Err(AeroError::Input(format!(
                 "mach: the doublet-lattice method is subsonic only (got M = {})",
                 flight.mach
             )));
         }
-        check_reduced_frequencies(k)?;
-        modes.check(self.surface.points.len())
+        Ok(())
     }
 
     /// Right-hand sides w/U: one column a mode, then the gust column (n × (n_modes + 1)).

@@ -13,7 +13,7 @@ use crate::deform::Deformation;
 use crate::gas::primitive;
 use crate::lfd::{HarmonicGust, Lfd, Symbol};
 use crate::mesh::{Boundary, Side};
-use gustkit_core::aero::check_reduced_frequencies;
+use gustkit_core::aero::check_request;
 use gustkit_core::{
     AeroError, AeroSurface, Aerodynamics, FlightCondition, GafGradient, GafTable, ModalSurface,
 };
@@ -95,9 +95,7 @@ impl LfdAero {
         modes: &ModalSurface,
         k: &[f64],
     ) -> Result<(), AeroError> {
-        flight.validate()?;
-        check_reduced_frequencies(k)?;
-        modes.check(self.surface.points.len())?;
+        check_request(flight, modes, k, self.surface.points.len())?;
         if (flight.mach - self.mach).abs() > 1e-6 * self.mach.max(1.0) {
             return Err(AeroError::Input(format!(
                 "mach: the LFD steady state was converged at Mach {}, the flight condition asks for {}",

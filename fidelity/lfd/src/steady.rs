@@ -405,40 +405,6 @@ mod tests {
         Euler::new(mesh, q_inf)
     }
 
-    /// The assembled Jacobian times a vector equals the dual-number Jacobian product of the
-    /// residual (which the residual tests check against finite differences).
-    #[test]
-    fn assembled_jacobian_matches_jvp() {
-        let q_inf = free_stream(0.4, 0.02);
-        let mut e = airfoil_euler(24, 8, q_inf);
-        e.order = Order::First;
-        let r = gustkit_testkit::rand_vec(e.mesh.n_cells * NVAR, 4);
-        let q: Vec<State<f64>> = (0..e.mesh.n_cells)
-            .map(|c| std::array::from_fn(|k| q_inf[k] * (1.0 + 0.05 * r[c * NVAR + k])))
-            .collect();
-        let v = gustkit_testkit::rand_vec(e.mesh.n_cells * NVAR, 8);
-        let qd: Vec<State<Dual<1>>> = (0..e.mesh.n_cells)
-            .map(|c| std::array::from_fn(|k| Dual::new(q[c][k], [v[c * NVAR + k]])))
-            .collect();
-        let jv = e.residual(&qd);
-        let mut av = vec![[0.0; NVAR]; e.mesh.n_cells];
-        for (row, col, b) in e.jacobian(&q) {
-            for i in 0..NVAR {
-                for j in 0..NVAR {
-                    av[row][i] += b[i][j] * v[col * NVAR + j];
-                }
-            }
-        }
-        let scale = jv.iter().flatten().fold(0.0f64, |a, x| a.max(x.d[0].abs()));
-        for c in 0..e.mesh.n_cells {
-            for k in 0..NVAR {
-                assert!((av[c][k] - jv[c][k].d[0]).abs() <= 1e-13 * scale);
-            }
-        }
-    }
-
-    /// A solve that runs out of iterations and a non-physical state are errors that carry the
-    /// residual history.
     #[test]
     fn failures_report_their_history() {
         let e = airfoil_euler(24, 8, free_stream(0.4, 0.02));
