@@ -397,7 +397,7 @@ impl Euler {
 mod tests {
     use super::*;
     use crate::airfoil::Section;
-    use crate::residual::{free_stream, Order};
+    use crate::residual::free_stream;
 
     fn airfoil_euler(n_around: usize, n_radial: usize, q_inf: [f64; NVAR]) -> Euler {
         let sec = Section::naca64a010();
