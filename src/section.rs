@@ -494,7 +494,7 @@ pub fn summary(r: &SectionResults) -> String {
     }
     if let [a, b] = &r.models[..] {
         md += &format!(
-            "\nLFD / strip theory: RMS plunge {:.3}, RMS pitch {:.3}.\n",
+            "\nLFD / strip theory: RMS plunge {:.3}, RMS pitch {:.3}. The p-k sweep keeps the GAFs of the study's Mach number at every speed (Nastran PK at fixed Mach).\n",
             a.rms_plunge_m / b.rms_plunge_m,
             a.rms_pitch_rad / b.rms_pitch_rad
         );

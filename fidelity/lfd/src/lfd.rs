@@ -613,10 +613,6 @@ mod tests {
         )
         .unwrap();
         let lift0 = lfd.euler.wall_force(&lfd.q0)[1];
-        eprintln!(
-            "newton its: {:?}",
-            samples.iter().map(|s| s.iterations).collect::<Vec<_>>()
-        );
         samples[samples.len() - steps_per_period..]
             .iter()
             .map(|s| (s.time, s.force[1] - lift0))

@@ -31,8 +31,9 @@ pub struct SteadyParams {
     /// instead of the first-order one: Newton's method proper, GMRES converging in an iteration or
     /// two, at the price of a denser LU.
     pub exact_jacobian: bool,
-    /// Stop when ‖R‖ ≤ tolerance · ‖R₀‖, when ‖R‖ reaches round-off (1e-15 of the fluxes and time
-    /// terms that cancel in it), or when it stagnates below 1e-11 ‖R₀‖ or 100 × that round-off.
+    /// Stop when ‖R‖ ≤ tolerance · ‖R₀‖, when ‖R‖ reaches round-off (1e-15 of the fluxes that
+    /// cancel in it), or when it stops falling below 1e-11 ‖R₀‖ or below 100 × the round-off of
+    /// the fluxes and time terms together.
     pub tolerance: f64,
 }
 
@@ -255,13 +256,16 @@ impl Euler {
                 .sum::<f64>()
                 .sqrt()
         });
-        let floor = 1e-15 * (self.flux_scale(&q) + time_scale);
+        let flux_scale = self.flux_scale(&q);
+        let floor = 1e-15 * flux_scale;
+        // where a stalled residual counts as round-off
+        let stall = 100.0 * 1e-15 * (flux_scale + time_scale);
         let mut cfl = params.cfl0;
         for it in 0..params.max_iterations {
             let rn = *history.last().expect("starts with r0");
             // converged, or stagnating at round-off below 1e-11 of the initial residual
             let stagnant = history.len() >= 3
-                && rn <= (1e-11 * r0).max(100.0 * floor)
+                && rn <= (1e-11 * r0).max(stall)
                 && rn > 0.5 * history[history.len() - 3];
             if rn <= params.tolerance * r0 || rn <= floor || stagnant {
                 return Ok((
