@@ -97,8 +97,9 @@ impl Section {
 
     /// The built-in O-mesh around the section (chord 1, mid-chord at the origin; see
     /// [`crate::mesh::o_mesh`] for the other arguments): its `n_around` wall points run from the
-    /// upper to the lower trailing-edge corner, so the blunt base is one face and the mesh is
-    /// symmetric about the chord line (a symmetric section has no lift at zero incidence).
+    /// upper to the lower trailing-edge corner, so the blunt base is one face (a sharp section:
+    /// from the trailing-edge node round to it), and the mesh is symmetric about the chord line (a
+    /// symmetric section has no lift at zero incidence).
     pub fn o_mesh(
         &self,
         n_around: usize,
@@ -107,7 +108,13 @@ impl Section {
         first: f64,
         dz: f64,
     ) -> crate::mesh::Mesh {
-        let stretch = n_around as f64 / (n_around - 1) as f64;
+        // blunt: the last point is the lower corner (the base is one face); sharp: the trailing
+        // edge is one node and the contour closes on it
+        let stretch = if self.half_thickness(1.0) == 0.0 {
+            1.0
+        } else {
+            n_around as f64 / (n_around - 1) as f64
+        };
         crate::mesh::o_mesh(
             &|t| {
                 let p = self.contour(t * stretch);
@@ -119,6 +126,23 @@ impl Section {
             first,
             dz,
         )
+    }
+
+    /// The section closed to a sharp trailing edge: the linear ramp x · y(1) taken off every
+    /// ordinate (exact on the spline in s = √x, since s² is a quadratic), which changes the
+    /// 64A010 by at most its 0.021 % base half-thickness.
+    pub fn sharp(&self) -> Self {
+        let y_te = *self.y.last().expect("a section has ordinates");
+        Self {
+            s: self.s.clone(),
+            y: self
+                .s
+                .iter()
+                .zip(&self.y)
+                .map(|(s, y)| y - s * s * y_te)
+                .collect(),
+            m: self.m.iter().map(|m| m - 2.0 * y_te).collect(),
+        }
     }
 
     /// The same section with every ordinate scaled by `factor` (e.g. 0.4: a 4 %-thick NACA

@@ -299,44 +299,43 @@ impl Lfd {
             .collect()
     }
 
-    /// The linearized force p̂ S + (p − p∞) Ŝ on every wall face (paper Eqs. 8 and 14: the gauge
-    /// pressure of the perturbed state on the perturbed face areas), by dual numbers.
+    /// The linearized force on every wall face (paper Eqs. 8 and 14): the wall forces of
+    /// [`Euler::wall_face_forces`] at q₀ + ε q̂ on the mesh moved by ε x̂, by dual numbers.
     pub fn wall_face_forces(
         &self,
         q_hat: &[C64],
         x_hat: Option<&[[C64; 3]]>,
     ) -> Vec<(usize, [C64; 3])> {
         let mesh = &self.euler.mesh;
-        let node = |n: usize| -> [Dual<2>; 3] {
-            let p = mesh.nodes[n];
-            match x_hat {
-                None => p.map(Dual::cst),
-                Some(xh) => std::array::from_fn(|i| Dual::new(p[i], [xh[n][i].re, xh[n][i].im])),
-            }
-        };
-        let p_inf = crate::gas::primitive(&self.euler.q_inf).p;
-        mesh.faces
+        let order = self.euler.order;
+        let q: Vec<State<Dual<2>>> = self
+            .q0
             .iter()
             .enumerate()
-            .filter(|(_, f)| f.right == crate::mesh::Side::Boundary(crate::mesh::Boundary::Wall))
-            .map(|(fi, f)| {
-                let c = f.left;
-                let q: State<Dual<2>> = std::array::from_fn(|k| {
+            .map(|(c, qc)| {
+                std::array::from_fn(|k| {
                     let x = q_hat[c * NVAR + k];
-                    Dual::new(self.q0[c][k], [x.re, x.im])
-                });
-                // gauge pressure, as in Euler::wall_force_in
-                let p = crate::gas::primitive(&q).p - p_inf;
-                let pts: Vec<[Dual<2>; 3]> = f.nodes.iter().map(|&n| node(n)).collect();
-                let s = crate::mesh::face_area(&pts);
-                (
-                    fi,
-                    s.map(|si| {
-                        let v = p * si;
-                        C64::new(v.d[0], v.d[1])
-                    }),
-                )
+                    Dual::new(qc[k], [x.re, x.im])
+                })
             })
+            .collect();
+        let geom = match x_hat {
+            None => self.euler.geometry::<Dual<2>>(order),
+            Some(xh) => {
+                let nodes: Vec<[Dual<2>; 3]> = mesh
+                    .nodes
+                    .iter()
+                    .zip(xh)
+                    .map(|(p, d)| std::array::from_fn(|i| Dual::new(p[i], [d[i].re, d[i].im])))
+                    .collect();
+                self.euler
+                    .geometry_at(&nodes, vec![Dual::cst(0.0); mesh.faces.len()], order)
+            }
+        };
+        self.euler
+            .wall_face_forces(&q, &geom)
+            .into_iter()
+            .map(|(fi, f)| (fi, f.map(|v| C64::new(v.d[0], v.d[1]))))
             .collect()
     }
 
