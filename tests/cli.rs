@@ -853,7 +853,7 @@ fn typical_section_study() {
         flutter(1)
     );
     // the pitch response is the more sensitive to the section's thickness and to the coarse
-X
+    // mesh's dissipation: 13 % below strip theory here, 4.6 % on the study's 64 × 32 mesh
     for (k, tol) in [("rms_plunge_m", 0.1), ("rms_pitch_rad", 0.25)] {
         let (a, b) = (get(0, k), get(1, k));
         assert!((a / b - 1.0).abs() < tol, "{k}: {a} {b}");
