@@ -528,23 +528,3 @@ mod refinement {
         }
     }
 }
-#[cfg(test)]
-mod tmp_level3 {
-    use super::*;
-    use crate::airfoil::Section;
-    use crate::residual::free_stream;
-    #[test]
-    #[ignore]
-    fn level3() {
-        let sec = Section::naca64a010();
-        let (alpha, q_dyn) = (1f64.to_radians(), 0.5 * 0.4 * 0.4);
-        let s = 8usize;
-        let mesh = sec.o_mesh(32 * s, 16 * s, 50.0, 0.0004 / s as f64, 1.0);
-        let e = Euler::new(mesh, free_stream(0.4, alpha));
-        let (q, _) = e.solve_steady(vec![e.q_inf; e.mesh.n_cells], &SteadyParams::default()).unwrap();
-        let f = e.wall_force(&q);
-        let cl = (f[1] * alpha.cos() - f[0] * alpha.sin()) / q_dyn;
-        let cd = (f[0] * alpha.cos() + f[1] * alpha.sin()) / q_dyn;
-        eprintln!("{} cells: C_L {cl:.6}, C_D {cd:.4e}", e.mesh.n_cells);
-    }
-}
