@@ -203,4 +203,32 @@ mod tests {
             .sum();
         assert!(area > 0.0);
     }
+
+    /// The sharp variant closes the trailing edge exactly, differs from the published ordinates
+    /// by at most the 0.021 % base half-thickness (times x), and its O-mesh (the trailing edge one
+    /// node) is valid and symmetric about the chord line.
+    #[test]
+    fn sharp_trailing_edge() {
+        let sec = Section::naca64a010();
+        let sharp = sec.sharp();
+        assert_eq!(sharp.half_thickness(1.0), 0.0);
+        for i in 0..=200 {
+            let x = i as f64 / 200.0;
+            let d = sec.half_thickness(x) - sharp.half_thickness(x);
+            assert!((d - 0.00021 * x).abs() < 1e-15, "x = {x}: {d}");
+        }
+        let m = sharp.o_mesh(32, 8, 20.0, 0.01, 1.0);
+        assert!(m.check().is_ok());
+        let wall: Vec<[f64; 3]> = m
+            .faces
+            .iter()
+            .filter(|f| f.right == crate::mesh::Side::Boundary(crate::mesh::Boundary::Wall))
+            .flat_map(|f| f.nodes.iter().map(|&n| m.nodes[n]))
+            .collect();
+        for p in &wall {
+            assert!(wall
+                .iter()
+                .any(|q| (q[0] - p[0]).abs() < 1e-12 && (q[1] + p[1]).abs() < 1e-12));
+        }
+    }
 }
