@@ -498,7 +498,8 @@ mod refinement {
 
     /// Mesh family (cells ×4 per level, h halved): the spurious drag of the inviscid subsonic flow
     /// falls with refinement at nearly the second order of the scheme (measured: C_D 1.40e-2,
-    /// 4.87e-3, 1.51e-3 on 512, 2048, 8192 cells, ratios 2.9 and 3.2, order 1.5 → 1.7; at zero
+    /// 4.87e-3, 1.51e-3 on 512, 2048, 8192 cells, ratios 2.9 and 3.2, order 1.5 → 1.7, and
+    /// 3.98e-4 on 32768 cells, ratio 3.8, order 1.9 — too slow for the suite; at zero
     /// lift 1.30e-2, 4.39e-3, 1.33e-3; a sharp trailing edge changes nothing, the cell-centre
     /// pressure in the forces made it first order) and the lift at 1° rises towards about 0.13
     /// (0.1191, 0.1215, 0.1254; thin-airfoil theory with Prandtl–Glauert 0.1197, a 10 %-thick
