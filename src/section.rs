@@ -291,13 +291,7 @@ fn modal_surface(aero: &dyn Aerodynamics, shapes: &[[f64; 2]], x_ea: f64) -> Mod
 /// The LFD model of the section: the steady flow converged on the built-in mesh.
 fn lfd_model(spec: &SectionSpec) -> Result<LfdAero> {
     let c = &spec.cfd;
-    let mesh = Section::naca64a010().scaled(c.thickness / 0.10).o_mesh(
-        c.mesh.n_around,
-        c.mesh.n_radial,
-        c.mesh.far_field_chords,
-        c.mesh.first_spacing_chords / c.mesh.far_field_chords,
-        1.0,
-    );
+    let mesh = crate::cfd::builtin_mesh(&c.mesh, &Section::naca64a010().scaled(c.thickness / 0.10));
     mesh.check()
         .map_err(|e| anyhow::anyhow!("typical_section.cfd.mesh: {e}"))?;
     let mut e = Euler::new(mesh, free_stream(spec.flight.mach, 0.0));

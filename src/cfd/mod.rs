@@ -321,7 +321,7 @@ impl CfdStudyFile {
 
 pub(crate) fn build(c: &CfdSpec, base: &Path, q_inf: State<f64>) -> Result<Euler> {
     let mesh = match (&c.mesh, &c.mesh_file) {
-        (Some(m), _) => builtin_mesh(m),
+        (Some(m), _) => builtin_mesh(m, &Section::naca64a010()),
         (None, Some(f)) => file_mesh(f, base)?,
         (None, None) => bail!("cfd: no mesh"),
     };
@@ -337,9 +337,8 @@ pub(crate) fn build(c: &CfdSpec, base: &Path, q_inf: State<f64>) -> Result<Euler
     Ok(e)
 }
 
-/// The built-in O-mesh about the NACA 64A010, mid-chord at the origin.
-fn builtin_mesh(m: &OMeshSpec) -> gustkit_lfd::mesh::Mesh {
-    let sec = Section::naca64a010();
+/// The built-in O-mesh of `m` about a section (chord 1, mid-chord at the origin).
+pub(crate) fn builtin_mesh(m: &OMeshSpec, sec: &Section) -> gustkit_lfd::mesh::Mesh {
     sec.o_mesh(
         m.n_around,
         m.n_radial,

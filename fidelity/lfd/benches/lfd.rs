@@ -82,12 +82,7 @@ fn main() {
         // the time domain: a tiny gust, the preconditioner kept for the run
         let (steps_per_period, probe_steps) = (400, 40);
         let dt = period / steps_per_period as f64;
-        let params = SteadyParams {
-            keep_preconditioner: true,
-            tolerance: 1e-14,
-            cfl0: 1e12,
-            ..SteadyParams::default()
-        };
+        let params = SteadyParams::small_amplitude();
         let gust = Gust::Sine {
             amplitude: 1e-5,
             omega,

@@ -594,12 +594,8 @@ mod tests {
         let dt = 2.0 * std::f64::consts::PI / omega / steps_per_period as f64;
         let mut e = lfd.euler.clone();
         let params = SteadyParams {
-            keep_preconditioner: true,
             exact_jacobian: true,
-            // no pseudo-time damping: the physical time term conditions the tiny-amplitude steps
-            cfl0: 1e12,
-            tolerance: 1e-14,
-            ..SteadyParams::default()
+            ..SteadyParams::small_amplitude()
         };
         let (_, samples) = march(
             &mut e,

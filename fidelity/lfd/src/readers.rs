@@ -550,21 +550,26 @@ mod tests {
         .collect()
     }
 
-    /// An O-mesh written as 2-D SU2 and read back has the same volumes, closed cells, the same
-    /// boundary faces, and passes the mesh checks.
-    #[test]
-    fn su2_round_trip() {
-        let m = o_mesh(
+    /// The O-mesh about an ellipse (semi-axes 0.5 and 0.3) the round-trip tests write and read.
+    fn ellipse_mesh(n_around: usize, n_radial: usize) -> Mesh {
+        o_mesh(
             &|t| {
                 let a = 2.0 * std::f64::consts::PI * t;
                 [0.5 * a.cos(), 0.3 * a.sin()]
             },
-            16,
-            5,
+            n_around,
+            n_radial,
             8.0,
             0.05,
             0.1,
-        );
+        )
+    }
+
+    /// An O-mesh written as 2-D SU2 and read back has the same volumes, closed cells, the same
+    /// boundary faces, and passes the mesh checks.
+    #[test]
+    fn su2_round_trip() {
+        let m = ellipse_mesh(16, 5);
         let text = write_su2_2d(&m);
         let r = read_su2(&text, &markers(), 0.1).unwrap();
         assert_eq!(r.check(), Ok(()));
@@ -646,17 +651,7 @@ mod tests {
     /// names) reads back to the same volumes and boundaries; an unmapped physical name is an error.
     #[test]
     fn gmsh_round_trip() {
-        let m = o_mesh(
-            &|t| {
-                let a = 2.0 * std::f64::consts::PI * t;
-                [0.5 * a.cos(), 0.3 * a.sin()]
-            },
-            12,
-            4,
-            8.0,
-            0.05,
-            0.1,
-        );
+        let m = ellipse_mesh(12, 4);
         let per_layer = m.nodes.len() / 2;
         let mut g = String::from("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n1 1 \"wall\"\n1 2 \"farfield\"\n$EndPhysicalNames\n");
         g += "$Entities\n0 2 1 0\n1 -1 -1 0 1 1 0 1 1 0\n2 -8 -8 0 8 8 0 1 2 0\n1 -8 -8 0 8 8 0 0 2 1 2\n$EndEntities\n";

@@ -326,19 +326,14 @@ impl Euler {
         let state = |c: usize, fi: usize| -> State<S> {
             match &second {
                 None => q[c],
-                Some((lsq, w, g)) => {
-                    let nb = match self.mesh.faces[fi].right {
-                        Side::Cell(r) if r != c => Some(r),
-                        Side::Cell(_) => Some(self.mesh.faces[fi].left),
-                        Side::Boundary(_) => None,
-                    };
-                    match (self.limiter, nb) {
-                        (Limiter::VanAlbada { .. }, Some(nb)) => {
-                            lsq.face_state_limited(&w[c], &g[c], c, &w[nb], nb, fi, &eps2)
-                        }
-                        _ => lsq.face_state(&w[c], &g[c], c, fi),
+                Some((lsq, w, g)) => match (self.limiter, self.mesh.faces[fi].right) {
+                    // interior faces are limited against the cell on the other side
+                    (Limiter::VanAlbada { .. }, Side::Cell(r)) => {
+                        let nb = if r == c { self.mesh.faces[fi].left } else { r };
+                        lsq.face_state_limited(&w[c], &g[c], c, &w[nb], nb, fi, &eps2)
                     }
-                }
+                    _ => lsq.face_state(&w[c], &g[c], c, fi),
+                },
             }
         };
         let fluxes: Vec<State<S>> = self

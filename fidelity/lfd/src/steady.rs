@@ -37,6 +37,20 @@ pub struct SteadyParams {
     pub tolerance: f64,
 }
 
+impl SteadyParams {
+    /// Dual-time settings of tiny-amplitude time-domain runs (the LFD checks): the first step's
+    /// preconditioner kept for the whole march (the Jacobian hardly changes), no pseudo-time
+    /// damping (the physical time term conditions each step), converged to round-off.
+    pub fn small_amplitude() -> Self {
+        Self {
+            keep_preconditioner: true,
+            cfl0: 1e12,
+            tolerance: 1e-14,
+            ..Self::default()
+        }
+    }
+}
+
 impl Default for SteadyParams {
     fn default() -> Self {
         Self {
