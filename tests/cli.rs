@@ -757,6 +757,10 @@ fn cfd_verification_studies() {
             Box::new(|v: &mut serde_json::Value| v["cfd"]["mesh"]["n_radail"] = 3.into()),
             "cfd.mesh.n_radail",
         ),
+        (
+            Box::new(|v: &mut serde_json::Value| v["cfd"]["limiter"] = "minmod".into()),
+            "cfd.limiter",
+        ),
     ] {
         let mut v = steady.clone();
         edit(&mut v);
