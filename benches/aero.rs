@@ -5,7 +5,7 @@ fn main() -> anyhow::Result<()> {
     let file =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm_analysis.json");
     let study = gustkit::study::Study::load(&file)?;
-    let a = gustkit::cli::bench_aero(&study, 3)?;
+    let a = gustkit::runner::bench::bench_aero(&study, 3)?;
     println!(
         "aero/agard445 ({} boxes, {} k, {} modes): influence matrices {:.1} ms (all k), LU {:.1} ms (1 thread), GAFs {:.1} ms, reverse mode {:.1} ms",
         a.n_boxes,

@@ -5,7 +5,7 @@ fn main() -> anyhow::Result<()> {
     let file =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm_analysis.json");
     let study = gustkit::study::Study::load(&file)?;
-    let (f, g) = gustkit::cli::bench_pipeline(&study)?;
+    let (f, g) = gustkit::runner::bench::bench_pipeline(&study)?;
     println!(
         "pipeline/agard445: function {:.1} ms, gradient {:.1} ms",
         1e3 * f,

@@ -5,7 +5,7 @@ fn main() -> anyhow::Result<()> {
     let file =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm_analysis.json");
     let study = gustkit::study::Study::load(&file)?;
-    let t = gustkit::cli::bench_structure(&study, 50)?;
+    let t = gustkit::runner::bench::bench_structure(&study, 50)?;
     println!(
         "structure/agard445 ({} dv, {} modes): assembly {:.2} ms, modes {:.2} ms, sensitivities {:.2} ms, total {:.2} ms",
         t.n_dv,

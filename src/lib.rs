@@ -1,17 +1,22 @@
 //! gustkit: aeroelastic gust analysis and gust-constrained wing design.
 //!
 //! The pipeline runs design vector → wing → plate model → modes → (aerodynamics) → gust response,
-//! and back again for gradients. See README.md for the architecture.
+//! and back again for gradients. See README.md for the user guide and ARCHITECTURE.md for the
+//! layout.
 
-pub mod cfd;
+pub mod aero;
 pub mod cli;
 pub mod flutter;
 pub mod gust;
+pub mod kind;
 pub mod optim;
 pub mod pipeline;
+pub mod problem;
 pub mod report;
-pub mod section;
+pub mod runner;
 pub mod structure;
 pub mod study;
 pub mod transfer;
+pub mod typical_section;
+pub mod verification;
 pub mod wing;

@@ -9,54 +9,19 @@
 //! This is the "flip the sign of the imaginary part" of the paper: the linearization of J with
 //! respect to a complex state z is conj(Q̄)ᵀ, not Q̄ᵀ.
 
-use crate::flutter::margin::{ks_max, zeros_like, DampingRoot};
-use crate::flutter::PkProblem;
-use crate::gust::{self, FrequencyGrid, GustProblem, GustResponse, Turbulence};
+use crate::aero::AeroModel;
+use crate::flutter::margin::{ks_max, zeros_like, DampingRoot, FlutterMargin, KS_RHO, PK_STEPS};
+use crate::flutter::{check_stability, PkProblem};
+use crate::gust::{self, FrequencyGrid, GustProblem, GustResponse, GustSettings, Quantity};
 use crate::structure::modal::SAMPLED;
 use crate::structure::{
     mass_grad, modal, modes_vjp, root_bending_moment, root_bending_moment_vjp, ModalSeed, Modes,
     PlateModel, Sampler,
 };
-use crate::study::{AeroModel, Study, StudyError};
+use crate::study::{Study, StudyError};
 use crate::wing::{DesignVector, N_PLANFORM};
 use anyhow::{Context, Result};
 use gustkit_core::GafTable;
-
-/// What a response output measures.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Quantity {
-    /// Vertical displacement at a point of the plate given in (ξ, η), m.
-    Displacement { point: [f64; 2] },
-    /// Root bending moment about the root line (mode-displacement method), N·m.
-    RootBendingMoment,
-}
-
-impl Quantity {
-    /// SI unit of the quantity.
-    pub fn unit(&self) -> &'static str {
-        match self {
-            Quantity::Displacement { .. } => "m",
-            Quantity::RootBendingMoment => "N m",
-        }
-    }
-}
-
-/// A response output.
-#[derive(Clone, Debug)]
-pub struct Output {
-    pub name: String,
-    pub quantity: Quantity,
-}
-
-/// Gust settings of a study (SI).
-#[derive(Clone, Debug)]
-pub struct GustSettings {
-    pub turbulence: Turbulence,
-    pub omega_min: f64,
-    pub points: usize,
-    pub max_tail: f64,
-    pub outputs: Vec<Output>,
-}
 
 /// One evaluation of the design, with what the adjoint needs.
 pub struct Evaluation {
@@ -142,22 +107,6 @@ pub struct DampingSeed {
     pub g_bar: Vec<f64>,
 }
 
-/// A flutter-margin requirement: every p-k root at every speed up to `speed_factor` × the flight
-/// speed (Mach and density of the flight condition) has a damping g ≤ `damping_max` (a hump mode
-/// that goes unstable and back below the flight speed violates it too).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FlutterMargin {
-    pub speed_factor: f64,
-    pub damping_max: f64,
-}
-
-/// Sharpness of the KS aggregate of the modal dampings (it exceeds the largest by ≤ ln(n)/ρ).
-pub const KS_RHO: f64 = 200.0;
-
-/// Speeds (from a fifth of the margin speed up to it) at which the margin constraint checks the
-/// p-k roots.
-const PK_STEPS: usize = 20;
-
 /// Evaluates a design of the study.
 pub fn evaluate(study: &Study, settings: &GustSettings, x: &[f64]) -> Result<Evaluation> {
     let plate = study
@@ -166,7 +115,7 @@ pub fn evaluate(study: &Study, settings: &GustSettings, x: &[f64]) -> Result<Eva
     let st = &study.spec.structure;
     let modes = modal::solve(&plate, st.modes, st.damping_ratio, &study.mode_fields())
         .context("modal analysis")?;
-    let aero = AeroModel::new(study, &plate)?;
+    let aero = study.aero_model(&plate)?;
     let table = aero
         .gafs(&plate, &modes)
         .map_err(|e| anyhow::anyhow!("aerodynamics: {e}"))?;
@@ -389,45 +338,6 @@ fn add_table(acc: &mut GafTable, t: &GafTable) {
     for (a, b) in acc.q_gs.iter_mut().flatten().zip(t.q_gs.iter().flatten()) {
         *a += b;
     }
-}
-
-/// The gust response of an unstable aeroelastic system has no meaning: a p-k sweep from a fifth
-/// of the flight speed up to it (12 speeds, so the branches are followed through any frequency
-/// coalescence) must find every mode damped.
-pub fn check_stability(
-    modes: &Modes,
-    table: &GafTable,
-    flight: &gustkit_core::FlightCondition,
-) -> Result<()> {
-    let pk = crate::flutter::PkProblem::new(modes, table, flight.density);
-    let speeds: Vec<f64> = (0..12)
-        .map(|i| flight.velocity * (0.2 + 0.8 * i as f64 / 11.0))
-        .collect();
-    let r = pk
-        .sweep(&speeds)
-        .map_err(|e| anyhow::anyhow!("stability check: {e}"))?;
-    let last = speeds.len() - 1;
-    let ks: Vec<f64> = r.curves.iter().map(|c| c.k[last]).collect();
-    let gmax = pk
-        .max_damping(flight.velocity, &ks)
-        .map_err(|e| anyhow::anyhow!("stability check: {e}"))?;
-    let unstable = r.flutter_speed_m_s.is_some() || gmax >= 0.0;
-    if let Some(c) = r
-        .curves
-        .iter()
-        .find(|c| unstable && (c.damping_g[last] >= 0.0 || r.flutter_mode == Some(c.mode)))
-    {
-        anyhow::bail!(
-            "unstable: the aeroelastic system flutters at the flight condition (mode {} has damping g = {:.4} at {:.3} Hz, V = {} m/s, M = {}, rho = {} kg/m3); the gust RMS has no meaning",
-            c.mode,
-            c.damping_g[last],
-            c.frequency_hz[last],
-            flight.velocity,
-            flight.mach,
-            flight.density
-        );
-    }
-    Ok(())
 }
 
 fn add_into(acc: &mut Vec<f64>, v: &[f64]) {

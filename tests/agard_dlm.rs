@@ -3,7 +3,7 @@
 mod common;
 
 use gustkit::structure::modal;
-use gustkit::study::{AeroModel, Study};
+use gustkit::study::Study;
 use gustkit_core::ModalSurface;
 use num_complex::Complex64 as C;
 
@@ -28,7 +28,7 @@ fn agard_gafs_converge_with_boxes() {
         let study = study_with(nc, ns, &[0.5]);
         let plate = study.build_model().unwrap();
         let modes = modal::solve(&plate, 4, 0.0, &study.mode_fields()).unwrap();
-        let aero = AeroModel::new(&study, &plate).unwrap();
+        let aero = study.aero_model(&plate).unwrap();
         tables.push(aero.gafs(&plate, &modes).unwrap());
     }
     let entries = |t: &gustkit_core::GafTable| -> Vec<C> {
@@ -66,7 +66,7 @@ fn agard_gafs_converge_with_boxes() {
 fn rigid_heave_and_pitch_consistency() {
     let study = study_with(8, 10, &[0.0, 1e-4]);
     let plate = study.build_model().unwrap();
-    let aero = AeroModel::new(&study, &plate).unwrap();
+    let aero = study.aero_model(&plate).unwrap();
     let surf = aero.fidelity.surface();
     let mut m = ModalSurface::zeros(2, surf.points.len());
     for (p, pt) in surf.points.iter().enumerate() {

@@ -422,7 +422,10 @@ fn run_optimization_and_resume() {
     for key in ["converged", "iterations", "initial", "final", "history"] {
         assert!(!r[key].is_null(), "{key}");
     }
-    for key in ["mass_kg", "rms_tip_in", "area_m2", "design_variables"] {
+    // results schema 2: the study kind is recorded, and the RMS in the report unit has a
+    // unit-honest name (it was `rms_tip_in`)
+    assert_eq!(r["kind"], "wing");
+    for key in ["mass_kg", "rms_display", "area_m2", "design_variables"] {
         assert!(!r["final"][key].is_null(), "final.{key}");
     }
     assert!(r["final"]["mass_kg"].as_f64().unwrap() < r["initial"]["mass_kg"].as_f64().unwrap());
@@ -695,9 +698,9 @@ fn cfd_verification_studies() {
     assert!(out.join("pressure.png").is_file());
 
     // the same mesh from an SU2 file gives the same forces
-    let sec = gustkit_lfd::airfoil::Section::naca64a010();
+    let sec = gustkit_cfd::airfoil::AirfoilShape::naca64a010();
     let m = sec.o_mesh(32, 12, 50.0, 0.02 / 50.0, 1.0);
-    std::fs::write(dir.join("mesh.su2"), gustkit_lfd::readers::write_su2_2d(&m)).unwrap();
+    std::fs::write(dir.join("mesh.su2"), gustkit_cfd::readers::write_su2_2d(&m)).unwrap();
     let mut from_file = steady.clone();
     from_file["name"] = "steady_from_file".into();
     from_file["cfd"].as_object_mut().unwrap().remove("mesh");
@@ -921,5 +924,81 @@ fn pitch_motion_study() {
     let o = run_json(&dir, &bad, "bad.json");
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("cfd.time_motion.motion"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Study kinds: a file with none of the kind sections, or two of them, is refused with a clear
+/// error; a wing-only command on another kind says so; `gustkit report` reads the kind recorded
+/// in results.json, and a results.json without it, with an unknown kind or whose content is of
+/// another kind, is a clear error.
+#[test]
+fn study_kinds_and_report_kinds() {
+    let dir = scratch("kinds");
+    let write = |name: &str, v: &serde_json::Value| -> PathBuf {
+        let p = dir.join(name);
+        std::fs::write(&p, v.to_string()).unwrap();
+        p
+    };
+    let stderr = |o: &std::process::Output| String::from_utf8_lossy(&o.stderr).into_owned();
+    let none = write(
+        "none.json",
+        &serde_json::json!({"schema_version": 1, "name": "x"}),
+    );
+    let o = gustkit()
+        .args(["run", none.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("none.json") && stderr(&o).contains("unknown study kind"),
+        "{}",
+        stderr(&o)
+    );
+    let mut both = load_study("agard445_dlm_analysis.json");
+    both["cfd"] = serde_json::json!({});
+    let both = write("both.json", &both);
+    let o = gustkit()
+        .args(["run", both.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(stderr(&o).contains("mixes study kinds"), "{}", stderr(&o));
+    let cfd = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/verify_naca64a010_pitch.json");
+    let o = gustkit()
+        .args(["modes", cfd.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("works on wing studies") && stderr(&o).contains("cfd_verification"),
+        "{}",
+        stderr(&o)
+    );
+    // report: no kind, an unknown kind, and a kind that does not match the content
+    let run_dir = dir.join("run");
+    std::fs::create_dir_all(&run_dir).unwrap();
+    let results = run_dir.join("results.json");
+    for (doc, want) in [
+        (serde_json::json!({"study": "x"}), "kind: missing"),
+        (
+            serde_json::json!({"kind": "aircraft", "study": "x"}),
+            "is not a study kind",
+        ),
+        (
+            serde_json::json!({"kind": "typical_section", "study": "x"}),
+            "does not hold typical_section results",
+        ),
+    ] {
+        std::fs::write(&results, doc.to_string()).unwrap();
+        let o = gustkit()
+            .args(["report", run_dir.to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert!(!o.status.success());
+        assert!(
+            stderr(&o).contains("results.json") && stderr(&o).contains(want),
+            "{want}: {}",
+            stderr(&o)
+        );
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

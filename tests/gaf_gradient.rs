@@ -4,7 +4,7 @@
 mod common;
 
 use gustkit::structure::{modal, modes_vjp, ModalSeed};
-use gustkit::study::{AeroModel, Study};
+use gustkit::study::Study;
 use gustkit::wing::DesignVector;
 use gustkit_core::GafTable;
 use gustkit_testkit::{fd_check, rand_vec};
@@ -46,7 +46,7 @@ fn functional(study: &Study, seed: &GafTable, x: &[f64]) -> f64 {
     let plate = study.model_at(DesignVector::from_slice(x)).unwrap();
     let st = &study.spec.structure;
     let modes = modal::solve(&plate, st.modes, 0.0, &study.mode_fields()).unwrap();
-    let aero = AeroModel::new(study, &plate).unwrap();
+    let aero = study.aero_model(&plate).unwrap();
     let q = aero.gafs(&plate, &modes).unwrap();
     seed.pair(&q)
 }
@@ -59,7 +59,7 @@ fn gaf_functional_gradient_matches_finite_differences() {
     let x0 = study.initial_design().unwrap().to_vec();
     let plate = study.build_model().unwrap();
     let modes = modal::solve(&plate, 4, 0.0, &study.mode_fields()).unwrap();
-    let aero = AeroModel::new(&study, &plate).unwrap();
+    let aero = study.aero_model(&plate).unwrap();
     let sd = seed(3, 4);
     let (shapes, p_bar) = aero.gafs_vjp(&plate, &modes, &sd).unwrap();
     let mut ms = ModalSeed::zeros(&modes);

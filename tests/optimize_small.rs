@@ -2,7 +2,7 @@
 //! KKT point with the RMS constraint active, the area kept, and the mass reduced.
 
 use gustkit::optim::{minimize, SqpParams};
-use gustkit::study::design::{DesignProblem, DesignSpec};
+use gustkit::problem::{DesignProblem, DesignSpec};
 use gustkit::study::Study;
 use std::path::Path;
 

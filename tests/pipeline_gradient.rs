@@ -149,7 +149,7 @@ fn root_bending_moment_rms_gradient() {
 /// planform variables and the tip thickness agree to 1e-7 … 1e-9.
 #[test]
 fn flutter_margin_gradient_matches_finite_differences() {
-    use gustkit::pipeline::FlutterMargin;
+    use gustkit::flutter::margin::FlutterMargin;
     let study = study();
     let settings = study.gust_settings().unwrap();
     let x0 = study.initial_design().unwrap().to_vec();

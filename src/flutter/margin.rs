@@ -12,6 +12,26 @@ use faer::{Mat, MatRef};
 use gustkit_core::GafTable;
 use num_complex::Complex64;
 
+/// A flutter-margin requirement: every p-k root at every speed up to `speed_factor` × the flight
+/// speed (Mach and density of the flight condition) has a damping g ≤ `damping_max` (a hump mode
+/// that goes unstable and back below the flight speed violates it too).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FlutterMargin {
+    pub speed_factor: f64,
+    pub damping_max: f64,
+}
+
+/// Sharpness of the KS aggregate of the modal dampings (it exceeds the largest by ≤ ln(n)/ρ).
+pub const KS_RHO: f64 = 200.0;
+
+/// Speeds (from a fifth of the margin speed up to it) at which the margin constraint checks the
+/// p-k roots.
+pub const PK_STEPS: usize = 20;
+
+/// Damping change that counts as one unit of the normalized flutter constraint
+/// (g_KS − g_max)/DAMPING_SCALE.
+pub const DAMPING_SCALE: f64 = 0.1;
+
 /// One mode's p-k root at one speed.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DampingRoot {

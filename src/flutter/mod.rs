@@ -325,6 +325,9 @@ impl PkProblem<'_> {
 }
 
 pub mod margin;
+pub mod stability;
+
+pub use stability::check_stability;
 
 #[cfg(test)]
 mod tests;

@@ -7,16 +7,16 @@ use std::f64::consts::PI;
 
 /// Hodges & Pierce's typical section: a = −1/5, x_α = 1/10, μ = 20, r_α² = 6/25, ω_h/ω_α = 2/5,
 /// b = 1, ω_α = 1, ρ = 1.
-struct Section {
+struct AirfoilShape {
     m: [[f64; 2]; 2],
     k: [[f64; 2]; 2],
     a: f64,
 }
 
-fn section() -> Section {
+fn section() -> AirfoilShape {
     let (a, xa, mu, r2, sigma): (f64, f64, f64, f64, f64) = (-0.2, 0.1, 20.0, 0.24, 0.4);
     let m = mu * PI; // ρ = b = 1
-    Section {
+    AirfoilShape {
         m: [[m, m * xa], [m * xa, m * r2]],
         k: [[m * sigma * sigma, 0.0], [0.0, m * r2]],
         a,
@@ -37,7 +37,7 @@ fn theodorsen_q(k: f64, a: f64) -> [[C; 2]; 2] {
 }
 
 /// Mass-normalized modes Φ of (K, M) (2 × 2) and their ω_n.
-fn modes(s: &Section) -> ([[f64; 2]; 2], [f64; 2]) {
+fn modes(s: &AirfoilShape) -> ([[f64; 2]; 2], [f64; 2]) {
     // det(K − λ M) = 0
     let (m, k) = (s.m, s.k);
     let a = m[0][0] * m[1][1] - m[0][1] * m[1][0];
@@ -59,7 +59,7 @@ fn modes(s: &Section) -> ([[f64; 2]; 2], [f64; 2]) {
     (phi, [lam[0].sqrt(), lam[1].sqrt()])
 }
 
-fn table(s: &Section, ks: &[f64]) -> (GafTable, [f64; 2]) {
+fn table(s: &AirfoilShape, ks: &[f64]) -> (GafTable, [f64; 2]) {
     let (phi, wn) = modes(s);
     let modal = |q: [[C; 2]; 2]| -> Vec<Vec<C>> {
         (0..2)
@@ -87,7 +87,7 @@ fn table(s: &Section, ks: &[f64]) -> (GafTable, [f64; 2]) {
 
 /// Independent reference by the k-method with exact C(k): (M + ½ρ(b/k)² Q) η = λ K η,
 /// λ = (1 + i g)/ω²; flutter where g of the critical branch crosses zero (bisection in k).
-fn k_method_flutter(s: &Section) -> (f64, f64) {
+fn k_method_flutter(s: &AirfoilShape) -> (f64, f64) {
     let g_of = |k: f64| -> Vec<(f64, f64)> {
         let q = theodorsen_q(k, s.a);
         let f = 0.5 * (1.0 / k).powi(2);

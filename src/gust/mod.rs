@@ -4,8 +4,10 @@
 pub mod interp;
 pub mod psd;
 pub mod response;
+pub mod settings;
 
 pub use psd::Turbulence;
 pub use response::{
     rms_vjp, solve, FrequencyGrid, GustError, GustGradient, GustProblem, GustResponse,
 };
+pub use settings::{GustSettings, Output, Quantity, QuantityName};

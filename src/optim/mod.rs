@@ -49,6 +49,32 @@ pub struct SqpParams {
     pub min_step: f64,
 }
 
+impl SqpParams {
+    /// Checks the settings (as clarabel's settings are checked before a solve).
+    pub fn validate(&self) -> Result<(), SqpError> {
+        let bad = |m: String| Err(SqpError::Params(m));
+        if self.max_iterations == 0 {
+            return bad("max_iterations must be at least 1".into());
+        }
+        for (name, v) in [
+            ("tolerance", self.tolerance),
+            ("elastic_penalty", self.elastic_penalty),
+            ("min_step", self.min_step),
+        ] {
+            if !(v > 0.0 && v.is_finite()) {
+                return bad(format!("{name} must be positive and finite (got {v})"));
+            }
+        }
+        if self.min_step >= 1.0 {
+            return bad(format!(
+                "min_step must lie below 1, the full step (got {})",
+                self.min_step
+            ));
+        }
+        Ok(())
+    }
+}
+
 impl Default for SqpParams {
     fn default() -> Self {
         Self {
@@ -105,8 +131,20 @@ pub enum SqpError {
     Start(String),
     #[error("checkpoint: {0}")]
     Checkpoint(String),
-    #[error("the QP subproblem failed at iteration {iteration} (clarabel could not solve it)")]
-    Subproblem { iteration: usize },
+    #[error(
+        "the QP subproblem failed at iteration {iteration} (clarabel could not solve it: {reason})"
+    )]
+    Subproblem { iteration: usize, reason: String },
+    #[error("bounds: {lower} lower and {upper} upper bounds for {n} design variables")]
+    BoundsLength {
+        n: usize,
+        lower: usize,
+        upper: usize,
+    },
+    #[error("settings: {0}")]
+    Params(String),
+    #[error("an observer failed: {0}")]
+    Observer(String),
     #[error("gradients failed at iteration {iteration}: {reason}")]
     Gradient { iteration: usize, reason: String },
 }
@@ -127,7 +165,7 @@ pub struct Checkpoint {
 }
 
 mod sqp;
-pub use sqp::{minimize, Observer};
+pub use sqp::{minimize, Checkpointing, Control, Executor, Observer};
 
 #[cfg(test)]
 mod tests;

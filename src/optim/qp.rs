@@ -26,6 +26,7 @@ pub struct QpData<'a> {
 
 /// The step and the multipliers of the linearized constraints (equality, inequality; inequality
 /// multipliers ≥ 0), and the elastic violation left in the subproblem.
+#[derive(Debug)]
 pub struct QpStep {
     pub d: Vec<f64>,
     pub lambda_eq: Vec<f64>,
@@ -36,8 +37,14 @@ pub struct QpStep {
     pub elastic: f64,
 }
 
-/// Solves the elastic QP; `None` when clarabel fails numerically.
-pub fn solve(q: &QpData) -> Option<QpStep> {
+/// Why clarabel returned no step: its status (e.g. `NumericalError`, `MaxIterations`), or the
+/// reason it refused the problem data.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("clarabel: {0}")]
+pub struct QpError(pub String);
+
+/// Solves the elastic QP; an error carries clarabel's status when it did not solve it.
+pub fn solve(q: &QpData) -> Result<QpStep, QpError> {
     let n = q.grad.len();
     let (me, mi) = (q.eq.len(), q.ineq.len());
     // variables: d (n), u (me), v (me), t (mi)
@@ -128,11 +135,12 @@ pub fn solve(q: &QpData) -> Option<QpStep> {
         presolve_enable: false,
         ..DefaultSettings::default()
     };
-    let mut solver = DefaultSolver::new(&p, &lin, &a, &b, &cones, settings).ok()?;
+    let mut solver = DefaultSolver::new(&p, &lin, &a, &b, &cones, settings)
+        .map_err(|e| QpError(format!("problem data refused: {e:?}")))?;
     solver.solve();
     let s = &solver.solution;
     if !matches!(s.status, SolverStatus::Solved | SolverStatus::AlmostSolved) {
-        return None;
+        return Err(QpError(format!("status {:?}", s.status)));
     }
     let z = &s.z;
     let elastic = s.x[n..].iter().sum();
@@ -145,7 +153,7 @@ pub fn solve(q: &QpData) -> Option<QpStep> {
             bound_lower[j] = z[r];
         }
     }
-    Some(QpStep {
+    Ok(QpStep {
         d: s.x[..n].to_vec(),
         lambda_eq: z[..me].to_vec(),
         lambda_ineq: z[me..me + mi].to_vec(),

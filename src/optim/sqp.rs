@@ -3,16 +3,99 @@
 use super::qp::{self, QpData};
 use super::{Checkpoint, Gradients, Iterate, Problem, SqpError, SqpInfo, SqpParams, Values};
 
-/// Sees every iteration with the checkpoint to continue from it; returns false to stop the run.
+/// What an observer tells the run after an iteration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Control {
+    Continue,
+    /// End the run here (not converged; the last checkpoint continues it).
+    Stop,
+}
+
+/// Sees every iteration with the checkpoint to continue from it (progress bars, logs, a user's
+/// stop). Fallible, as argmin's observers are: an error ends the run with
+/// [`SqpError::Observer`].
 pub trait Observer {
-    fn iteration(&mut self, iterate: &Iterate, checkpoint: &Checkpoint) -> bool;
+    fn iteration(&mut self, iterate: &Iterate, checkpoint: &Checkpoint) -> Result<Control, String>;
 }
 
 /// An observer that does nothing.
 impl Observer for () {
-    fn iteration(&mut self, _: &Iterate, _: &Checkpoint) -> bool {
-        true
+    fn iteration(&mut self, _: &Iterate, _: &Checkpoint) -> Result<Control, String> {
+        Ok(Control::Continue)
     }
+}
+
+/// Where the checkpoint of every iteration is kept: a plug-in of its own beside the observers
+/// (a file written atomically, say). An error ends the run with [`SqpError::Checkpoint`].
+pub trait Checkpointing {
+    fn save(&mut self, checkpoint: &Checkpoint) -> Result<(), String>;
+}
+
+/// No checkpoints.
+impl Checkpointing for () {
+    fn save(&mut self, _: &Checkpoint) -> Result<(), String> {
+        Ok(())
+    }
+}
+
+/// The SQP run: settings, the problem's identity (a checkpoint of another problem is refused),
+/// an optional checkpoint to continue, observers and a checkpoint store.
+pub struct Executor<'a> {
+    params: SqpParams,
+    problem_id: String,
+    resume: Option<Checkpoint>,
+    observers: Vec<&'a mut dyn Observer>,
+    checkpoints: Option<&'a mut dyn Checkpointing>,
+}
+
+impl<'a> Executor<'a> {
+    pub fn new(params: SqpParams, problem_id: &str) -> Self {
+        Self {
+            params,
+            problem_id: problem_id.to_string(),
+            resume: None,
+            observers: Vec::new(),
+            checkpoints: None,
+        }
+    }
+
+    /// Continue from `checkpoint` (when given) instead of starting afresh.
+    pub fn resume(mut self, checkpoint: Option<Checkpoint>) -> Self {
+        self.resume = checkpoint;
+        self
+    }
+
+    /// Adds an observer (called in the order added).
+    pub fn observe(mut self, observer: &'a mut dyn Observer) -> Self {
+        self.observers.push(observer);
+        self
+    }
+
+    /// Keeps every iteration's checkpoint in `store` (saved before the observers see it).
+    pub fn checkpoint(mut self, store: &'a mut dyn Checkpointing) -> Self {
+        self.checkpoints = Some(store);
+        self
+    }
+
+    /// Runs the SQP on `problem` from `x0` (or from the checkpoint).
+    pub fn run(self, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInfo, SqpError> {
+        run(self, problem, x0)
+    }
+}
+
+/// Runs the SQP from `x0`, or continues a checkpoint, with one observer and no checkpoint store.
+pub fn minimize(
+    problem: &mut dyn Problem,
+    x0: &[f64],
+    params: &SqpParams,
+    problem_id: &str,
+    resume: Option<Checkpoint>,
+    observer: &mut dyn Observer,
+) -> Result<SqpInfo, SqpError> {
+    Executor::new(params.clone(), problem_id)
+        .resume(resume)
+        .observe(observer)
+        .run(problem, x0)
 }
 
 /// Affine scaling x = offset + scale ∘ z: z ∈ [0, 1] for finite bounds.
@@ -78,16 +161,25 @@ fn lagrangian_grad(s: &Scaling, g: &Gradients, le: &[f64], li: &[f64]) -> Vec<f6
     out
 }
 
-/// Runs the SQP from `x0`, or continues a checkpoint.
-pub fn minimize(
-    problem: &mut dyn Problem,
-    x0: &[f64],
-    params: &SqpParams,
-    problem_id: &str,
-    resume: Option<Checkpoint>,
-    observer: &mut dyn Observer,
-) -> Result<SqpInfo, SqpError> {
+/// The SQP iteration of an [`Executor`].
+fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInfo, SqpError> {
+    let Executor {
+        params,
+        problem_id,
+        resume,
+        mut observers,
+        mut checkpoints,
+    } = ex;
+    let (params, problem_id) = (&params, problem_id.as_str());
+    params.validate()?;
     let (lb, ub) = (problem.lower(), problem.upper());
+    if lb.len() != x0.len() || ub.len() != x0.len() {
+        return Err(SqpError::BoundsLength {
+            n: x0.len(),
+            lower: lb.len(),
+            upper: ub.len(),
+        });
+    }
     for i in 0..x0.len() {
         if !(lb[i] <= ub[i]) {
             return Err(SqpError::InfeasibleBounds {
@@ -186,7 +278,10 @@ pub fn minimize(
             upper: &upper,
             rho: params.elastic_penalty,
         })
-        .ok_or(SqpError::Subproblem { iteration })?;
+        .map_err(|e| SqpError::Subproblem {
+            iteration,
+            reason: e.0,
+        })?;
         let viol = violation(&values);
         let kkt = dot(&g, &step.d).abs()
             + step
@@ -284,7 +379,7 @@ pub fn minimize(
                                 .collect()
                         };
                         let (eq_soc, ineq_soc) = (shift(&v.eq, &eq_jac), shift(&v.ineq, &ineq_jac));
-                        if let Some(soc) = qp::solve(&QpData {
+                        if let Ok(soc) = qp::solve(&QpData {
                             hessian: &hess,
                             grad: &g,
                             eq: &eq_soc,
@@ -374,7 +469,21 @@ pub fn minimize(
             penalty,
             history: history.clone(),
         };
-        if !observer.iteration(&record, &checkpoint) {
+        if let Some(store) = checkpoints.as_mut() {
+            store
+                .save(&checkpoint)
+                .map_err(|e| SqpError::Checkpoint(format!("cannot save it: {e}")))?;
+        }
+        let mut control = Control::Continue;
+        for o in observers.iter_mut() {
+            if o.iteration(&record, &checkpoint)
+                .map_err(SqpError::Observer)?
+                == Control::Stop
+            {
+                control = Control::Stop;
+            }
+        }
+        if control == Control::Stop {
             let x = scaling.x(&z);
             return Ok(SqpInfo {
                 converged: false,

@@ -172,11 +172,15 @@ fn resume_from_checkpoint_reproduces_the_run() {
     let full = minimize(&mut hs71(), &x0, &params, "hs71", None, &mut ()).unwrap();
     struct StopAt(usize, Option<Checkpoint>);
     impl Observer for StopAt {
-        fn iteration(&mut self, _: &Iterate, c: &Checkpoint) -> bool {
+        fn iteration(&mut self, _: &Iterate, c: &Checkpoint) -> Result<Control, String> {
             // round-trip through JSON as the CLI does
             let text = serde_json::to_string(c).unwrap();
             self.1 = Some(serde_json::from_str(&text).unwrap());
-            c.iteration < self.0
+            Ok(if c.iteration < self.0 {
+                Control::Continue
+            } else {
+                Control::Stop
+            })
         }
     }
     let mut stop = StopAt(3, None);
@@ -258,4 +262,74 @@ fn bad_input_and_failed_evaluations() {
         minimize(&mut p, &[0.5], &SqpParams::default(), "x", None, &mut ()),
         Err(SqpError::Start(_))
     ));
+}
+
+/// Bounds whose length does not match the starting point, and settings that cannot work, are
+/// errors before anything is evaluated (they used to index out of range or run on).
+#[test]
+fn bounds_length_and_settings_are_checked() {
+    let mut p = Fns {
+        lb: vec![0.0],
+        ub: vec![1.0, 1.0],
+        values: |_: &[f64]| -> Result<Values, String> { panic!("must not be evaluated") },
+        grads: |_: &[f64]| -> Gradients { panic!("must not be evaluated") },
+    };
+    let e = minimize(
+        &mut p,
+        &[0.5, 0.5],
+        &SqpParams::default(),
+        "x",
+        None,
+        &mut (),
+    )
+    .unwrap_err();
+    assert!(
+        matches!(
+            e,
+            SqpError::BoundsLength {
+                n: 2,
+                lower: 1,
+                upper: 2
+            }
+        ),
+        "{e}"
+    );
+    for bad in [
+        SqpParams {
+            max_iterations: 0,
+            ..Default::default()
+        },
+        SqpParams {
+            tolerance: f64::NAN,
+            ..Default::default()
+        },
+        SqpParams {
+            min_step: 2.0,
+            ..Default::default()
+        },
+    ] {
+        let e = minimize(&mut p, &[0.5, 0.5], &bad, "x", None, &mut ()).unwrap_err();
+        assert!(matches!(e, SqpError::Params(_)), "{e}");
+    }
+    assert!(SqpParams::default().validate().is_ok());
+}
+
+/// The QP subproblem's failure carries clarabel's status: a QP with a NaN gradient cannot be
+/// solved, and the error says why instead of a bare "failed".
+#[test]
+fn qp_failure_names_clarabel_status() {
+    let hess = vec![vec![1.0]];
+    let e = qp::solve(&qp::QpData {
+        hessian: &hess,
+        grad: &[f64::NAN],
+        eq: &[],
+        eq_jac: &[],
+        ineq: &[],
+        ineq_jac: &[],
+        lower: &[-1.0],
+        upper: &[1.0],
+        rho: 1e4,
+    })
+    .unwrap_err();
+    assert!(e.to_string().starts_with("clarabel: "), "{e}");
 }

@@ -1,77 +1,11 @@
 //! Figures of the structural model.
 
+use super::results::{HistoryRow, OptimizationResults};
+pub use super::results::{ModeShapes, PsdSeries};
 use super::{diverging, Figure};
-use crate::structure::model::{Field, NODAL};
-use crate::structure::{Modes, PlateModel};
 use anyhow::{anyhow, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use serde::{Deserialize, Serialize};
-
-/// Mode shapes on the planform: one panel a mode, each element coloured by its mean deflection
-/// (membrane modes by in-plane displacement magnitude), scaled to the mode's maximum.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct ModeShapes {
-    /// Element corner polygons in display units.
-    polygons: Vec<Vec<(f64, f64)>>,
-    /// Per mode: title and per-element value in [-1, 1].
-    panels: Vec<(String, Vec<f64>)>,
-    unit: String,
-}
-
-impl ModeShapes {
-    /// Builds the figure data; lengths are shown in `unit` (`to_m` metres each).
-    pub fn new(model: &PlateModel, modes: &Modes, unit: &str, to_m: f64) -> Self {
-        let xy = model.node_xy();
-        let polygons = model
-            .mesh
-            .elements
-            .iter()
-            .map(|e| {
-                e.iter()
-                    .map(|&n| (xy[n][0] / to_m, xy[n][1] / to_m))
-                    .collect()
-            })
-            .collect();
-        let panels = modes
-            .modes
-            .iter()
-            .enumerate()
-            .map(|(i, m)| {
-                let value = |n: usize| {
-                    let c = &m.shape[NODAL * n..NODAL * (n + 1)];
-                    match m.field {
-                        Field::Bending => c[0],
-                        Field::Membrane => c[3].hypot(c[4]),
-                    }
-                };
-                let vals: Vec<f64> = model
-                    .mesh
-                    .elements
-                    .iter()
-                    .map(|e| e.iter().map(|&n| value(n)).sum::<f64>() / 4.0)
-                    .collect();
-                let peak = vals
-                    .iter()
-                    .fold(0.0f64, |a, v| a.max(v.abs()))
-                    .max(f64::MIN_POSITIVE);
-                let kind = match m.field {
-                    Field::Bending => "bending field",
-                    Field::Membrane => "in-plane field",
-                };
-                (
-                    format!("Mode {}: {:.2} Hz ({kind})", i + 1, m.freq_hz()),
-                    vals.iter().map(|v| v / peak).collect(),
-                )
-            })
-            .collect();
-        Self {
-            polygons,
-            panels,
-            unit: unit.to_string(),
-        }
-    }
-}
 
 impl Figure for ModeShapes {
     fn size(&self) -> (u32, u32) {
@@ -239,15 +173,6 @@ impl Figure for VgVf<'_> {
     }
 }
 
-/// The response PSD of one output (SI, one-sided in ω).
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct PsdSeries {
-    pub label: String,
-    pub unit: String,
-    pub omega_rad_s: Vec<f64>,
-    pub psd: Vec<f64>,
-}
-
 /// Power spectral densities on log-log axes: one panel per entry, each with one or more series
 /// of the same quantity.
 pub struct PsdPlot {
@@ -345,10 +270,10 @@ pub struct Convergence {
 }
 
 impl Convergence {
-    pub fn new(study: &str, o: &crate::report::run::OptimizationResults) -> Self {
+    pub fn new(study: &str, o: &OptimizationResults) -> Self {
         let m0 = o.initial.mass_kg;
         let a0 = o.initial.area_m2;
-        let it = |f: &dyn Fn(&crate::report::run::HistoryRow) -> f64| {
+        let it = |f: &dyn Fn(&HistoryRow) -> f64| {
             o.history
                 .iter()
                 .map(|h| (h.iteration as f64, f(h)))
@@ -358,7 +283,7 @@ impl Convergence {
             ("mass / initial mass".to_string(), it(&|h| h.mass_kg / m0)),
             (
                 format!("RMS {} / limit", o.output),
-                it(&|h| h.rms_tip_in / o.rms_limit),
+                it(&|h| h.rms_display / o.rms_limit),
             ),
         ];
         if o.fix_area {

@@ -1,6 +1,7 @@
 //! Reports: figures (plotters, PNG and SVG), VTK files and markdown, always written atomically.
 
 pub mod figures;
+pub mod results;
 pub mod run;
 pub mod sweep;
 pub mod vtk;

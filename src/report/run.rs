@@ -2,158 +2,12 @@
 //! it alone: `gustkit run` and `gustkit report RUN_DIR` call the same [`render`], so a report can
 //! be re-drawn without re-running anything.
 
-use super::figures::{Convergence, ModeShapes, PsdPlot, PsdSeries, ThicknessMaps, VgVf};
+use super::figures::{Convergence, PsdPlot, ThicknessMaps, VgVf};
+use super::results::{ModeRow, RunResults};
 use super::{from_json, save_figure};
 use crate::flutter::FlutterResult;
-use crate::gust::Turbulence;
 use anyhow::Result;
-use serde::{Deserialize, Serialize};
 use std::path::Path;
-
-/// One mode in the modal summary.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct ModeRow {
-    pub mode: usize,
-    pub frequency_hz: f64,
-    /// "bending" or "membrane".
-    pub field: String,
-    /// Vertical displacement of the wing-tip trailing edge in the mass-normalized mode, m/√kg.
-    pub tip_te_w: f64,
-}
-
-/// RMS and zero-crossing rate of one gust output.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct OutputRow {
-    pub name: String,
-    /// RMS in `unit` (SI).
-    pub rms: f64,
-    pub unit: String,
-    pub n0_hz: f64,
-}
-
-/// The stochastic gust response at the study's design.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct GustResults {
-    pub mach: f64,
-    pub velocity_m_s: f64,
-    pub density_kg_m3: f64,
-    pub q_inf_pa: f64,
-    pub turbulence: Turbulence,
-    /// Number of circular frequencies of the response grid and the largest, rad/s.
-    pub n_omega: usize,
-    pub omega_max_rad_s: f64,
-    pub outputs: Vec<OutputRow>,
-    /// The response PSD of every output (SI).
-    pub psd: Vec<PsdSeries>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub calibration: Option<Calibration>,
-}
-
-/// The σ_w calibration recorded in the study, checked at the initial design.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct Calibration {
-    pub output: String,
-    /// Target and computed RMS in `unit` (the study's length unit for displacements).
-    pub target_rms: f64,
-    pub rms: f64,
-    pub unit: String,
-    pub sigma_w_m_s: f64,
-    /// σ_w that meets the target exactly.
-    pub sigma_w_for_target_m_s: f64,
-    pub source: String,
-}
-
-/// A p-k sweep and its flutter point.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct FlutterSummary {
-    pub mach: f64,
-    pub density_kg_m3: f64,
-    #[serde(flatten)]
-    pub result: FlutterResult,
-}
-
-/// A design as the report shows it.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct DesignSnapshot {
-    pub mass_kg: f64,
-    pub area_m2: f64,
-    /// RMS of the constrained output in report units (in for displacements, N m for moments).
-    pub rms_tip_in: f64,
-    /// The same RMS in SI.
-    pub rms: f64,
-    pub frequencies_hz: Vec<f64>,
-    pub design_variables: Vec<f64>,
-    /// Element corner polygons (x, y) in the study's length unit, and element thickness in it.
-    pub elements: Vec<Vec<(f64, f64)>>,
-    pub thickness: Vec<f64>,
-    /// Response PSD of the constrained output (SI).
-    pub psd: PsdSeries,
-}
-
-/// One SQP iteration in physical units.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct HistoryRow {
-    pub iteration: usize,
-    pub mass_kg: f64,
-    pub rms_tip_in: f64,
-    pub area_m2: f64,
-    /// KS aggregate of the p-k dampings at the margin speed (with a flutter-margin constraint).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub flutter_damping: Option<f64>,
-    pub violation: f64,
-    pub kkt: f64,
-    pub evaluations: usize,
-}
-
-/// The optimization: the keys the issue asks for at the top level of results.json.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct OptimizationResults {
-    pub converged: bool,
-    pub message: String,
-    pub iterations: usize,
-    pub evaluations: usize,
-    pub wall_time_s: f64,
-    pub output: String,
-    /// RMS limit in report units.
-    pub rms_limit: f64,
-    pub unit: String,
-    pub fix_area: bool,
-    /// The flutter-margin constraint: speed factor and largest damping, if any.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub flutter_margin: Option<(f64, f64)>,
-    /// Published results to compare with.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub reference: Option<crate::study::ReferenceSpec>,
-    pub design_variable_names: Vec<String>,
-    pub lower: Vec<f64>,
-    pub upper: Vec<f64>,
-    pub initial: DesignSnapshot,
-    #[serde(rename = "final")]
-    pub final_: DesignSnapshot,
-    pub history: Vec<HistoryRow>,
-}
-
-/// Everything `gustkit run` computed; results.json.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct RunResults {
-    pub study: String,
-    pub description: String,
-    /// Display unit of lengths in figures ("in", "m", "ft").
-    pub length_unit: String,
-    pub mass_kg: f64,
-    pub area_m2: f64,
-    pub n_design_variables: usize,
-    pub frequencies_hz: Vec<f64>,
-    pub modes: Vec<ModeRow>,
-    pub mode_shapes: ModeShapes,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub gust: Option<GustResults>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub flutter: Option<FlutterSummary>,
-    #[serde(default, skip_serializing_if = "Option::is_none", flatten)]
-    pub optimization: Option<OptimizationResults>,
-    pub run_time_s: f64,
-}
 
 /// Markdown frequency table.
 pub fn frequency_table(modes: &[ModeRow]) -> String {
@@ -234,7 +88,7 @@ pub fn summary(r: &RunResults) -> String {
             o.rms_limit,
             o.unit,
             match o.flutter_margin {
-                Some((f, g)) => format!(", every p-k root damped (g ≤ {g}) at {f} × the flight speed (KS aggregate, ρ = {})", crate::pipeline::KS_RHO),
+                Some((f, g)) => format!(", every p-k root damped (g ≤ {g}) at {f} × the flight speed (KS aggregate, ρ = {})", o.ks_rho),
                 None => String::new(),
             } + if o.fix_area { ", planform area fixed" } else { "" },
             o.design_variable_names.len(),
@@ -247,9 +101,9 @@ pub fn summary(r: &RunResults) -> String {
             100.0 * (f.mass_kg / i.mass_kg - 1.0),
             o.output,
             o.unit,
-            i.rms_tip_in,
-            f.rms_tip_in,
-            100.0 * (f.rms_tip_in / i.rms_tip_in - 1.0),
+            i.rms_display,
+            f.rms_display,
+            100.0 * (f.rms_display / i.rms_display - 1.0),
             i.area_m2,
             f.area_m2,
             100.0 * (f.area_m2 / i.area_m2 - 1.0),
@@ -265,23 +119,19 @@ pub fn summary(r: &RunResults) -> String {
                 100.0 * (f.mass_kg / i.mass_kg - 1.0),
                 o.unit,
                 opt(refr.initial_rms.map(|v| format!("{v:.3}"))),
-                i.rms_tip_in,
+                i.rms_display,
                 if refr.design.is_empty() { "–" } else { &refr.design },
             );
         }
         // planform variables in the study's units: lengths in its length unit, sweep in degrees
-        let to_unit = match r.length_unit.as_str() {
-            "in" => 1.0 / 0.0254,
-            "ft" => 1.0 / 0.3048,
-            _ => 1.0,
-        };
+        let to_unit = 1.0 / r.length_unit.to_m();
         md += "\n| planform variable | lower | initial | final | upper | unit |\n|---|---:|---:|---:|---:|---|\n";
         let n = o.design_variable_names.len();
         for k in n.saturating_sub(4)..n {
             let (scale, unit) = if o.design_variable_names[k].starts_with("sweep") {
                 (180.0 / std::f64::consts::PI, "deg")
             } else {
-                (to_unit, r.length_unit.as_str())
+                (to_unit, r.length_unit.name())
             };
             md += &format!(
                 "| {} | {:.3} | {:.3} | {:.3} | {:.3} | {unit} |\n",
@@ -356,7 +206,7 @@ pub fn render(dir: &Path, r: &RunResults) -> Result<()> {
             "thickness",
             &ThicknessMaps {
                 title: format!("{}: planform and thickness", r.study),
-                unit: r.length_unit.clone(),
+                unit: r.length_unit.name().to_string(),
                 panels: vec![
                     (
                         "initial".into(),
@@ -376,8 +226,12 @@ pub fn render(dir: &Path, r: &RunResults) -> Result<()> {
 }
 
 /// `gustkit report RUN_DIR`: re-renders the report from `value`, the results.json at `path`.
-pub fn rerender(dir: &Path, path: &Path, value: &serde_json::Value) -> Result<RunResults> {
-    let mut r: RunResults = from_json(path, value)?;
+pub fn rerender(
+    dir: &Path,
+    path: &Path,
+    value: &serde_json::Value,
+    mut r: RunResults,
+) -> Result<RunResults> {
     // a flattened Option swallows errors in its fields: read the optimization on its own
     if value.get("converged").is_some() {
         r.optimization = Some(from_json(path, value)?);

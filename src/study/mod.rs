@@ -5,18 +5,18 @@
 //! Lengths are given in `length_unit` (m, in or ft) and converted to SI here; angles in degrees;
 //! material constants in SI with the unit in the field name.
 
-pub mod design;
-pub mod fidelity;
 pub(crate) mod schema;
 pub mod sweep;
 
-pub use fidelity::AeroModel;
+pub use crate::aero::{dlm::DlmSpec, FidelitySpec};
 pub use schema::{
-    AeroSpec, AirfoilSpec, ClampSpec, DlmSpec, FidelitySpec, FlightSpec, FlutterSpec, GustSpec,
-    LengthUnit, MaterialSpec, MeshSpec, OptimizationSpec, OutputSpec, ReferenceSpec, StructureSpec,
-    StudyFile, SweepCombine, SweepParameter, SweepSpec, WingSpec,
+    AeroSpec, AirfoilSpec, ClampSpec, FlightSpec, FlutterSpec, GustSpec, LengthUnit, MaterialSpec,
+    MeshSpec, OptimizationSpec, OutputSpec, ReferenceSpec, StructureSpec, StudyFile, SweepCombine,
+    SweepParameter, SweepSpec, WingSpec,
 };
 
+use crate::aero::AeroModel;
+use crate::gust::{GustSettings, Output, Quantity, QuantityName};
 use crate::structure::{airfoil_thickness, Clamp, Orthotropic, PlateMesh, PlateModel};
 use crate::wing::{Airfoil, DesignVector, Planform};
 use std::path::{Path, PathBuf};
@@ -32,6 +32,36 @@ pub struct StudyError {
     /// JSON path of the offending field (`.` for the whole document).
     pub path: String,
     pub reason: String,
+}
+
+/// The checks every study kind shares: the schema version this build reads, and a name that is
+/// safe as the run folder's name (it becomes `reports/<name>/`).
+pub fn check_header(file: &Path, schema_version: u32, name: &str) -> Result<(), StudyError> {
+    let err = |path: &str, reason: String| StudyError {
+        file: file.to_path_buf(),
+        path: path.into(),
+        reason,
+    };
+    if schema_version != SCHEMA_VERSION {
+        return Err(err(
+            "schema_version",
+            format!(
+                "this gustkit reads schema version {SCHEMA_VERSION}, the file has {schema_version}"
+            ),
+        ));
+    }
+    if name.is_empty()
+        || name.starts_with('.')
+        || !name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.')
+    {
+        return Err(err(
+            "name",
+            "must be a non-empty file-name-safe string (letters, digits, '_', '-', '.'; not starting with '.')".into(),
+        ));
+    }
+    Ok(())
 }
 
 /// A loaded, validated study.
@@ -82,26 +112,7 @@ impl Study {
 
     fn validate(&self) -> Result<(), StudyError> {
         let s = &self.spec;
-        if s.schema_version != SCHEMA_VERSION {
-            return Err(self.err(
-                "schema_version",
-                format!(
-                    "this gustkit reads schema version {SCHEMA_VERSION}, the file has {}",
-                    s.schema_version
-                ),
-            ));
-        }
-        if s.name.is_empty()
-            || !s
-                .name
-                .chars()
-                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.')
-        {
-            return Err(self.err(
-                "name",
-                "must be a non-empty file-name-safe string (letters, digits, '_', '-', '.')",
-            ));
-        }
+        check_header(&self.file, s.schema_version, &s.name)?;
         self.planform()?;
         self.airfoil()?;
         self.material()?;
@@ -115,7 +126,7 @@ impl Study {
                 format!("must lie in [0, 1) (got {})", st.damping_ratio),
             ));
         }
-        let plate = self.build_model()?;
+        self.build_model()?;
         if self.spec.aero.is_some() || self.spec.flight.is_some() {
             self.flight_condition()?;
             let aero = self
@@ -125,7 +136,11 @@ impl Study {
                 .expect("checked by flight_condition");
             gustkit_core::check_reduced_frequencies(&aero.reduced_frequencies)
                 .map_err(|e| self.err("aero.reduced_frequencies", e.to_string()))?;
-            AeroModel::new(self, &plate)?;
+            // the fidelity's own checks, cheap: no model is built to validate a file
+            aero.fidelity
+                .builder()
+                .validate(&self.planform()?)
+                .map_err(|e| self.fidelity_err(&e))?;
         }
         if self.spec.gust.is_some() {
             self.gust_settings()?;
@@ -135,8 +150,54 @@ impl Study {
         }
         if self.spec.optimization.is_some() {
             self.design_bounds()?;
+            self.require_reverse_mode("optimization")?;
         }
         Ok(())
+    }
+
+    /// Refuses a study whose fidelity has no reverse mode where `what` needs gradients.
+    pub fn require_reverse_mode(&self, what: &str) -> Result<(), StudyError> {
+        let aero = self.spec.aero.as_ref().ok_or_else(|| {
+            self.err(
+                "aero",
+                format!("missing: {what} needs an aerodynamic model"),
+            )
+        })?;
+        let builder = aero.fidelity.builder();
+        builder
+            .capabilities()
+            .require_reverse(builder.name(), what)
+            .map_err(|reason| self.err(&format!("aero.fidelity.{}", builder.name()), reason))
+    }
+
+    /// A fidelity builder's error, with the JSON path of the field in this study.
+    fn fidelity_err(&self, e: &crate::aero::BuildError) -> StudyError {
+        let name = self
+            .spec
+            .aero
+            .as_ref()
+            .map_or("?", |a| a.fidelity.builder().name());
+        self.err(
+            &e.path_in(&format!("aero.fidelity.{name}")),
+            e.reason.clone(),
+        )
+    }
+
+    /// The study's aerodynamic model on a plate (its current planform), bound to it.
+    pub fn aero_model(&self, plate: &PlateModel) -> Result<AeroModel, StudyError> {
+        let aero = self.spec.aero.as_ref().ok_or_else(|| {
+            self.err(
+                "aero",
+                "the study has no aerodynamic model (add an \"aero\" section)",
+            )
+        })?;
+        AeroModel::new(
+            &aero.fidelity,
+            self.flight_condition()?,
+            aero.reduced_frequencies.clone(),
+            plate,
+        )
+        .map_err(|e| self.fidelity_err(&e))
     }
 
     /// Bounds of the design vector from the `optimization` section (SI), checked; the initial
@@ -283,7 +344,7 @@ impl Study {
     }
 
     /// The gust settings in SI, checked.
-    pub fn gust_settings(&self) -> Result<crate::pipeline::GustSettings, StudyError> {
+    pub fn gust_settings(&self) -> Result<GustSettings, StudyError> {
         let g = self
             .spec
             .gust
@@ -322,42 +383,31 @@ impl Study {
         }
         let mut outputs = Vec::new();
         for (i, o) in g.outputs.iter().enumerate() {
-            let quantity = match (
-                o.quantity.as_deref().unwrap_or("vertical_displacement"),
-                o.point,
-            ) {
-                ("vertical_displacement", Some(point)) => {
+            let quantity = match (o.quantity.unwrap_or_default(), o.point) {
+                (QuantityName::VerticalDisplacement, Some(point)) => {
                     if !point.iter().all(|v| (0.0..=1.0).contains(v)) {
                         return Err(self.err(
                             &format!("gust.outputs[{i}].point"),
                             format!("(ξ, η) must lie in [0, 1]² (got {point:?})"),
                         ));
                     }
-                    crate::pipeline::Quantity::Displacement { point }
+                    Quantity::Displacement { point }
                 }
-                ("vertical_displacement", None) => {
+                (QuantityName::VerticalDisplacement, None) => {
                     return Err(self.err(
                         &format!("gust.outputs[{i}].point"),
                         "missing: a displacement output needs a point [ξ, η]",
                     ))
                 }
-                ("root_bending_moment", None) => crate::pipeline::Quantity::RootBendingMoment,
-                ("root_bending_moment", Some(_)) => {
+                (QuantityName::RootBendingMoment, None) => Quantity::RootBendingMoment,
+                (QuantityName::RootBendingMoment, Some(_)) => {
                     return Err(self.err(
                         &format!("gust.outputs[{i}].point"),
                         "a root bending moment takes no point",
                     ))
                 }
-                (other, _) => {
-                    return Err(self.err(
-                        &format!("gust.outputs[{i}].quantity"),
-                        format!(
-                        "unknown quantity '{other}' (vertical_displacement or root_bending_moment)"
-                    ),
-                    ))
-                }
             };
-            outputs.push(crate::pipeline::Output {
+            outputs.push(Output {
                 name: o.name.clone(),
                 quantity,
             });
@@ -368,7 +418,7 @@ impl Study {
                 ));
             }
         }
-        Ok(crate::pipeline::GustSettings {
+        Ok(GustSettings {
             turbulence: g.turbulence,
             omega_min: g.omega_min_rad_s,
             points: g.points,

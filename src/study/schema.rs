@@ -218,7 +218,7 @@ pub struct OutputSpec {
     pub name: String,
     /// `"vertical_displacement"` (default) or `"root_bending_moment"`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub quantity: Option<String>,
+    pub quantity: Option<crate::gust::QuantityName>,
     /// (ξ, η) in [0, 1]² of a displacement output: [1, 1] is the wing-tip trailing edge.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub point: Option<[f64; 2]>,
@@ -229,7 +229,7 @@ pub struct OutputSpec {
 #[serde(deny_unknown_fields)]
 pub struct AeroSpec {
     /// Which fidelity and its settings, e.g. `{"dlm": {...}}`.
-    pub fidelity: FidelitySpec,
+    pub fidelity: crate::aero::FidelitySpec,
     /// Reduced frequencies k = ω b_ref / U of the GAF table.
     pub reduced_frequencies: Vec<f64>,
     /// Reference semichord b_ref (length unit); default half the root chord.
@@ -238,33 +238,6 @@ pub struct AeroSpec {
     /// Streamwise station of zero gust phase (length unit); default the root leading edge.
     #[serde(default)]
     pub gust_x_ref: f64,
-}
-
-/// The aerodynamic fidelities a study can name.
-#[derive(Clone, Debug, Deserialize, Serialize)]
-#[serde(rename_all = "lowercase", deny_unknown_fields)]
-pub enum FidelitySpec {
-    /// Doublet-Lattice Method on the wing planform.
-    Dlm(DlmSpec),
-}
-
-/// Box layout of the DLM on the planform.
-#[derive(Clone, Debug, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct DlmSpec {
-    pub n_chord: usize,
-    pub n_span: usize,
-    #[serde(default)]
-    pub chord_spacing: gustkit_dlm::Spacing,
-    #[serde(default)]
-    pub span_spacing: gustkit_dlm::Spacing,
-    /// `"symmetric"` (a wall-mounted half wing, the default), `"antisymmetric"` or `"none"`.
-    #[serde(default = "default_symmetry")]
-    pub symmetry: gustkit_dlm::Symmetry,
-}
-
-fn default_symmetry() -> gustkit_dlm::Symmetry {
-    gustkit_dlm::Symmetry::Symmetric
 }
 
 /// Free-stream condition (SI).
@@ -287,6 +260,15 @@ pub enum LengthUnit {
 }
 
 impl LengthUnit {
+    /// The unit's name as written in study files and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            LengthUnit::M => "m",
+            LengthUnit::In => "in",
+            LengthUnit::Ft => "ft",
+        }
+    }
+
     /// Metres per unit.
     pub fn to_m(self) -> f64 {
         match self {

@@ -56,10 +56,16 @@ impl FlightCondition {
                 )));
             }
         }
-        if !(self.mach >= 0.0) || !self.x_ref.is_finite() {
+        if !(self.mach >= 0.0 && self.mach.is_finite()) {
             return Err(AeroError::Input(format!(
                 "mach: must be non-negative (got {})",
                 self.mach
+            )));
+        }
+        if !self.x_ref.is_finite() {
+            return Err(AeroError::Input(format!(
+                "x_ref: must be finite (got {})",
+                self.x_ref
             )));
         }
         Ok(())
@@ -210,13 +216,54 @@ pub struct GafGradient {
     pub geometry: Vec<f64>,
 }
 
-/// Errors of an aerodynamic model.
+/// Why a fidelity's solver failed: its own words and, for iterative solvers, the residual
+/// history (so a stalled solve can be diagnosed from the error alone).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SolverFailure {
+    pub reason: String,
+    /// Residual norms of the iterations, where the solver is iterative (relative or absolute,
+    /// as the solver states in `reason`).
+    pub history: Vec<f64>,
+}
+
+impl std::fmt::Display for SolverFailure {
+    /// The reason and a one-line digest of the history (the whole history stays in the value).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.reason)?;
+        if let (Some(first), Some(last)) = (self.history.first(), self.history.last()) {
+            write!(
+                f,
+                " (residual history: {} values, {first:.3e} first, {last:.3e} last)",
+                self.history.len()
+            )?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for SolverFailure {}
+
+/// Errors of an aerodynamic model: bad input, a singular system, a solver that failed at a
+/// reduced frequency and right-hand side, or a capability the fidelity lacks.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum AeroError {
     #[error("{0}")]
     Input(String),
     #[error("the aerodynamic influence matrix is singular at k = {k}")]
     Singular { k: f64 },
+    /// A solver failed (a Krylov solve that stalled, a factorization that broke down).
+    #[error("solver failed at k = {k} ({rhs}): {source}")]
+    Solver {
+        /// The reduced frequency.
+        k: f64,
+        /// Which right-hand side: "mode 3", "gust", "preconditioner", ….
+        rhs: String,
+        #[source]
+        source: SolverFailure,
+    },
+    /// The fidelity has no such capability (e.g. no reverse mode).
+    #[error("the {fidelity} fidelity cannot {what}")]
+    Unsupported { fidelity: String, what: String },
 }
 
 /// Checks a reduced-frequency list: finite, non-negative, no duplicates.
@@ -254,7 +301,9 @@ pub fn check_request(
     modes.check(n_points)
 }
 
-/// An aerodynamic model that supplies GAFs and their reverse-mode derivatives.
+/// An aerodynamic model that supplies GAFs. Its reverse mode is a separate capability
+/// ([`AerodynamicsReverse`], reached through [`Aerodynamics::reverse`]), so a caller that needs
+/// gradients asks for it once, up front, instead of failing at the first gradient.
 pub trait Aerodynamics: Send + Sync {
     /// Points where this model wants structural displacements.
     fn surface(&self) -> &AeroSurface;
@@ -267,6 +316,14 @@ pub trait Aerodynamics: Send + Sync {
         modes: &ModalSurface,
         k: &[f64],
     ) -> Result<GafTable, AeroError>;
+    /// The model's reverse mode, if it has one (the default: none).
+    fn reverse(&self) -> Option<&dyn AerodynamicsReverse> {
+        None
+    }
+}
+
+/// The reverse mode of an [`Aerodynamics`] model.
+pub trait AerodynamicsReverse: Aerodynamics {
     /// Reverse mode: for seeds on Q_ss and Q_gs (conjugate convention above), the gradient with
     /// respect to the sampled mode shapes and the geometry parameters.
     fn gafs_vjp(
@@ -276,8 +333,8 @@ pub trait Aerodynamics: Send + Sync {
         k: &[f64],
         seed: &GafTable,
     ) -> Result<GafGradient, AeroError>;
-    /// Reverse mode for several seeds at once, one gradient each. Models that share work between
-    /// seeds (factorizations, geometry passes) override it.
+    /// Reverse mode for several seeds at once, one gradient each (none for no seeds). Models
+    /// that share work between seeds (factorizations, geometry passes) override it.
     fn gafs_vjp_many(
         &self,
         flight: &FlightCondition,
@@ -322,7 +379,15 @@ mod tests {
         assert_eq!(f.q_inf(), 6000.0);
         let mut bad = f;
         bad.mach = -0.1;
-        assert!(bad.validate().is_err());
+        assert!(bad.validate().unwrap_err().to_string().starts_with("mach:"));
+        // a bad gust reference station is named as such, not as the Mach number
+        let mut bad = f;
+        bad.x_ref = f64::NAN;
+        assert!(bad
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .starts_with("x_ref:"));
     }
 
     #[test]

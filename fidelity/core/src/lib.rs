@@ -7,6 +7,6 @@ pub mod strip;
 pub mod theory;
 
 pub use aero::{
-    check_reduced_frequencies, AeroError, AeroSurface, Aerodynamics, FlightCondition, GafGradient,
-    GafTable, ModalSurface,
+    check_reduced_frequencies, AeroError, AeroSurface, Aerodynamics, AerodynamicsReverse,
+    FlightCondition, GafGradient, GafTable, ModalSurface, SolverFailure,
 };

@@ -6,7 +6,8 @@
 use crate::aero::check_request;
 use crate::theory::strip_gafs;
 use crate::{
-    AeroError, AeroSurface, Aerodynamics, FlightCondition, GafGradient, GafTable, ModalSurface,
+    AeroError, AeroSurface, Aerodynamics, AerodynamicsReverse, FlightCondition, GafGradient,
+    GafTable, ModalSurface,
 };
 use num_complex::Complex64;
 
@@ -149,6 +150,12 @@ impl Aerodynamics for StripSection {
         Ok(GafTable::from_parts(flight, k, parts))
     }
 
+    fn reverse(&self) -> Option<&dyn AerodynamicsReverse> {
+        Some(self)
+    }
+}
+
+impl AerodynamicsReverse for StripSection {
     /// Q_ss[m][n] = a_mᵀ S a_n and Q_gs[m] = a_mᵀ g with a = (h, α) linear in the displacements,
     /// so ∂J/∂a_m = Re(Σ_n conj(Q̄_mn) S a_n + Σ_n conj(Q̄_nm) Sᵀ a_n + conj(Q̄_g,m) g), pulled back
     /// through the fit.

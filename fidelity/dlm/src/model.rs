@@ -16,7 +16,8 @@ use faer::linalg::solvers::Solve;
 use faer::{c64, Mat};
 use gustkit_core::scalar::{Dual, Scalar};
 use gustkit_core::{
-    AeroError, AeroSurface, Aerodynamics, FlightCondition, GafGradient, GafTable, ModalSurface,
+    AeroError, AeroSurface, Aerodynamics, AerodynamicsReverse, FlightCondition, GafGradient,
+    GafTable, ModalSurface,
 };
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -522,6 +523,12 @@ impl Aerodynamics for Dlm {
         Ok(GafTable::from_parts(flight, k, per_k))
     }
 
+    fn reverse(&self) -> Option<&dyn AerodynamicsReverse> {
+        Some(self)
+    }
+}
+
+impl AerodynamicsReverse for Dlm {
     fn gafs_vjp(
         &self,
         flight: &FlightCondition,
@@ -543,6 +550,9 @@ impl Aerodynamics for Dlm {
         seeds: &[GafTable],
     ) -> Result<Vec<GafGradient>, AeroError> {
         self.check_inputs(flight, modes, k)?;
+        if seeds.is_empty() {
+            return Ok(Vec::new());
+        }
         let nm = modes.n_modes();
         if seeds
             .iter()

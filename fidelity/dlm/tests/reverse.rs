@@ -1,7 +1,7 @@
 //! Reverse mode of the DLM GAFs: dot-product tests against forward products (modes and geometry)
 //! and finite differences of the geometry gradient.
 
-use gustkit_core::{Aerodynamics, FlightCondition, GafTable, ModalSurface};
+use gustkit_core::{Aerodynamics, AerodynamicsReverse, FlightCondition, GafTable, ModalSurface};
 use gustkit_dlm::{Dlm, Spacing, SurfaceSpec, Symmetry};
 use gustkit_testkit::{fd_check, rand_vec};
 use num_complex::Complex64 as C;
@@ -178,4 +178,14 @@ fn many_seeds_equal_separate_passes() {
             assert!((x - y).abs() <= 1e-12 * gs, "{x} {y}");
         }
     }
+}
+
+/// No seeds, no gradients: the many-seed reverse mode returns an empty list (it used to index
+/// the first seed's adjoint quantities and panic).
+#[test]
+fn many_seeds_with_no_seed_is_empty() {
+    let dlm = Dlm::new(vec![wing()], Symmetry::Symmetric).unwrap();
+    let m = modes(&dlm, 3, 5);
+    let many = dlm.gafs_vjp_many(&flight(), &m, &K, &[]).unwrap();
+    assert!(many.is_empty());
 }

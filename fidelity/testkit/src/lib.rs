@@ -143,8 +143,8 @@ pub use gustkit_core::theory as bessel;
 /// a quasi-steady strip-like model: stiffness from slopes, damping and apparent mass from motion.
 pub mod fake {
     use gustkit_core::{
-        check_reduced_frequencies, AeroError, AeroSurface, Aerodynamics, FlightCondition,
-        GafGradient, GafTable, ModalSurface,
+        check_reduced_frequencies, AeroError, AeroSurface, Aerodynamics, AerodynamicsReverse,
+        FlightCondition, GafGradient, GafTable, ModalSurface,
     };
     use num_complex::Complex64 as C;
 
@@ -207,6 +207,13 @@ pub mod fake {
             }
             Ok(t)
         }
+
+        fn reverse(&self) -> Option<&dyn AerodynamicsReverse> {
+            Some(self)
+        }
+    }
+
+    impl AerodynamicsReverse for FakeAero {
         fn gafs_vjp(
             &self,
             f: &FlightCondition,

@@ -1,0 +1,141 @@
+//! Aerodynamics bound to the structure: the fidelity registry ([`registry`]: a study's fidelity
+//! spec → its builder → a model with its surface binding), the builders of each fidelity
+//! ([`dlm`], [`lfd`], [`strip`]) and the GAF driver [`AeroModel`] that couples a wing model to the
+//! plate: modes → transfer → GAFs, and the reverse sweep back to the nodal mode shapes and the
+//! planform variables. Nothing here asks which fidelity it is holding.
+
+pub mod dlm;
+pub mod lfd;
+pub mod registry;
+pub mod strip;
+
+pub use registry::{
+    BuildError, Capabilities, FidelitySpec, SectionFidelitySpec, SurfaceBinding, WingBuilder,
+    WingFidelity,
+};
+
+use crate::structure::{Modes, PlateModel};
+use crate::transfer::ModeTransfer;
+use crate::wing::N_PLANFORM;
+use gustkit_core::{AeroError, AerodynamicsReverse, FlightCondition, GafTable, ModalSurface};
+
+/// Seeds on the nodal mode shapes (one vector a mode) and the direct planform gradient.
+pub type ShapeSeeds = (Vec<Vec<f64>>, [f64; N_PLANFORM]);
+
+/// An aerodynamic model bound to a planform and a plate.
+pub struct AeroModel {
+    /// The fidelity's name, for messages ("dlm", "lfd").
+    pub name: &'static str,
+    pub fidelity: Box<dyn gustkit_core::Aerodynamics>,
+    pub transfer: ModeTransfer,
+    pub flight: FlightCondition,
+    pub k: Vec<f64>,
+    /// ∂(geometry parameter)/∂(planform variable) of the fidelity's geometry parameters.
+    geometry_jacobian: Vec<[f64; N_PLANFORM]>,
+}
+
+impl AeroModel {
+    /// Builds the fidelity of `spec` on the plate's current planform and binds it to the plate
+    /// through the builder's surface binding.
+    pub fn new(
+        spec: &FidelitySpec,
+        flight: FlightCondition,
+        k: Vec<f64>,
+        plate: &PlateModel,
+    ) -> Result<Self, BuildError> {
+        let builder = spec.builder();
+        let built = builder.build(plate.planform())?;
+        Ok(Self::bind(builder.name(), built, flight, k, plate))
+    }
+
+    /// Binds a built wing model to the plate: the transfer samples the plate's modes at the
+    /// binding's (ξ, η) points, one for each point of the model's surface.
+    pub fn bind(
+        name: &'static str,
+        built: WingFidelity,
+        flight: FlightCondition,
+        k: Vec<f64>,
+        plate: &PlateModel,
+    ) -> Self {
+        debug_assert_eq!(
+            built.binding.points.len(),
+            built.model.surface().points.len(),
+            "a surface binding has one plate point for each surface point"
+        );
+        Self {
+            name,
+            transfer: ModeTransfer::new(plate, &built.binding.points),
+            fidelity: built.model,
+            flight,
+            k,
+            geometry_jacobian: built.binding.geometry_jacobian,
+        }
+    }
+
+    /// Mode shapes on the aerodynamic surface.
+    pub fn modal_surface(&self, plate: &PlateModel, modes: &Modes) -> ModalSurface {
+        self.transfer.modes_on_surface(plate, modes)
+    }
+
+    /// GAFs of the plate's modes at the study's reduced frequencies.
+    pub fn gafs(&self, plate: &PlateModel, modes: &Modes) -> Result<GafTable, AeroError> {
+        self.fidelity
+            .gafs(&self.flight, &self.modal_surface(plate, modes), &self.k)
+    }
+
+    /// The fidelity's reverse mode, or the error that says it has none.
+    fn reverse(&self) -> Result<&dyn AerodynamicsReverse, AeroError> {
+        self.fidelity
+            .reverse()
+            .ok_or_else(|| AeroError::Unsupported {
+                fidelity: self.name.to_string(),
+                what: "supply gradients (it has no reverse mode)".into(),
+            })
+    }
+
+    /// Whether the bound model has a reverse mode.
+    pub fn has_reverse(&self) -> bool {
+        self.fidelity.reverse().is_some()
+    }
+
+    /// Reverse mode: for seeds on the GAF table, the seeds on the nodal mode shapes (feed them to
+    /// `structure::modes_vjp`) and the direct gradient with respect to the planform variables
+    /// (aerodynamic geometry and transfer).
+    pub fn gafs_vjp(
+        &self,
+        plate: &PlateModel,
+        modes: &Modes,
+        seed: &GafTable,
+    ) -> Result<ShapeSeeds, AeroError> {
+        let mut out = self.gafs_vjp_many(plate, modes, std::slice::from_ref(seed))?;
+        Ok(out.pop().expect("one seed, one gradient"))
+    }
+
+    /// [`AeroModel::gafs_vjp`] for several seeds, sharing the aerodynamic model's work.
+    pub fn gafs_vjp_many(
+        &self,
+        plate: &PlateModel,
+        modes: &Modes,
+        seeds: &[GafTable],
+    ) -> Result<Vec<ShapeSeeds>, AeroError> {
+        let reverse = self.reverse()?;
+        let surface = self.modal_surface(plate, modes);
+        let gs = reverse.gafs_vjp_many(&self.flight, &surface, &self.k, seeds)?;
+        Ok(gs
+            .iter()
+            .map(|g| {
+                let (shapes, mut p_bar) =
+                    self.transfer.modes_on_surface_vjp(plate, modes, &g.modes);
+                for (gq, row) in g.geometry.iter().zip(&self.geometry_jacobian) {
+                    for k in 0..N_PLANFORM {
+                        p_bar[k] += gq * row[k];
+                    }
+                }
+                (shapes, p_bar)
+            })
+            .collect())
+    }
+}
+
+#[cfg(test)]
+mod tests;

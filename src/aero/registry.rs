@@ -1,0 +1,144 @@
+//! The one place where a study's fidelity spec becomes a model (the MPhys lesson: a builder per
+//! fidelity). A wing study names its fidelity as `aero.fidelity: {"dlm": {...}}`; the builder
+//! turns that spec into a `Box<dyn Aerodynamics>` plus its [`SurfaceBinding`] — the plate points
+//! where the model wants structural displacements and how the planform variables move its
+//! geometry — so the transfer and the pipeline never ask which fidelity they hold. What a
+//! fidelity can do ([`Capabilities`]) is known from its spec alone, so a study that needs a
+//! reverse mode its fidelity lacks is refused when it is loaded.
+
+use crate::wing::{Planform, N_PLANFORM};
+use gustkit_core::Aerodynamics;
+use serde::{Deserialize, Serialize};
+
+/// What a fidelity can do.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Capabilities {
+    /// Reverse mode of the GAFs (adjoint gradients, optimization, check-gradient).
+    pub reverse: bool,
+}
+
+impl Capabilities {
+    /// Refuses a use that needs gradients (`what`, e.g. "optimization") of a fidelity named
+    /// `name` without a reverse mode; the reason names both.
+    pub fn require_reverse(self, name: &str, what: &str) -> Result<(), String> {
+        if self.reverse {
+            Ok(())
+        } else {
+            Err(format!(
+                "{what} needs adjoint gradients, and the {name} fidelity has no reverse mode"
+            ))
+        }
+    }
+}
+
+/// Where a wing model wants structural displacements, and how the planform moves its geometry.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SurfaceBinding {
+    /// For each point of the model's [`Aerodynamics::surface`], in its order, the point's (ξ, η)
+    /// in the plate's parametrization: the model's points move with the planform.
+    pub points: Vec<[f64; 2]>,
+    /// ∂(geometry parameter)/∂(planform variable) for each of the model's geometry parameters
+    /// (those its reverse mode differentiates, [`Aerodynamics::geometry_names`]).
+    pub geometry_jacobian: Vec<[f64; N_PLANFORM]>,
+}
+
+/// A wing model and its binding to the plate.
+pub struct WingFidelity {
+    pub model: Box<dyn Aerodynamics>,
+    pub binding: SurfaceBinding,
+}
+
+/// A builder could not build its model: the JSON path of the field inside the fidelity's spec
+/// (empty for the spec as a whole) and the reason. The caller knows where the spec lives in its
+/// study file and names the whole path ([`BuildError::path_in`]).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{reason}")]
+pub struct BuildError {
+    pub path: String,
+    pub reason: String,
+}
+
+impl BuildError {
+    /// The JSON path of the field in a study whose fidelity spec sits at `spec_path`.
+    pub fn path_in(&self, spec_path: &str) -> String {
+        if self.path.is_empty() {
+            spec_path.to_string()
+        } else {
+            format!("{spec_path}.{}", self.path)
+        }
+    }
+}
+
+/// A fidelity's builder for wing studies.
+pub trait WingBuilder {
+    /// The fidelity's name as the study file spells it.
+    fn name(&self) -> &'static str;
+    fn capabilities(&self) -> Capabilities;
+    /// Cheap checks of the settings on a planform; builds nothing expensive.
+    fn validate(&self, planform: &Planform) -> Result<(), BuildError>;
+    /// The model on a planform, with its binding.
+    fn build(&self, planform: &Planform) -> Result<WingFidelity, BuildError>;
+}
+
+/// The aerodynamic fidelities a wing study can name.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase", deny_unknown_fields)]
+pub enum FidelitySpec {
+    /// Doublet-Lattice Method on the wing planform.
+    Dlm(super::dlm::DlmSpec),
+}
+
+impl FidelitySpec {
+    /// The builder of this fidelity.
+    pub fn builder(&self) -> &dyn WingBuilder {
+        match self {
+            FidelitySpec::Dlm(spec) => spec,
+        }
+    }
+}
+
+/// The aerodynamic models of a 2-D typical section (rigid plunge and pitch: the section models
+/// bind to the structure through their own surface points, so they need no plate binding).
+#[derive(Clone, Debug)]
+pub enum SectionFidelitySpec {
+    /// The LFD of the Euler solver on the built-in O-mesh.
+    Lfd(super::lfd::SectionLfdSpec),
+    /// Theodorsen/Sears strip theory with the Prandtl–Glauert factor.
+    Strip(super::strip::StripSpec),
+}
+
+impl SectionFidelitySpec {
+    /// What the fidelity can do: the LFD has no reverse mode yet (the LFD adjoint), strip
+    /// theory has one.
+    pub fn capabilities(&self) -> Capabilities {
+        match self {
+            SectionFidelitySpec::Lfd(_) => Capabilities { reverse: false },
+            SectionFidelitySpec::Strip(_) => Capabilities { reverse: true },
+        }
+    }
+
+    /// The fidelity's display name.
+    pub fn display_name(&self) -> &'static str {
+        match self {
+            SectionFidelitySpec::Lfd(_) => "LFD (Euler)",
+            SectionFidelitySpec::Strip(_) => "Theodorsen/Sears strip (Prandtl–Glauert)",
+        }
+    }
+
+    /// The model of a section of chord `chord_m` at `mach`, and its cell count (0 for a model
+    /// without a mesh).
+    pub fn build(
+        &self,
+        chord_m: f64,
+        mach: f64,
+    ) -> Result<(Box<dyn Aerodynamics>, usize), BuildError> {
+        match self {
+            SectionFidelitySpec::Lfd(s) => {
+                let m = s.build(chord_m, mach)?;
+                let cells = m.lfd.euler.mesh.n_cells;
+                Ok((Box::new(m), cells))
+            }
+            SectionFidelitySpec::Strip(s) => Ok((Box::new(s.build(chord_m)), 0)),
+        }
+    }
+}

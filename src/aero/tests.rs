@@ -1,0 +1,124 @@
+//! The registry's contract: builders bind their models to the plate point for point, the
+//! capability of a reverse mode is known before anything runs, and a model without one is
+//! refused with its name instead of failing deep in a gradient.
+
+use super::*;
+use crate::aero::dlm::DlmSpec;
+use crate::study::Study;
+use gustkit_core::{AeroSurface, Aerodynamics, GafTable};
+use std::path::Path;
+
+fn agard() -> Study {
+    Study::load(Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/studies/agard445_dlm.json"
+    )))
+    .unwrap()
+}
+
+/// The DLM's binding: one plate point for each surface point, and the planform map of each
+/// (ξ, η) is the surface point's (x, y) to round-off (the boxes lie on the plate's own map).
+#[test]
+fn dlm_binding_matches_its_surface() {
+    let study = agard();
+    let planform = study.planform().unwrap();
+    let aero = study.spec.aero.as_ref().unwrap();
+    let built = aero.fidelity.builder().build(&planform).unwrap();
+    let pts = &built.model.surface().points;
+    assert_eq!(built.binding.points.len(), pts.len());
+    assert_eq!(
+        built.binding.geometry_jacobian.len(),
+        built.model.geometry_names().len()
+    );
+    let p = planform.to_array();
+    for (xe, x) in built.binding.points.iter().zip(pts) {
+        let q = crate::wing::planform_point(p, xe[0], xe[1]);
+        assert!((q[0] - x[0]).abs() < 1e-12 && (q[1] - x[1]).abs() < 1e-12);
+    }
+}
+
+/// A forward-only model: the DLM's GAFs without its reverse mode.
+struct ForwardOnly(Box<dyn Aerodynamics>);
+
+impl Aerodynamics for ForwardOnly {
+    fn surface(&self) -> &AeroSurface {
+        self.0.surface()
+    }
+    fn geometry_names(&self) -> Vec<String> {
+        self.0.geometry_names()
+    }
+    fn gafs(
+        &self,
+        flight: &FlightCondition,
+        modes: &ModalSurface,
+        k: &[f64],
+    ) -> Result<GafTable, AeroError> {
+        self.0.gafs(flight, modes, k)
+    }
+}
+
+/// A bound model without a reverse mode gives its GAFs, and a gradient request is the typed
+/// `Unsupported` error naming the fidelity.
+#[test]
+fn model_without_reverse_mode_is_refused_by_name() {
+    let study = agard();
+    let plate = study.build_model().unwrap();
+    let st = &study.spec.structure;
+    let modes =
+        crate::structure::modal::solve(&plate, st.modes, 0.0, &study.mode_fields()).unwrap();
+    let aero = study.spec.aero.as_ref().unwrap();
+    let mut built = aero.fidelity.builder().build(plate.planform()).unwrap();
+    built.model = Box::new(ForwardOnly(built.model));
+    let model = AeroModel::bind(
+        "forward-only",
+        built,
+        study.flight_condition().unwrap(),
+        aero.reduced_frequencies.clone(),
+        &plate,
+    );
+    assert!(!model.has_reverse());
+    let table = model.gafs(&plate, &modes).unwrap();
+    let e = model.gafs_vjp(&plate, &modes, &table).unwrap_err();
+    assert_eq!(
+        e,
+        AeroError::Unsupported {
+            fidelity: "forward-only".into(),
+            what: "supply gradients (it has no reverse mode)".into()
+        }
+    );
+    assert!(e.to_string().contains("forward-only fidelity"), "{e}");
+    assert!(study.aero_model(&plate).unwrap().has_reverse());
+}
+
+/// Capabilities come from the spec alone: the DLM and strip theory have a reverse mode, the
+/// section LFD not yet; a use that needs gradients is refused with the fidelity's name.
+#[test]
+fn capabilities_are_known_before_building() {
+    let dlm = DlmSpec {
+        n_chord: 4,
+        n_span: 4,
+        chord_spacing: Default::default(),
+        span_spacing: Default::default(),
+        symmetry: gustkit_dlm::Symmetry::Symmetric,
+    };
+    assert!(FidelitySpec::Dlm(dlm).builder().capabilities().reverse);
+    let lfd = SectionFidelitySpec::Lfd(crate::aero::lfd::SectionLfdSpec {
+        thickness: 0.1,
+        mesh: crate::aero::lfd::OMeshSpec {
+            n_around: 16,
+            n_radial: 4,
+            far_field_chords: 20.0,
+            first_spacing_chords: 0.01,
+        },
+        order: crate::aero::lfd::OrderSpec::Second,
+    });
+    let caps = lfd.capabilities();
+    assert!(!caps.reverse);
+    let e = caps.require_reverse("lfd", "optimization").unwrap_err();
+    assert!(
+        e.contains("optimization") && e.contains("lfd fidelity has no reverse mode"),
+        "{e}"
+    );
+    let strip = SectionFidelitySpec::Strip(crate::aero::strip::StripSpec::default());
+    assert!(strip.capabilities().require_reverse("strip", "x").is_ok());
+}

@@ -1,0 +1,125 @@
+//! The gust-constrained design problem of a study as an [`optim::Problem`]: minimize mass subject
+//! to RMS(output) ≤ limit, optionally a flutter margin (every p-k root at a speed above the flight
+//! speed damped), and planform area = initial area, within the design bounds.
+//! Objective and constraints are normalized (mass/mass₀, RMS/limit − 1, (g_KS − g_max)/0.1,
+//! area/area₀ − 1) so the SQP sees quantities of order one.
+
+use crate::flutter::margin::{FlutterMargin, DAMPING_SCALE};
+use crate::gust::GustSettings;
+use crate::optim::{Gradients, Problem, Values};
+use crate::pipeline::{evaluate, gradients, DampingSeed, Evaluation, OutputSeeds};
+use crate::study::Study;
+
+/// Bounds and constraint settings (SI).
+#[derive(Clone, Debug)]
+pub struct DesignSpec {
+    pub lower: Vec<f64>,
+    pub upper: Vec<f64>,
+    /// Index of the constrained gust output and its RMS limit (SI).
+    pub output: usize,
+    pub rms_limit: f64,
+    pub mass0: f64,
+    pub area0: f64,
+    /// Keep the planform area at area0 (an equality constraint).
+    pub fix_area: bool,
+    /// The flutter-margin constraint, if any (the second inequality).
+    pub flutter: Option<FlutterMargin>,
+}
+
+/// KS weights and the p-k roots of the last flutter-margin evaluation.
+type FlutterState = (Vec<f64>, DampingSeed);
+
+/// The study's design problem; caches the last evaluation for its gradient.
+pub struct DesignProblem<'a> {
+    pub study: &'a Study,
+    pub settings: GustSettings,
+    pub spec: DesignSpec,
+    last: Option<(Evaluation, Option<FlutterState>)>,
+}
+
+impl<'a> DesignProblem<'a> {
+    pub fn new(study: &'a Study, settings: GustSettings, spec: DesignSpec) -> Self {
+        Self {
+            study,
+            settings,
+            spec,
+            last: None,
+        }
+    }
+
+    /// The last evaluation (at the last point asked for).
+    pub fn last(&self) -> Option<&Evaluation> {
+        self.last.as_ref().map(|l| &l.0)
+    }
+}
+
+impl Problem for DesignProblem<'_> {
+    fn lower(&self) -> Vec<f64> {
+        self.spec.lower.clone()
+    }
+    fn upper(&self) -> Vec<f64> {
+        self.spec.upper.clone()
+    }
+    fn values(&mut self, x: &[f64]) -> Result<Values, String> {
+        let ev = evaluate(self.study, &self.settings, x).map_err(|e| format!("{e:#}"))?;
+        let mut ineq = vec![ev.rms_m[self.spec.output] / self.spec.rms_limit - 1.0];
+        let mut flutter = None;
+        if let Some(m) = &self.spec.flutter {
+            let (ks, weights, seed) = ev.flutter_damping(m).map_err(|e| format!("{e:#}"))?;
+            ineq.push((ks - m.damping_max) / DAMPING_SCALE);
+            flutter = Some((weights, seed));
+        }
+        let v = Values {
+            f: ev.mass_kg / self.spec.mass0,
+            eq: if self.spec.fix_area {
+                vec![ev.area_m2 / self.spec.area0 - 1.0]
+            } else {
+                Vec::new()
+            },
+            ineq,
+        };
+        self.last = Some((ev, flutter));
+        Ok(v)
+    }
+    fn gradients(&mut self, x: &[f64]) -> Result<Gradients, String> {
+        if self.last.as_ref().is_none_or(|e| e.0.x != x) {
+            self.values(x)?;
+        }
+        let (ev, flutter) = self.last.as_ref().expect("evaluated");
+        let n_out = ev.rms_m.len();
+        let seeds = |mass: f64, area: f64, rms: f64| OutputSeeds {
+            mass,
+            area,
+            rms: (0..n_out)
+                .map(|i| if i == self.spec.output { rms } else { 0.0 })
+                .collect(),
+            damping: None,
+        };
+        let mut all = vec![
+            seeds(1.0 / self.spec.mass0, 0.0, 0.0),
+            seeds(0.0, 1.0 / self.spec.area0, 0.0),
+            seeds(0.0, 0.0, 1.0 / self.spec.rms_limit),
+        ];
+        if let Some((weights, seed)) = flutter {
+            let mut s = seeds(0.0, 0.0, 0.0);
+            let mut d = seed.clone();
+            d.g_bar = weights.iter().map(|w| w / DAMPING_SCALE).collect();
+            s.damping = Some(d);
+            all.push(s);
+        }
+        let mut g = gradients(ev, &all)
+            .map_err(|e| format!("{e:#}"))?
+            .into_iter();
+        let (f, h) = (g.next().expect("mass"), g.next().expect("area"));
+        let ineq: Vec<Vec<f64>> = g.collect();
+        Ok(Gradients {
+            f,
+            eq: if self.spec.fix_area {
+                vec![h]
+            } else {
+                Vec::new()
+            },
+            ineq,
+        })
+    }
+}

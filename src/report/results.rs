@@ -1,0 +1,251 @@
+//! The typed results of a wing study run (results.json): what `gustkit run` computed and what
+//! `gustkit report` renders again, with nothing else needed.
+
+use crate::flutter::FlutterResult;
+use crate::gust::Turbulence;
+use crate::kind::StudyKind;
+use crate::structure::model::{Field, NODAL};
+use crate::structure::{Modes, PlateModel};
+use crate::study::LengthUnit;
+use serde::{Deserialize, Serialize};
+
+/// One mode in the modal summary.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ModeRow {
+    pub mode: usize,
+    pub frequency_hz: f64,
+    /// "bending" or "membrane".
+    pub field: String,
+    /// Vertical displacement of the wing-tip trailing edge in the mass-normalized mode, m/√kg.
+    pub tip_te_w: f64,
+}
+
+/// RMS and zero-crossing rate of one gust output.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct OutputRow {
+    pub name: String,
+    /// RMS in `unit` (SI).
+    pub rms: f64,
+    pub unit: String,
+    pub n0_hz: f64,
+}
+
+/// The stochastic gust response at the study's design.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct GustResults {
+    pub mach: f64,
+    pub velocity_m_s: f64,
+    pub density_kg_m3: f64,
+    pub q_inf_pa: f64,
+    pub turbulence: Turbulence,
+    /// Number of circular frequencies of the response grid and the largest, rad/s.
+    pub n_omega: usize,
+    pub omega_max_rad_s: f64,
+    pub outputs: Vec<OutputRow>,
+    /// The response PSD of every output (SI).
+    pub psd: Vec<PsdSeries>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<Calibration>,
+}
+
+/// The σ_w calibration recorded in the study, checked at the initial design.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Calibration {
+    pub output: String,
+    /// Target and computed RMS in `unit` (the study's length unit for displacements).
+    pub target_rms: f64,
+    pub rms: f64,
+    pub unit: String,
+    pub sigma_w_m_s: f64,
+    /// σ_w that meets the target exactly.
+    pub sigma_w_for_target_m_s: f64,
+    pub source: String,
+}
+
+/// A p-k sweep and its flutter point.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct FlutterSummary {
+    pub mach: f64,
+    pub density_kg_m3: f64,
+    #[serde(flatten)]
+    pub result: FlutterResult,
+}
+
+/// A design as the report shows it.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct DesignSnapshot {
+    pub mass_kg: f64,
+    pub area_m2: f64,
+    /// RMS of the constrained output in the report unit ([`OptimizationResults::unit`]: the
+    /// study's length unit for displacements, N m for moments). Written as `rms_tip_in` before
+    /// results schema 2, which holds the same value when the study's unit is inches.
+    #[serde(alias = "rms_tip_in")]
+    pub rms_display: f64,
+    /// The same RMS in SI.
+    pub rms: f64,
+    pub frequencies_hz: Vec<f64>,
+    pub design_variables: Vec<f64>,
+    /// Element corner polygons (x, y) in the study's length unit, and element thickness in it.
+    pub elements: Vec<Vec<(f64, f64)>>,
+    pub thickness: Vec<f64>,
+    /// Response PSD of the constrained output (SI).
+    pub psd: PsdSeries,
+}
+
+/// One SQP iteration in physical units.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct HistoryRow {
+    pub iteration: usize,
+    pub mass_kg: f64,
+    /// RMS of the constrained output in the report unit (`rms_tip_in` before results schema 2).
+    #[serde(alias = "rms_tip_in")]
+    pub rms_display: f64,
+    pub area_m2: f64,
+    /// KS aggregate of the p-k dampings at the margin speed (with a flutter-margin constraint).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flutter_damping: Option<f64>,
+    pub violation: f64,
+    pub kkt: f64,
+    pub evaluations: usize,
+}
+
+/// The optimization: the keys the issue asks for at the top level of results.json.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct OptimizationResults {
+    pub converged: bool,
+    pub message: String,
+    pub iterations: usize,
+    pub evaluations: usize,
+    pub wall_time_s: f64,
+    pub output: String,
+    /// RMS limit in report units.
+    pub rms_limit: f64,
+    pub unit: String,
+    pub fix_area: bool,
+    /// The flutter-margin constraint: speed factor and largest damping, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flutter_margin: Option<(f64, f64)>,
+    /// Sharpness ρ of the KS aggregate of the p-k dampings the margin constraint used (200
+    /// before it was recorded).
+    #[serde(default = "default_ks_rho")]
+    pub ks_rho: f64,
+    /// Damping change that made one unit of the normalized margin constraint (0.1 before it
+    /// was recorded).
+    #[serde(default = "default_damping_scale")]
+    pub damping_scale: f64,
+    /// Published results to compare with.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<crate::study::ReferenceSpec>,
+    pub design_variable_names: Vec<String>,
+    pub lower: Vec<f64>,
+    pub upper: Vec<f64>,
+    pub initial: DesignSnapshot,
+    #[serde(rename = "final")]
+    pub final_: DesignSnapshot,
+    pub history: Vec<HistoryRow>,
+}
+
+fn default_ks_rho() -> f64 {
+    200.0
+}
+fn default_damping_scale() -> f64 {
+    0.1
+}
+
+/// Everything `gustkit run` computed; results.json.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct RunResults {
+    /// Always `wing`.
+    pub kind: StudyKind,
+    pub study: String,
+    pub description: String,
+    /// The study's length unit: figures and tables show lengths in it ("in", "m", "ft").
+    pub length_unit: LengthUnit,
+    pub mass_kg: f64,
+    pub area_m2: f64,
+    pub n_design_variables: usize,
+    pub frequencies_hz: Vec<f64>,
+    pub modes: Vec<ModeRow>,
+    pub mode_shapes: ModeShapes,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gust: Option<GustResults>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flutter: Option<FlutterSummary>,
+    #[serde(default, skip_serializing_if = "Option::is_none", flatten)]
+    pub optimization: Option<OptimizationResults>,
+    pub run_time_s: f64,
+}
+
+/// Mode shapes on the planform: one panel a mode, each element coloured by its mean deflection
+/// (membrane modes by in-plane displacement magnitude), scaled to the mode's maximum.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ModeShapes {
+    /// Element corner polygons in display units.
+    pub(crate) polygons: Vec<Vec<(f64, f64)>>,
+    /// Per mode: title and per-element value in [-1, 1].
+    pub(crate) panels: Vec<(String, Vec<f64>)>,
+    pub(crate) unit: String,
+}
+
+impl ModeShapes {
+    /// Builds the figure data; lengths are shown in `unit` (`to_m` metres each).
+    pub fn new(model: &PlateModel, modes: &Modes, unit: &str, to_m: f64) -> Self {
+        let xy = model.node_xy();
+        let polygons = model
+            .mesh
+            .elements
+            .iter()
+            .map(|e| {
+                e.iter()
+                    .map(|&n| (xy[n][0] / to_m, xy[n][1] / to_m))
+                    .collect()
+            })
+            .collect();
+        let panels = modes
+            .modes
+            .iter()
+            .enumerate()
+            .map(|(i, m)| {
+                let value = |n: usize| {
+                    let c = &m.shape[NODAL * n..NODAL * (n + 1)];
+                    match m.field {
+                        Field::Bending => c[0],
+                        Field::Membrane => c[3].hypot(c[4]),
+                    }
+                };
+                let vals: Vec<f64> = model
+                    .mesh
+                    .elements
+                    .iter()
+                    .map(|e| e.iter().map(|&n| value(n)).sum::<f64>() / 4.0)
+                    .collect();
+                let peak = vals
+                    .iter()
+                    .fold(0.0f64, |a, v| a.max(v.abs()))
+                    .max(f64::MIN_POSITIVE);
+                let kind = match m.field {
+                    Field::Bending => "bending field",
+                    Field::Membrane => "in-plane field",
+                };
+                (
+                    format!("Mode {}: {:.2} Hz ({kind})", i + 1, m.freq_hz()),
+                    vals.iter().map(|v| v / peak).collect(),
+                )
+            })
+            .collect();
+        Self {
+            polygons,
+            panels,
+            unit: unit.to_string(),
+        }
+    }
+}
+
+/// The response PSD of one output (SI, one-sided in ω).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct PsdSeries {
+    pub label: String,
+    pub unit: String,
+    pub omega_rad_s: Vec<f64>,
+    pub psd: Vec<f64>,
+}

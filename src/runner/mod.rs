@@ -1,0 +1,71 @@
+//! What the `gustkit` subcommands run: one runner per study kind (wing studies in [`wing`], the
+//! typical section in `crate::typical_section`, the CFD verification cases in
+//! `crate::verification`) and per tool ([`sweep`], [`bench`], [`export`]). `crate::cli` only
+//! parses arguments and calls these.
+
+pub mod bench;
+pub mod export;
+pub mod load;
+pub mod sweep;
+pub mod wing;
+
+use crate::kind::StudyKind;
+use crate::report;
+use anyhow::Result;
+pub use load::LoadedStudy;
+use std::path::Path;
+
+/// `gustkit run`: every analysis the study defines, with its report, whatever its kind.
+pub fn run(file: &Path, reports: &Path, resume: bool) -> Result<()> {
+    match LoadedStudy::load(file)? {
+        LoadedStudy::Wing(study) => wing::run(&study, reports, resume),
+        LoadedStudy::TypicalSection(study) => crate::typical_section::run(&study, reports),
+        LoadedStudy::CfdVerification(study) => crate::verification::run(&study, reports),
+    }
+}
+
+/// `gustkit report RUN_DIR`: every figure and the summary again, from results.json alone (or,
+/// for a sweep folder, from sweep_results.json). The kind recorded in results.json chooses the
+/// renderer.
+pub fn report(dir: &Path) -> Result<()> {
+    if dir.join("sweep_results.json").is_file() {
+        let r = report::sweep::rerender(dir)?;
+        println!(
+            "sweep report of {} re-rendered from {}",
+            r.study,
+            dir.join("sweep_results.json").display()
+        );
+        return Ok(());
+    }
+    let results = dir.join("results.json");
+    let value = report::read_json(&results)?;
+    let kind = StudyKind::of_results(&results, &value)?;
+    let mismatch = |e: anyhow::Error| {
+        anyhow::anyhow!(
+            "{}: does not hold {} results: {e}",
+            results.display(),
+            kind.name()
+        )
+    };
+    let study = match kind {
+        StudyKind::TypicalSection => {
+            let r: crate::typical_section::SectionResults =
+                report::from_json(&results, &value).map_err(mismatch)?;
+            crate::typical_section::render(dir, &r)?;
+            r.study
+        }
+        StudyKind::CfdVerification => {
+            let r: crate::verification::CfdResults =
+                report::from_json(&results, &value).map_err(mismatch)?;
+            crate::verification::render(dir, &r)?;
+            r.study
+        }
+        StudyKind::Wing => {
+            let r: crate::report::results::RunResults =
+                report::from_json(&results, &value).map_err(mismatch)?;
+            report::run::rerender(dir, &results, &value, r)?.study
+        }
+    };
+    println!("report of {study} re-rendered from {}", results.display());
+    Ok(())
+}

@@ -1,0 +1,92 @@
+//! `gustkit flutter`: the p-k sweep of a wing study with its V-g/V-f figures and flutter.json.
+
+use crate::report::run::flutter_point;
+use crate::report::{self, save_figure, write_atomic};
+use crate::study::Study;
+use anyhow::Result;
+use std::path::Path;
+
+/// `gustkit flutter`: p-k sweep of a study at its flight Mach number and density.
+pub fn flutter(study: &Study, json: bool, reports: &Path) -> Result<()> {
+    let (doc, r, velocities) = flutter_analysis(study, reports)?;
+    if json {
+        println!("{}", serde_json::to_string_pretty(&doc)?);
+        return Ok(());
+    }
+    print_flutter(study, &r, &velocities, &doc);
+    println!(
+        "V-g/V-f figures and flutter.json written to {}",
+        study.report_dir(reports).display()
+    );
+    Ok(())
+}
+
+/// The p-k sweep of a study with its V-g/V-f figures and `flutter.json`.
+pub(crate) fn flutter_analysis(
+    study: &Study,
+    reports: &Path,
+) -> Result<(serde_json::Value, crate::flutter::FlutterResult, Vec<f64>)> {
+    let file = &study.file;
+    let velocities = study.flutter_velocities()?;
+    let (plate, modes, _) = super::analyze(study)?;
+    let aero = study.aero_model(&plate)?;
+    let table = aero
+        .gafs(&plate, &modes)
+        .map_err(|e| anyhow::anyhow!("{}: aero: {e}", file.display()))?;
+    let pk = crate::flutter::PkProblem::new(&modes, &table, aero.flight.density);
+    let r = pk
+        .sweep(&velocities)
+        .map_err(|e| anyhow::anyhow!("{}: flutter: {e}", file.display()))?;
+    let dir = study.report_dir(reports);
+    save_figure(
+        &dir,
+        "flutter_vg",
+        &report::figures::VgVf {
+            result: &r,
+            title: format!(
+                "{}: p-k, M = {}, rho = {} kg/m3",
+                study.spec.name, aero.flight.mach, aero.flight.density
+            ),
+        },
+    )?;
+    let doc = serde_json::json!({
+        "study": study.spec.name,
+        "mach": aero.flight.mach,
+        "density_kg_m3": aero.flight.density,
+        "flutter_speed_m_s": r.flutter_speed_m_s,
+        "flutter_frequency_hz": r.flutter_frequency_hz,
+        "flutter_mode": r.flutter_mode,
+        "curves": r.curves,
+    });
+    write_atomic(
+        &dir.join("flutter.json"),
+        serde_json::to_string_pretty(&doc)?.as_bytes(),
+    )?;
+    Ok((doc, r, velocities))
+}
+
+/// The p-k table and the flutter point on stdout.
+pub(crate) fn print_flutter(
+    study: &Study,
+    r: &crate::flutter::FlutterResult,
+    velocities: &[f64],
+    doc: &serde_json::Value,
+) {
+    println!(
+        "{}: p-k at M = {}, ρ = {} kg/m³",
+        study.spec.name, doc["mach"], doc["density_kg_m3"]
+    );
+    print!("{:>10}", "V [m/s]");
+    for c in &r.curves {
+        print!("{:>22}", format!("mode {} g / f [Hz]", c.mode));
+    }
+    println!();
+    for i in 0..velocities.len() {
+        print!("{:>10.2}", velocities[i]);
+        for c in &r.curves {
+            print!("{:>12.4} {:>9.3}", c.damping_g[i], c.frequency_hz[i]);
+        }
+        println!();
+    }
+    println!("{}", flutter_point(r));
+}

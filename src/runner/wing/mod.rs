@@ -1,0 +1,164 @@
+//! The runner of wing studies: modal analysis, gust response with its σ_w calibration, p-k
+//! flutter, the gust-constrained optimization and the gradient check, each in its own module;
+//! [`run`] does every analysis a study defines and writes its report.
+
+pub mod flutter;
+pub mod gradient;
+pub mod gust;
+pub mod optimize;
+
+use crate::kind::StudyKind;
+use crate::report::figures::ModeShapes;
+use crate::report::results::{FlutterSummary, ModeRow, RunResults};
+use crate::report::run::frequency_table;
+use crate::report::{self, save_figure, write_atomic};
+use crate::structure::model::Field;
+use crate::structure::{modal, Modes, PlateModel, Sampler};
+use crate::study::Study;
+use anyhow::{Context, Result};
+use serde::Serialize;
+use std::path::Path;
+use std::time::Instant;
+
+/// The modal analysis of a study as written to JSON.
+#[derive(Serialize)]
+pub struct ModalSummary {
+    pub study: String,
+    pub mass_kg: f64,
+    pub area_m2: f64,
+    pub frequencies_hz: Vec<f64>,
+    pub modes: Vec<ModeRow>,
+}
+
+fn field_name(f: Field) -> &'static str {
+    match f {
+        Field::Bending => "bending",
+        Field::Membrane => "membrane",
+    }
+}
+
+/// Builds the model of a study and solves its modes.
+pub fn analyze(study: &Study) -> Result<(PlateModel, Modes, ModalSummary)> {
+    let model = study.build_model()?;
+    let st = &study.spec.structure;
+    let modes = modal::solve(&model, st.modes, st.damping_ratio, &study.mode_fields())
+        .with_context(|| format!("{}: modal analysis", study.file.display()))?;
+    let tip = Sampler::new(&model, &[[1.0, 1.0]]);
+    let summary = ModalSummary {
+        study: study.spec.name.clone(),
+        mass_kg: model.mass(),
+        area_m2: model.planform().area(),
+        frequencies_hz: modes.freq_hz(),
+        modes: modes
+            .modes
+            .iter()
+            .enumerate()
+            .map(|(i, m)| ModeRow {
+                mode: i + 1,
+                frequency_hz: m.freq_hz(),
+                field: field_name(m.field).to_string(),
+                tip_te_w: tip.sample(&model, &m.shape)[0][0],
+            })
+            .collect(),
+    };
+    Ok((model, modes, summary))
+}
+
+/// Name of the study's display length unit.
+pub(crate) fn unit_label(study: &Study) -> &'static str {
+    study.spec.length_unit.name()
+}
+
+/// The mode-shape figure data of a model.
+fn mode_shapes(study: &Study, model: &PlateModel, modes: &Modes) -> ModeShapes {
+    ModeShapes::new(
+        model,
+        modes,
+        unit_label(study),
+        study.spec.length_unit.to_m(),
+    )
+}
+
+/// Writes the modal figures and the VTK file into `dir`.
+fn write_modal_files(study: &Study, model: &PlateModel, modes: &Modes, dir: &Path) -> Result<()> {
+    save_figure(dir, "modes", &mode_shapes(study, model, modes))?;
+    let vtk = report::vtk::plate_modes(model, modes, &format!("gustkit {} modes", study.spec.name));
+    write_atomic(&dir.join("modes.vtk"), vtk.as_bytes())
+}
+
+/// `gustkit modes`.
+pub fn modes(study: &Study, json: bool, reports: &Path) -> Result<()> {
+    let study = study.clone();
+    let (model, modes, summary) = analyze(&study)?;
+    let dir = study.report_dir(reports);
+    write_modal_files(&study, &model, &modes, &dir)?;
+    if json {
+        println!("{}", serde_json::to_string_pretty(&summary)?);
+        eprintln!("figures and VTK written to {}", dir.display());
+    } else {
+        println!(
+            "{}: mass {:.4} kg, planform area {:.4} m²",
+            summary.study, summary.mass_kg, summary.area_m2
+        );
+        print!("{}", frequency_table(&summary.modes));
+        println!("figures and VTK written to {}", dir.display());
+    }
+    Ok(())
+}
+
+/// `gustkit run`: every analysis the study defines, with its report.
+pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<()> {
+    let study = study.clone();
+    let t0 = Instant::now();
+    let (model, modes, summary) = analyze(&study)?;
+    let dir = study.report_dir(reports);
+    // fail early, before any long computation, when the run folder cannot be written
+    std::fs::create_dir_all(&dir)
+        .with_context(|| format!("cannot create the run folder {}", dir.display()))?;
+    let vtk = report::vtk::plate_modes(
+        &model,
+        &modes,
+        &format!("gustkit {} modes", study.spec.name),
+    );
+    write_atomic(&dir.join("modes.vtk"), vtk.as_bytes())?;
+    println!("{}", frequency_table(&summary.modes));
+    let gust = match study.spec.gust {
+        Some(_) => Some(gust::gust_results(&study)?),
+        None => None,
+    };
+    let flutter = match study.spec.flutter {
+        Some(_) => {
+            let (doc, r, velocities) = flutter::flutter_analysis(&study, reports)?;
+            flutter::print_flutter(&study, &r, &velocities, &doc);
+            Some(FlutterSummary {
+                mach: doc["mach"].as_f64().unwrap_or(f64::NAN),
+                density_kg_m3: doc["density_kg_m3"].as_f64().unwrap_or(f64::NAN),
+                result: r,
+            })
+        }
+        None => None,
+    };
+    let optimization = match study.spec.optimization {
+        Some(_) => Some(optimize::optimize(&study, &dir, resume, false)?),
+        None => None,
+    };
+    let results = RunResults {
+        kind: StudyKind::Wing,
+        study: study.spec.name.clone(),
+        description: study.spec.description.clone(),
+        length_unit: study.spec.length_unit,
+        mass_kg: summary.mass_kg,
+        area_m2: summary.area_m2,
+        n_design_variables: model.design.len(),
+        frequencies_hz: summary.frequencies_hz,
+        modes: summary.modes,
+        mode_shapes: mode_shapes(&study, &model, &modes),
+        gust,
+        flutter,
+        optimization,
+        run_time_s: t0.elapsed().as_secs_f64(),
+    };
+    report::run::render(&dir, &results)?;
+    println!("report written to {}", dir.display());
+    Ok(())
+}

@@ -1,0 +1,300 @@
+//! The gust-constrained mass minimization of a wing study: the SQP run with its progress
+//! observer, the atomic checkpoint of every iteration, `--resume`, and the results it reports.
+
+use super::gust::psd_series;
+use super::unit_label;
+use crate::flutter::margin::{DAMPING_SCALE, KS_RHO};
+use crate::optim::{Checkpointing, Control, Executor};
+use crate::report::results::{DesignSnapshot, HistoryRow, OptimizationResults};
+use crate::report::write_atomic;
+use crate::study::Study;
+use anyhow::{Context, Result};
+use std::path::Path;
+use std::time::Instant;
+
+/// Shows each SQP iteration on a progress bar (and as a line on stdout).
+struct RunObserver {
+    mass0: f64,
+    rms_scale: f64,
+    rms_unit: &'static str,
+    rms_limit: f64,
+    /// Damping limit of the flutter-margin constraint, when there is one.
+    damping_max: Option<f64>,
+    quiet: bool,
+    bar: indicatif::ProgressBar,
+}
+
+/// Keeps every iteration's checkpoint in `checkpoint.json` of the run folder, written
+/// atomically (a kill never leaves half a checkpoint).
+struct FileCheckpoint {
+    path: std::path::PathBuf,
+}
+
+impl Checkpointing for FileCheckpoint {
+    fn save(&mut self, cp: &crate::optim::Checkpoint) -> Result<(), String> {
+        serde_json::to_vec(cp)
+            .map_err(anyhow::Error::from)
+            .and_then(|b| write_atomic(&self.path, &b))
+            .map_err(|e| format!("{e:#}"))
+    }
+}
+
+impl crate::optim::Observer for RunObserver {
+    fn iteration(
+        &mut self,
+        it: &crate::optim::Iterate,
+        cp: &crate::optim::Checkpoint,
+    ) -> Result<Control, String> {
+        let rms = (it.values.ineq[0] + 1.0) * self.rms_limit;
+        let flutter = match (it.values.ineq.get(1), self.damping_max) {
+            (Some(c), Some(g_max)) => format!(", g_KS {:+.4}", g_max + c * DAMPING_SCALE),
+            _ => String::new(),
+        };
+        let line = format!(
+            "iteration {:>3}: mass {:.5} kg ({:+.2} %), RMS {:.4} {} (limit {:.4}){flutter}, violation {:.2e}, KKT {:.2e}, step {:.3}{}",
+            it.iteration,
+            it.values.f * self.mass0,
+            100.0 * (it.values.f - 1.0),
+            rms * self.rms_scale,
+            self.rms_unit,
+            self.rms_limit * self.rms_scale,
+            it.violation,
+            it.kkt,
+            it.alpha,
+            if it.failed_trials > 0 {
+                format!(" ({} trial points failed)", it.failed_trials)
+            } else {
+                String::new()
+            }
+        );
+        if !self.quiet {
+            self.bar.suspend(|| println!("{line}"));
+        }
+        self.bar.set_position(cp.iteration as u64);
+        self.bar.set_message(format!(
+            "mass {:+.1} %, RMS {:.3} {}, KKT {:.1e}",
+            100.0 * (it.values.f - 1.0),
+            rms * self.rms_scale,
+            self.rms_unit,
+            it.kkt
+        ));
+        Ok(Control::Continue)
+    }
+}
+
+/// FNV-1a hash of a string, to tie a checkpoint to the study that wrote it.
+pub(crate) fn fnv(text: &str) -> u64 {
+    text.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+/// A design as the report shows it: values, planform, thickness map and the PSD of `output`.
+fn snapshot(
+    study: &Study,
+    ev: &crate::pipeline::Evaluation,
+    output: usize,
+    unit_scale: f64,
+) -> DesignSnapshot {
+    let to_m = study.spec.length_unit.to_m();
+    let xy = ev.plate.node_xy();
+    let mesh = &ev.plate.mesh;
+    DesignSnapshot {
+        mass_kg: ev.mass_kg,
+        area_m2: ev.area_m2,
+        rms_display: ev.rms_m[output] * unit_scale,
+        rms: ev.rms_m[output],
+        frequencies_hz: ev.freq_hz.clone(),
+        design_variables: ev.x.clone(),
+        elements: mesh
+            .elements
+            .iter()
+            .map(|e| {
+                e.iter()
+                    .map(|&n| (xy[n][0] / to_m, xy[n][1] / to_m))
+                    .collect()
+            })
+            .collect(),
+        thickness: (0..mesh.elements.len())
+            .map(|e| ev.plate.element_thickness(e) / to_m)
+            .collect(),
+        psd: psd_series(ev, output),
+    }
+}
+
+/// The gust-constrained mass minimization of a study (the `optimization` section).
+pub fn optimize(
+    study: &Study,
+    dir: &Path,
+    resume: bool,
+    quiet: bool,
+) -> Result<OptimizationResults> {
+    use crate::problem::{DesignProblem, DesignSpec};
+    let o = study.spec.optimization.as_ref().expect("caller checked");
+    let settings = study.gust_settings()?;
+    let (lower, upper) = study.design_bounds()?;
+    let x0 = study.initial_design()?.to_vec();
+    let output = settings
+        .outputs
+        .iter()
+        .position(|out| out.name == o.output)
+        .expect("checked");
+    let is_disp = matches!(
+        settings.outputs[output].quantity,
+        crate::gust::Quantity::Displacement { .. }
+    );
+    let to_m = study.spec.length_unit.to_m();
+    // the report shows a displacement RMS in the study's own length unit
+    let (unit_scale, unit) = if is_disp {
+        (1.0 / to_m, unit_label(study))
+    } else {
+        (1.0, "N m")
+    };
+    let rms_limit = if is_disp { o.rms_max * to_m } else { o.rms_max };
+    let ev0 = crate::pipeline::evaluate(study, &settings, &x0).context("initial design")?;
+    let spec = DesignSpec {
+        lower,
+        upper,
+        output,
+        rms_limit,
+        mass0: ev0.mass_kg,
+        area0: ev0.area_m2,
+        fix_area: o.fix_area,
+        flutter: o
+            .flutter_margin
+            .as_ref()
+            .map(|m| crate::flutter::margin::FlutterMargin {
+                speed_factor: m.speed_factor,
+                damping_max: m.damping_max,
+            }),
+    };
+    let params = crate::optim::SqpParams {
+        max_iterations: o.max_iterations,
+        tolerance: o.tolerance,
+        ..Default::default()
+    };
+    // the study defines the problem; its iteration limit does not (a run may be continued with a
+    // higher one)
+    let mut defining = study.spec.clone();
+    if let Some(o) = defining.optimization.as_mut() {
+        o.max_iterations = 0;
+    }
+    let problem_id = format!(
+        "{}:{:016x}",
+        study.spec.name,
+        fnv(&serde_json::to_string(&defining)?)
+    );
+    let checkpoint = if resume {
+        let path = dir.join("checkpoint.json");
+        let text = std::fs::read_to_string(&path)
+            .with_context(|| format!("--resume: cannot read {}", path.display()))?;
+        let cp: crate::optim::Checkpoint = serde_json::from_str(&text).with_context(|| {
+            format!(
+                "--resume: {} is not a gustkit checkpoint (corrupted?)",
+                path.display()
+            )
+        })?;
+        if !quiet {
+            println!("resuming from iteration {}", cp.iteration);
+        }
+        Some(cp)
+    } else {
+        None
+    };
+    let bar = if quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        indicatif::ProgressBar::new(o.max_iterations as u64)
+    };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} SQP [{elapsed_precise}] {bar:30} {pos}/{len} iterations  {msg}",
+        )
+        .expect("valid template"),
+    );
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    let mut observer = RunObserver {
+        mass0: ev0.mass_kg,
+        rms_scale: unit_scale,
+        rms_unit: unit,
+        rms_limit,
+        damping_max: spec.flutter.map(|m| m.damping_max),
+        quiet,
+        bar,
+    };
+    let mut store = FileCheckpoint {
+        path: dir.join("checkpoint.json"),
+    };
+    let mut problem = DesignProblem::new(study, settings.clone(), spec.clone());
+    let t0 = Instant::now();
+    let info = Executor::new(params, &problem_id)
+        .resume(checkpoint)
+        .observe(&mut observer)
+        .checkpoint(&mut store)
+        .run(&mut problem, &x0);
+    observer.bar.finish_and_clear();
+    let info = info.map_err(|e| anyhow::anyhow!("optimization: {e}"))?;
+    let wall_time_s = t0.elapsed().as_secs_f64();
+    let ev = crate::pipeline::evaluate(study, &settings, &info.x).context("final design")?;
+    let history = info
+        .history
+        .iter()
+        .map(|it| HistoryRow {
+            iteration: it.iteration,
+            mass_kg: it.values.f * ev0.mass_kg,
+            rms_display: (it.values.ineq[0] + 1.0) * rms_limit * unit_scale,
+            area_m2: it
+                .values
+                .eq
+                .first()
+                .map_or(ev0.area_m2, |h| (h + 1.0) * ev0.area_m2),
+            flutter_damping: match (it.values.ineq.get(1), &spec.flutter) {
+                (Some(c), Some(m)) => Some(m.damping_max + c * DAMPING_SCALE),
+                _ => None,
+            },
+            violation: it.violation,
+            kkt: it.kkt,
+            evaluations: it.evaluations,
+        })
+        .collect();
+    if !quiet {
+        println!(
+        "{} after {} iterations ({} evaluations, {:.1} s): mass {:.4} → {:.4} kg ({:+.1} %), RMS {:.4} → {:.4} {unit}",
+        info.message,
+        info.iterations,
+        info.evaluations,
+        wall_time_s,
+        ev0.mass_kg,
+        ev.mass_kg,
+        100.0 * (ev.mass_kg / ev0.mass_kg - 1.0),
+        ev0.rms_m[output] * unit_scale,
+        ev.rms_m[output] * unit_scale
+    );
+    }
+    let design = study.initial_design()?;
+    Ok(OptimizationResults {
+        converged: info.converged,
+        message: info.message.clone(),
+        iterations: info.iterations,
+        evaluations: info.evaluations,
+        wall_time_s,
+        output: o.output.clone(),
+        rms_limit: if is_disp {
+            rms_limit * unit_scale
+        } else {
+            rms_limit
+        },
+        unit: unit.to_string(),
+        fix_area: o.fix_area,
+        flutter_margin: spec.flutter.map(|m| (m.speed_factor, m.damping_max)),
+        ks_rho: KS_RHO,
+        damping_scale: DAMPING_SCALE,
+        reference: o.reference.clone(),
+        design_variable_names: (0..x0.len()).map(|i| design.name(i)).collect(),
+        lower: spec.lower,
+        upper: spec.upper,
+        initial: snapshot(study, &ev0, output, unit_scale),
+        final_: snapshot(study, &ev, output, unit_scale),
+        history,
+    })
+}

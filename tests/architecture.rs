@@ -1,0 +1,203 @@
+//! The module graph has no import cycles: in the root package (top-level modules, and the
+//! submodules of `report`) and in each fidelity crate (its modules). A reference `crate::m` or
+//! `super::m` in code (comments and unit-test modules excluded) is an edge; the test finds
+//! strongly connected components of more than one module (Tarjan) and names them.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+/// Every `.rs` file below `dir`.
+fn sources(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            out.extend(sources(&p));
+        } else if p.extension().is_some_and(|x| x == "rs") {
+            out.push(p);
+        }
+    }
+    out
+}
+
+/// The code of a file without line comments and without its `#[cfg(test)] mod tests` block.
+fn code(text: &str) -> String {
+    let text = match text.find("#[cfg(test)]\nmod tests") {
+        Some(i) => &text[..i],
+        None => text,
+    };
+    text.lines()
+        .filter(|l| !l.trim_start().starts_with("//"))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// Identifiers following each occurrence of `prefix` in `text`.
+fn paths_after(text: &str, prefix: &str) -> Vec<(String, Option<String>)> {
+    let ident = |s: &str| -> String {
+        s.chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect()
+    };
+    let mut out = Vec::new();
+    let mut rest = text;
+    while let Some(i) = rest.find(prefix) {
+        let before = rest[..i].chars().last();
+        rest = &rest[i + prefix.len()..];
+        if before.is_some_and(|c| c.is_alphanumeric() || c == '_') {
+            continue;
+        }
+        let first = ident(rest);
+        let second = rest[first.len()..]
+            .strip_prefix("::")
+            .map(ident)
+            .filter(|s| !s.is_empty());
+        if !first.is_empty() {
+            out.push((first, second));
+        }
+    }
+    out
+}
+
+/// The module graph of a crate's `src`; modules in `split` are graphed by their submodules.
+fn graph(src: &Path, split: &[&str]) -> BTreeMap<String, BTreeSet<String>> {
+    let mut g: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for file in sources(src) {
+        let rel = file.strip_prefix(src).unwrap().with_extension("");
+        let mut parts: Vec<String> = rel
+            .iter()
+            .map(|s| s.to_string_lossy().into_owned())
+            .collect();
+        if parts.last().is_some_and(|p| p == "mod") {
+            parts.pop();
+        }
+        if parts.is_empty()
+            || ["lib", "main"].contains(&parts[0].as_str())
+            || parts.last().is_some_and(|p| p == "tests")
+        {
+            continue;
+        }
+        let node_of = |first: &str, second: Option<&str>| -> String {
+            match second {
+                Some(s)
+                    if split.contains(&first)
+                        && src.join(first).join(format!("{s}.rs")).is_file() =>
+                {
+                    format!("{first}/{s}")
+                }
+                _ => first.to_string(),
+            }
+        };
+        let node = node_of(&parts[0], parts.get(1).map(String::as_str));
+        let text = code(&std::fs::read_to_string(&file).unwrap());
+        let entry = g.entry(node.clone()).or_default();
+        for (a, b) in paths_after(&text, "crate::") {
+            let t = node_of(&a, b.as_deref());
+            if t != node {
+                entry.insert(t);
+            }
+        }
+        if split.contains(&parts[0].as_str()) && parts.len() > 1 {
+            for (a, _) in paths_after(&text, "super::") {
+                let t = format!("{}/{a}", parts[0]);
+                if src.join(&parts[0]).join(format!("{a}.rs")).is_file() && t != node {
+                    entry.insert(t);
+                }
+            }
+        }
+    }
+    g
+}
+
+/// Strongly connected components with more than one module.
+fn cycles(g: &BTreeMap<String, BTreeSet<String>>) -> Vec<Vec<String>> {
+    struct Tarjan<'a> {
+        g: &'a BTreeMap<String, BTreeSet<String>>,
+        index: BTreeMap<String, usize>,
+        low: BTreeMap<String, usize>,
+        stack: Vec<String>,
+        on: BTreeSet<String>,
+        out: Vec<Vec<String>>,
+    }
+    impl Tarjan<'_> {
+        fn visit(&mut self, v: &str) {
+            let i = self.index.len();
+            self.index.insert(v.into(), i);
+            self.low.insert(v.into(), i);
+            self.stack.push(v.into());
+            self.on.insert(v.into());
+            for w in self.g.get(v).into_iter().flatten() {
+                if !self.index.contains_key(w) {
+                    self.visit(w);
+                    let l = self.low[v].min(self.low[w]);
+                    self.low.insert(v.into(), l);
+                } else if self.on.contains(w) {
+                    let l = self.low[v].min(self.index[w]);
+                    self.low.insert(v.into(), l);
+                }
+            }
+            if self.low[v] == self.index[v] {
+                let mut comp = Vec::new();
+                loop {
+                    let w = self.stack.pop().unwrap();
+                    self.on.remove(&w);
+                    let done = w == v;
+                    comp.push(w);
+                    if done {
+                        break;
+                    }
+                }
+                if comp.len() > 1 {
+                    self.out.push(comp);
+                }
+            }
+        }
+    }
+    let mut t = Tarjan {
+        g,
+        index: BTreeMap::new(),
+        low: BTreeMap::new(),
+        stack: Vec::new(),
+        on: BTreeSet::new(),
+        out: Vec::new(),
+    };
+    for v in g.keys() {
+        if !t.index.contains_key(v) {
+            t.visit(v);
+        }
+    }
+    t.out
+}
+
+#[test]
+fn no_import_cycles() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for (src, split) in [
+        ("src", &["report"][..]),
+        ("fidelity/core/src", &[][..]),
+        ("fidelity/dlm/src", &[][..]),
+        ("fidelity/cfd/src", &[][..]),
+    ] {
+        let g = graph(&root.join(src), split);
+        assert!(g.len() > 3, "{src}: no modules found");
+        let c = cycles(&g);
+        assert!(c.is_empty(), "{src}: import cycles {c:?}");
+    }
+}
+
+/// The checker itself finds a cycle where there is one.
+#[test]
+fn cycle_checker_finds_a_cycle() {
+    let mut g: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    g.entry("a".into()).or_default().insert("b".into());
+    g.entry("b".into()).or_default().insert("c".into());
+    g.entry("c".into()).or_default().insert("a".into());
+    g.entry("d".into()).or_default().insert("a".into());
+    let c = cycles(&g);
+    assert_eq!(c.len(), 1);
+    assert_eq!(c[0].len(), 3);
+    assert_eq!(
+        paths_after("use crate::report::figures; xcrate::no", "crate::"),
+        vec![("report".to_string(), Some("figures".to_string()))]
+    );
+}
