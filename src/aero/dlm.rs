@@ -3,7 +3,9 @@
 //! eight geometry parameters with respect to the planform variables (dual numbers through the
 //! planform map).
 
-use super::registry::{BuildError, Capabilities, SurfaceBinding, WingBuilder, WingFidelity};
+use super::registry::{
+    BuildError, Capabilities, SurfaceBinding, WingBuilder, WingContext, WingFidelity,
+};
 use crate::wing::{planform_point, Planform, N_PLANFORM};
 use gustkit_core::scalar::Dual;
 use gustkit_dlm::{Dlm, SurfaceSpec};
@@ -84,15 +86,16 @@ impl WingBuilder for DlmSpec {
         Capabilities { reverse: true }
     }
 
-    fn validate(&self, planform: &Planform) -> Result<(), BuildError> {
-        let (surface, _) = dlm_surface(planform, self);
+    fn validate(&self, wing: &WingContext) -> Result<(), BuildError> {
+        let (surface, _) = dlm_surface(wing.planform, self);
         surface.validate(0).map_err(|e| BuildError {
             path: String::new(),
             reason: e.to_string(),
         })
     }
 
-    fn build(&self, planform: &Planform) -> Result<WingFidelity, BuildError> {
+    fn build(&self, wing: &WingContext) -> Result<WingFidelity, BuildError> {
+        let planform = wing.planform;
         let (_, jac) = dlm_surface(planform, self);
         let mut dlm = self.lattice(planform)?;
         // only the parameters the planform moves need reverse-mode work

@@ -3,14 +3,18 @@
 //! Euler flow converged on the built-in mesh about a scaled NACA 64A0xx). Every closed set of
 //! strings in a CFD spec is a serde enum, so a typo is refused with its JSON path at load.
 
-use super::registry::BuildError;
+use super::registry::{
+    BuildError, Capabilities, SurfaceBinding, WingBuilder, WingContext, WingFidelity,
+};
 use anyhow::{Context, Result};
 use gustkit_cfd::airfoil::AirfoilShape;
 use gustkit_cfd::gafs::Lfd;
-use gustkit_cfd::lfd::LfdOperator;
+use gustkit_cfd::lfd::{LfdOperator, LfdParams, Preconditioner};
 use gustkit_cfd::mesh::{Boundary, Mesh};
 use gustkit_cfd::residual::{free_stream, Euler, Limiter, Order};
+use gustkit_cfd::steady::NewtonLinearSolver;
 use gustkit_cfd::steady::SteadyParams;
+use gustkit_cfd::wing_mesh::{WingMesh, WingMeshSpec};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -198,5 +202,268 @@ impl SectionLfdSpec {
             .solve_steady(vec![e.q_inf; e.mesh.n_cells], &params)
             .map_err(|err| fail("", format!("steady state: {err}")))?;
         Ok(Lfd::new(LfdOperator::new(e, q0), chord_m, chord_m, 10.0))
+    }
+}
+
+/// The built-in wing mesh levels.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum WingMeshLevel {
+    /// About 7 k cells: CI tests and quick looks.
+    #[default]
+    Coarse,
+    /// About 57 k cells (2× finer in each direction).
+    Medium,
+    /// About 460 k cells.
+    Fine,
+}
+
+impl WingMeshLevel {
+    pub fn name(self) -> &'static str {
+        match self {
+            WingMeshLevel::Coarse => "coarse",
+            WingMeshLevel::Medium => "medium",
+            WingMeshLevel::Fine => "fine",
+        }
+    }
+}
+
+/// Explicit sizes of the built-in wing mesh (instead of a level).
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct WingMeshSizes {
+    pub n_around: usize,
+    pub n_radial: usize,
+    pub n_span: usize,
+    pub n_outboard: usize,
+    #[serde(default = "default_far_wing")]
+    pub far_field_chords: f64,
+    pub first_spacing_chords: f64,
+    #[serde(default = "default_tip_closure")]
+    pub tip_closure: f64,
+}
+
+fn default_far_wing() -> f64 {
+    15.0
+}
+fn default_tip_closure() -> f64 {
+    0.05
+}
+
+/// The preconditioner of the LFD solves (one factorization per reduced frequency for every
+/// right-hand side).
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum LfdPreconditionerSpec {
+    /// Block ILU(0) of the exact second-order Jacobian: no fill, for 3-D meshes.
+    #[default]
+    BlockIlu,
+    /// Sparse LU of the exact Jacobian: one GMRES iteration, small meshes only.
+    ExactLu,
+    /// Sparse LU of the first-order Jacobian.
+    FirstOrderLu,
+}
+
+impl LfdPreconditionerSpec {
+    fn preconditioner(self) -> Preconditioner {
+        match self {
+            LfdPreconditionerSpec::BlockIlu => Preconditioner::BlockIlu,
+            LfdPreconditionerSpec::ExactLu => Preconditioner::Exact,
+            LfdPreconditionerSpec::FirstOrderLu => Preconditioner::FirstOrder,
+        }
+    }
+}
+
+/// The LFD fidelity of a wing study: `aero.fidelity: {"lfd": {...}}`. Every field has a default,
+/// so `{"lfd": {}}` is the coarse built-in mesh at second order with block ILU(0).
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct LfdWingSpec {
+    /// The built-in mesh level: "coarse" (default), "medium" or "fine".
+    #[serde(default)]
+    pub mesh: WingMeshLevel,
+    /// Explicit mesh sizes instead of the level.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mesh_sizes: Option<WingMeshSizes>,
+    #[serde(default)]
+    pub order: OrderSpec,
+    #[serde(default)]
+    pub limiter: LimiterSpec,
+    #[serde(default)]
+    pub preconditioner: LfdPreconditionerSpec,
+    /// GMRES stops at ‖A q̂ + b‖ ≤ tolerance ‖b‖.
+    #[serde(default = "default_gmres_tolerance")]
+    pub gmres_tolerance: f64,
+    #[serde(default = "default_gmres_restart")]
+    pub gmres_restart: usize,
+    #[serde(default = "default_gmres_max")]
+    pub gmres_max_iterations: usize,
+    /// Mode shapes reach the volume mesh by inverse-distance weighting blended to zero at this
+    /// many root chords from the wall.
+    #[serde(default = "default_deform_radius")]
+    pub deform_radius_chords: f64,
+    /// The most memory the model may take, GB (refused before anything is allocated).
+    #[serde(default = "default_memory_limit")]
+    pub memory_limit_gb: f64,
+}
+
+fn default_gmres_tolerance() -> f64 {
+    1e-8
+}
+fn default_gmres_restart() -> usize {
+    80
+}
+fn default_gmres_max() -> usize {
+    800
+}
+fn default_deform_radius() -> f64 {
+    5.0
+}
+fn default_memory_limit() -> f64 {
+    12.0
+}
+
+/// Bytes per cell of the LFD wing model, estimated from its parts with two threads: the mesh,
+/// geometry and states (≈ 4 kB), the exact second-order Jacobian (≈ 30 blocks of 5 × 5 reals,
+/// 6 kB), per concurrent frequency its complex block ILU(0) (12 kB) and per concurrent
+/// right-hand side the GMRES basis (restart + 1 complex vectors of 5 unknowns).
+fn bytes_per_cell(restart: usize) -> f64 {
+    let threads = 2.0;
+    4e3 + 6e3 + threads * (12e3 + (restart as f64 + 1.0) * 5.0 * 16.0)
+}
+
+impl LfdWingSpec {
+    /// The wing mesh sizes of the spec.
+    pub fn mesh_spec(&self) -> WingMeshSpec {
+        match &self.mesh_sizes {
+            Some(m) => WingMeshSpec {
+                n_around: m.n_around,
+                n_radial: m.n_radial,
+                n_span: m.n_span,
+                n_outboard: m.n_outboard,
+                far_field_chords: m.far_field_chords,
+                first_spacing_chords: m.first_spacing_chords,
+                tip_closure: m.tip_closure,
+            },
+            None => WingMeshSpec::level(self.mesh.name()).expect("built-in level"),
+        }
+    }
+
+    /// The memory the model would take, GB.
+    pub fn memory_estimate_gb(&self) -> f64 {
+        self.mesh_spec().n_cells() as f64 * bytes_per_cell(self.gmres_restart) / 1e9
+    }
+
+    fn params(&self) -> LfdParams {
+        LfdParams {
+            tolerance: self.gmres_tolerance,
+            restart: self.gmres_restart,
+            max_iterations: self.gmres_max_iterations,
+        }
+    }
+}
+
+impl WingBuilder for LfdWingSpec {
+    fn name(&self) -> &'static str {
+        "lfd"
+    }
+
+    fn capabilities(&self) -> Capabilities {
+        // the LFD adjoint is not built yet
+        Capabilities { reverse: false }
+    }
+
+    fn validate(&self, wing: &WingContext) -> Result<(), BuildError> {
+        let fail = |path: &str, reason: String| BuildError {
+            path: path.into(),
+            reason,
+        };
+        let mesh = self.mesh_spec();
+        mesh.validate().map_err(|(field, reason)| {
+            let path = if self.mesh_sizes.is_some() {
+                format!("mesh_sizes.{field}")
+            } else {
+                "mesh".into()
+            };
+            fail(&path, reason)
+        })?;
+        self.params()
+            .validate()
+            .map_err(|r| fail("gmres_tolerance", r))?;
+        if !(self.deform_radius_chords > 0.0 && self.deform_radius_chords.is_finite()) {
+            return Err(fail(
+                "deform_radius_chords",
+                format!("must be positive (got {})", self.deform_radius_chords),
+            ));
+        }
+        if !(wing.flight.mach > 0.0 && wing.flight.mach < 1.0) {
+            return Err(fail(
+                "",
+                format!(
+                    "the LFD needs a subsonic free stream, 0 < M < 1 (flight.mach is {})",
+                    wing.flight.mach
+                ),
+            ));
+        }
+        let gb = self.memory_estimate_gb();
+        if !(gb <= self.memory_limit_gb) {
+            return Err(fail(
+                if self.mesh_sizes.is_some() {
+                    "mesh_sizes"
+                } else {
+                    "mesh"
+                },
+                format!(
+                    "the {} mesh ({} cells) needs about {gb:.1} GB, above memory_limit_gb = {} (this machine has 24 GB shared with other jobs): choose a coarser mesh or raise the limit",
+                    if self.mesh_sizes.is_some() { "given" } else { self.mesh.name() },
+                    mesh.n_cells(),
+                    self.memory_limit_gb
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    fn build(&self, wing: &WingContext) -> Result<WingFidelity, BuildError> {
+        self.validate(wing)?;
+        let fail = |reason: String| BuildError {
+            path: String::new(),
+            reason,
+        };
+        let p = wing.planform.to_array();
+        let mesh = WingMesh::new(p, &|x| wing.airfoil.half_thickness(x), &self.mesh_spec());
+        mesh.mesh
+            .check()
+            .map_err(|e| fail(format!("the built-in wing mesh is invalid: {e}")))?;
+        let mut e = Euler::new(mesh.mesh.clone(), free_stream(wing.flight.mach, 0.0));
+        e.order = self.order.order();
+        e.limiter = self.limiter.limiter();
+        let params = SteadyParams {
+            linear_solver: NewtonLinearSolver::BlockIlu,
+            ..SteadyParams::default()
+        };
+        let (q0, _) = e
+            .solve_steady(vec![e.q_inf; e.mesh.n_cells], &params)
+            .map_err(|err| fail(format!("steady state did not converge: {err}")))?;
+        let mut op = LfdOperator::with_preconditioner(e, q0, self.preconditioner.preconditioner());
+        op.params = self.params();
+        let model = Lfd::new(
+            op,
+            1.0,
+            1.0,
+            self.deform_radius_chords * wing.planform.root_chord,
+        );
+        let points = model
+            .wall_nodes()
+            .iter()
+            .map(|&n| mesh.parametric(n))
+            .collect();
+        Ok(WingFidelity {
+            model: Box::new(model),
+            binding: SurfaceBinding {
+                points,
+                geometry_jacobian: Vec::new(),
+            },
+        })
     }
 }

@@ -11,7 +11,7 @@ pub mod strip;
 
 pub use registry::{
     BuildError, Capabilities, FidelitySpec, SectionFidelitySpec, SurfaceBinding, WingBuilder,
-    WingFidelity,
+    WingContext, WingFidelity,
 };
 
 use crate::structure::{Modes, PlateModel};
@@ -42,9 +42,14 @@ impl AeroModel {
         flight: FlightCondition,
         k: Vec<f64>,
         plate: &PlateModel,
+        airfoil: &crate::wing::Airfoil,
     ) -> Result<Self, BuildError> {
         let builder = spec.builder();
-        let built = builder.build(plate.planform())?;
+        let built = builder.build(&WingContext {
+            planform: plate.planform(),
+            airfoil,
+            flight: &flight,
+        })?;
         Ok(Self::bind(builder.name(), built, flight, k, plate))
     }
 

@@ -6,8 +6,8 @@
 //! fidelity can do ([`Capabilities`]) is known from its spec alone, so a study that needs a
 //! reverse mode its fidelity lacks is refused when it is loaded.
 
-use crate::wing::{Planform, N_PLANFORM};
-use gustkit_core::Aerodynamics;
+use crate::wing::{Airfoil, Planform, N_PLANFORM};
+use gustkit_core::{Aerodynamics, FlightCondition};
 use serde::{Deserialize, Serialize};
 
 /// What a fidelity can do.
@@ -69,15 +69,25 @@ impl BuildError {
     }
 }
 
+/// What a wing fidelity is built for: the planform (SI), the section and the flight condition
+/// (a CFD model converges its steady state there).
+#[derive(Clone, Copy, Debug)]
+pub struct WingContext<'a> {
+    pub planform: &'a Planform,
+    pub airfoil: &'a Airfoil,
+    pub flight: &'a FlightCondition,
+}
+
 /// A fidelity's builder for wing studies.
 pub trait WingBuilder {
     /// The fidelity's name as the study file spells it.
     fn name(&self) -> &'static str;
     fn capabilities(&self) -> Capabilities;
-    /// Cheap checks of the settings on a planform; builds nothing expensive.
-    fn validate(&self, planform: &Planform) -> Result<(), BuildError>;
-    /// The model on a planform, with its binding.
-    fn build(&self, planform: &Planform) -> Result<WingFidelity, BuildError>;
+    /// Cheap checks of the settings for a wing (sizes, memory estimates); builds nothing
+    /// expensive.
+    fn validate(&self, wing: &WingContext) -> Result<(), BuildError>;
+    /// The model of the wing, with its binding.
+    fn build(&self, wing: &WingContext) -> Result<WingFidelity, BuildError>;
 }
 
 /// The aerodynamic fidelities a wing study can name.
@@ -86,6 +96,8 @@ pub trait WingBuilder {
 pub enum FidelitySpec {
     /// Doublet-Lattice Method on the wing planform.
     Dlm(super::dlm::DlmSpec),
+    /// Euler LFD on the built-in wing mesh (or a mesh file).
+    Lfd(super::lfd::LfdWingSpec),
 }
 
 impl FidelitySpec {
@@ -93,6 +105,7 @@ impl FidelitySpec {
     pub fn builder(&self) -> &dyn WingBuilder {
         match self {
             FidelitySpec::Dlm(spec) => spec,
+            FidelitySpec::Lfd(spec) => spec,
         }
     }
 }

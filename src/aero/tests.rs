@@ -23,7 +23,13 @@ fn dlm_binding_matches_its_surface() {
     let study = agard();
     let planform = study.planform().unwrap();
     let aero = study.spec.aero.as_ref().unwrap();
-    let built = aero.fidelity.builder().build(&planform).unwrap();
+    let (airfoil, flight) = (study.airfoil().unwrap(), study.flight_condition().unwrap());
+    let ctx = WingContext {
+        planform: &planform,
+        airfoil: &airfoil,
+        flight: &flight,
+    };
+    let built = aero.fidelity.builder().build(&ctx).unwrap();
     let pts = &built.model.surface().points;
     assert_eq!(built.binding.points.len(), pts.len());
     assert_eq!(
@@ -67,7 +73,13 @@ fn model_without_reverse_mode_is_refused_by_name() {
     let modes =
         crate::structure::modal::solve(&plate, st.modes, 0.0, &study.mode_fields()).unwrap();
     let aero = study.spec.aero.as_ref().unwrap();
-    let mut built = aero.fidelity.builder().build(plate.planform()).unwrap();
+    let (airfoil, flight) = (study.airfoil().unwrap(), study.flight_condition().unwrap());
+    let ctx = WingContext {
+        planform: plate.planform(),
+        airfoil: &airfoil,
+        flight: &flight,
+    };
+    let mut built = aero.fidelity.builder().build(&ctx).unwrap();
     built.model = Box::new(ForwardOnly(built.model));
     let model = AeroModel::bind(
         "forward-only",

@@ -72,7 +72,7 @@ pub fn gafs(study: &Study, out: &Path) -> Result<()> {
     let doc = GafFile {
         conventions: CONVENTIONS.iter().map(|s| s.to_string()).collect(),
         study: study.spec.name.clone(),
-        fidelity: "dlm".into(),
+        fidelity: aero.name.into(),
         mach: f.mach,
         velocity_m_s: f.velocity,
         density_kg_m3: f.density,
@@ -140,7 +140,13 @@ pub fn aic(file: &Path, mach: f64, ks: &[f64], out: &Path) -> Result<()> {
         let Some(aero) = &study.spec.aero else {
             anyhow::bail!("{}: aero: missing (the study has no DLM)", file.display());
         };
-        let crate::study::FidelitySpec::Dlm(spec) = &aero.fidelity;
+        let crate::study::FidelitySpec::Dlm(spec) = &aero.fidelity else {
+            anyhow::bail!(
+                "{}: aero.fidelity: `gustkit aic` writes DLM influence matrices; this study's fidelity is {}",
+                file.display(),
+                aero.fidelity.builder().name()
+            );
+        };
         let dlm = spec
             .lattice(plate.planform())
             .map_err(|e| anyhow::anyhow!("{}: aero.fidelity.dlm: {e}", file.display()))?;

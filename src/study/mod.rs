@@ -137,9 +137,14 @@ impl Study {
             gustkit_core::check_reduced_frequencies(&aero.reduced_frequencies)
                 .map_err(|e| self.err("aero.reduced_frequencies", e.to_string()))?;
             // the fidelity's own checks, cheap: no model is built to validate a file
+            let flight = self.flight_condition()?;
             aero.fidelity
                 .builder()
-                .validate(&self.planform()?)
+                .validate(&crate::aero::WingContext {
+                    planform: &self.planform()?,
+                    airfoil: &self.airfoil()?,
+                    flight: &flight,
+                })
                 .map_err(|e| self.fidelity_err(&e))?;
         }
         if self.spec.gust.is_some() {
@@ -196,6 +201,7 @@ impl Study {
             self.flight_condition()?,
             aero.reduced_frequencies.clone(),
             plate,
+            &self.airfoil()?,
         )
         .map_err(|e| self.fidelity_err(&e))
     }

@@ -120,6 +120,11 @@ impl Lfd {
         }
     }
 
+    /// The mesh nodes of the surface points, in the order of [`Aerodynamics::surface`].
+    pub fn wall_nodes(&self) -> &[usize] {
+        &self.deform.wall_nodes
+    }
+
     fn check(
         &self,
         flight: &FlightCondition,

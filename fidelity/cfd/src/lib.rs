@@ -28,3 +28,4 @@ pub mod residual;
 pub mod steady;
 pub mod unsteady;
 pub mod vtk;
+pub mod wing_mesh;

@@ -191,6 +191,38 @@ impl Mesh {
     }
 }
 
+/// n + 1 points s_0 = 0 < … < s_n = 1 with geometrically growing steps, the first `first`.
+pub fn geometric_distribution(first: f64, n: usize) -> Vec<f64> {
+    // solve first · (g^n − 1)/(g − 1) = 1 for g by bisection
+    let sum = |g: f64| {
+        if (g - 1.0).abs() < 1e-12 {
+            first * n as f64
+        } else {
+            first * (g.powi(n as i32) - 1.0) / (g - 1.0)
+        }
+    };
+    let (mut lo, mut hi) = (1e-6, 10.0);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if sum(mid) > 1.0 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let ratio = 0.5 * (lo + hi);
+    let mut s = vec![0.0];
+    let mut step = first;
+    for _ in 0..n {
+        let last = *s.last().expect("starts with 0");
+        s.push(last + step);
+        step *= ratio;
+    }
+    let top = *s.last().expect("n > 0");
+    s.iter_mut().for_each(|v| *v /= top);
+    s
+}
+
 /// A 2-D O-mesh around the closed curve `body(t)`, t ∈ [0, 1) counter-clockwise, with
 /// `n_around` × `n_radial` cells out to a circle of radius `r_far` about the origin, the radial
 /// spacing growing geometrically from `first` (a fraction of the distance to the far field),
@@ -203,36 +235,7 @@ pub fn o_mesh(
     first: f64,
     dz: f64,
 ) -> Mesh {
-    // radial distribution s_j ∈ [0, 1], geometric with ratio g so that s_1 = first
-    let ratio = {
-        // solve first · (g^n − 1)/(g − 1) = 1 for g by bisection
-        let sum = |g: f64| {
-            if (g - 1.0).abs() < 1e-12 {
-                first * n_radial as f64
-            } else {
-                first * (g.powi(n_radial as i32) - 1.0) / (g - 1.0)
-            }
-        };
-        let (mut lo, mut hi) = (1e-6, 10.0);
-        for _ in 0..200 {
-            let mid = 0.5 * (lo + hi);
-            if sum(mid) > 1.0 {
-                hi = mid;
-            } else {
-                lo = mid;
-            }
-        }
-        0.5 * (lo + hi)
-    };
-    let mut s = vec![0.0];
-    let mut step = first;
-    for _ in 0..n_radial {
-        let last = *s.last().expect("starts with 0");
-        s.push(last + step);
-        step *= ratio;
-    }
-    let top = *s.last().expect("n_radial > 0");
-    s.iter_mut().for_each(|v| *v /= top);
+    let s = geometric_distribution(first, n_radial);
     // nodes: ring j, point i, layer k (z = 0, dz)
     let id = |i: usize, j: usize, k: usize| (k * (n_radial + 1) + j) * n_around + i % n_around;
     let mut nodes = vec![[0.0; 3]; 2 * (n_radial + 1) * n_around];

@@ -1,0 +1,109 @@
+//! The CFD fidelity on the AGARD 445.6 wing through the wing-study schema: `aero.fidelity:
+//! {"lfd": {...}}` loads, is refused where gradients are needed (it has no reverse mode yet),
+//! guards its memory, and its GAFs on the coarse built-in mesh stand beside the DLM's.
+
+use gustkit::study::Study;
+use std::path::Path;
+
+fn flagship() -> serde_json::Value {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json");
+    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+}
+
+fn load(v: &serde_json::Value) -> Result<Study, gustkit::study::StudyError> {
+    Study::from_str(Path::new("lfd_wing.json"), &v.to_string())
+}
+
+/// An optimization with the LFD fidelity is refused when the study is loaded, naming the
+/// fidelity and the reason; without the optimization the same study loads (and validating it
+/// builds no mesh and solves nothing).
+#[test]
+fn lfd_wing_study_loads_and_refuses_gradients() {
+    let mut v = flagship();
+    v["aero"]["fidelity"] = serde_json::json!({"lfd": {}});
+    let e = load(&v).unwrap_err();
+    assert_eq!(e.path, "aero.fidelity.lfd", "{e}");
+    assert!(
+        e.reason.contains("optimization needs adjoint gradients")
+            && e.reason.contains("lfd fidelity has no reverse mode"),
+        "{e}"
+    );
+    v.as_object_mut().unwrap().remove("optimization");
+    let s = load(&v).unwrap();
+    let e = s.require_reverse_mode("check-gradient").unwrap_err();
+    assert!(e.reason.contains("check-gradient"), "{e}");
+}
+
+/// Bad LFD settings are named by their JSON path: a mesh whose memory estimate exceeds the
+/// limit (refused before anything is allocated), odd point counts, an unknown level or
+/// preconditioner.
+#[test]
+fn lfd_settings_are_checked_at_load() {
+    let mut v = flagship();
+    v.as_object_mut().unwrap().remove("optimization");
+    let with = |fidelity: serde_json::Value| {
+        let mut w = v.clone();
+        w["aero"]["fidelity"] = fidelity;
+        load(&w).unwrap_err()
+    };
+    let e = with(serde_json::json!({"lfd": {"mesh": "fine", "memory_limit_gb": 4}}));
+    assert_eq!(e.path, "aero.fidelity.lfd.mesh", "{e}");
+    assert!(
+        e.reason.contains("fine mesh") && e.reason.contains("GB"),
+        "{e}"
+    );
+    let e = with(serde_json::json!({"lfd": {"mesh_sizes": {
+        "n_around": 17, "n_radial": 6, "n_span": 4, "n_outboard": 3, "first_spacing_chords": 0.02
+    }}}));
+    assert_eq!(e.path, "aero.fidelity.lfd.mesh_sizes.n_around", "{e}");
+    let e = with(serde_json::json!({"lfd": {"mesh": "huge"}}));
+    assert_eq!(e.path, "aero.fidelity.lfd.mesh", "{e}");
+    let e = with(serde_json::json!({"lfd": {"preconditioner": "jacobi"}}));
+    assert_eq!(e.path, "aero.fidelity.lfd.preconditioner", "{e}");
+}
+
+/// LFD GAFs on the coarse built-in wing mesh (7 168 cells, steady Euler at M 0.5 converged to
+/// round-off) against the DLM of the flagship (8 × 12 boxes) at k = 0 and 0.5: the diagonal
+/// motion GAFs of the first three modes lie within 25 % of the DLM's (measured on this level
+/// over the 11 k of the study: 4–21 %), the gust GAFs within 25 % of the largest gust GAF
+/// (measured 2–15 %). The differences are the coarse level's discretization error plus the
+/// thickness and compressibility the DLM does not see; the issue note records them on the
+/// medium level. A regression guard for the wing LFD, not its verification.
+#[test]
+fn coarse_lfd_gafs_beside_the_dlm() {
+    let mut v = flagship();
+    v.as_object_mut().unwrap().remove("optimization");
+    v["aero"]["reduced_frequencies"] = serde_json::json!([0.0, 0.5]);
+    let dlm = load(&v).unwrap();
+    v["aero"]["fidelity"] = serde_json::json!({"lfd": {"mesh": "coarse"}});
+    let lfd = load(&v).unwrap();
+    let plate = dlm.build_model().unwrap();
+    let st = &dlm.spec.structure;
+    let modes =
+        gustkit::structure::modal::solve(&plate, st.modes, 0.0, &dlm.mode_fields()).unwrap();
+    let a = dlm
+        .aero_model(&plate)
+        .unwrap()
+        .gafs(&plate, &modes)
+        .unwrap();
+    let model = lfd.aero_model(&plate).unwrap();
+    assert!(!model.has_reverse());
+    let b = model.gafs(&plate, &modes).unwrap();
+    for ik in 0..2 {
+        let gust_scale = (0..3).map(|m| a.q_gs[ik][m].norm()).fold(0.0, f64::max);
+        for m in 0..3 {
+            let (x, y) = (a.q_ss[ik][m][m], b.q_ss[ik][m][m]);
+            assert!(
+                (y - x).norm() < 0.25 * x.norm(),
+                "k = {}, Q_ss[{m}][{m}]: DLM {x}, LFD {y}",
+                a.k[ik]
+            );
+            let (x, y) = (a.q_gs[ik][m], b.q_gs[ik][m]);
+            assert!(
+                (y - x).norm() < 0.25 * gust_scale,
+                "k = {}, Q_gs[{m}]: DLM {x}, LFD {y}",
+                a.k[ik]
+            );
+        }
+    }
+}
