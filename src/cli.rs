@@ -14,6 +14,10 @@ use std::path::{Path, PathBuf};
     about = "Aeroelastic gust analysis and gust-constrained wing design"
 )]
 pub struct Cli {
+    /// On an error, print its full debug form (with a backtrace where RUST_BACKTRACE asks for
+    /// one) instead of the one-line message.
+    #[arg(long, global = true)]
+    pub debug: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -155,7 +159,21 @@ pub fn dispatch(cli: Cli) -> Result<()> {
     }
 }
 
-/// Parses the process arguments and runs them.
-pub fn main() -> Result<()> {
-    dispatch(Cli::parse())
+/// Parses the process arguments, runs them and prints an error the way a user reads it: one
+/// line with its chain of causes (`error: file: field: reason`), no backtrace unless `--debug`.
+/// Exit status 0 on success, 1 on an error, 2 on a command-line usage error (clap's).
+pub fn main() -> std::process::ExitCode {
+    let cli = Cli::parse();
+    let debug = cli.debug;
+    match dispatch(cli) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            if debug {
+                eprintln!("error: {e:?}");
+            } else {
+                eprintln!("error: {e:#}");
+            }
+            std::process::ExitCode::FAILURE
+        }
+    }
 }

@@ -1,5 +1,5 @@
 //! The `gustkit` command line (see `gustkit::cli`).
 
-fn main() -> anyhow::Result<()> {
+fn main() -> std::process::ExitCode {
     gustkit::cli::main()
 }

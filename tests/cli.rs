@@ -1002,3 +1002,30 @@ fn study_kinds_and_report_kinds() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A user error is one line (`error: file: path: reason`) with exit status 1 and no backtrace,
+/// even where RUST_BACKTRACE=1 is set (common on developer machines); `--debug` shows the full
+/// form.
+#[test]
+fn user_errors_print_without_backtrace() {
+    let cfd = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/verify_naca64a010_pitch.json");
+    let o = gustkit()
+        .env("RUST_BACKTRACE", "1")
+        .args(["modes", cfd.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.starts_with("error: ") && e.contains("works on wing studies"),
+        "{e}"
+    );
+    assert!(!e.contains("backtrace") && e.lines().count() == 1, "{e}");
+    let o = gustkit()
+        .env("RUST_BACKTRACE", "1")
+        .args(["--debug", "modes", cfd.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("backtrace"));
+}

@@ -114,6 +114,9 @@ pub enum Preconditioner {
     /// Block ILU(0) of the exact Jacobian: no fill, for meshes whose LU would not fit in memory;
     /// the most GMRES iterations.
     BlockIlu,
+    /// Block ILU(0) of the first-order Jacobian: sparser and more diagonally dominant than the
+    /// exact one's (the exact second-order Jacobian's ILU(0) can be unstable on fine 3-D meshes).
+    FirstOrderIlu,
 }
 
 /// The LFD problem about a converged steady state.
@@ -155,7 +158,7 @@ impl LfdOperator {
         preconditioner: Preconditioner,
     ) -> Self {
         let blocks = match preconditioner {
-            Preconditioner::FirstOrder => euler.jacobian(&q0),
+            Preconditioner::FirstOrder | Preconditioner::FirstOrderIlu => euler.jacobian(&q0),
             Preconditioner::Exact | Preconditioner::BlockIlu => {
                 let coloring = crate::jacobian::Coloring::new(&euler, euler.order);
                 euler.jacobian_colored(&q0, &coloring, euler.order)
@@ -439,7 +442,10 @@ impl LfdOperator {
             omega: s.im,
             reason,
         };
-        let factors = if self.preconditioner == Preconditioner::BlockIlu {
+        let factors = if matches!(
+            self.preconditioner,
+            Preconditioner::BlockIlu | Preconditioner::FirstOrderIlu
+        ) {
             Factors::Ilu(
                 BlockIlu::new(self.euler.mesh.n_cells, &self.blocks, &|c| s * vol[c])
                     .map_err(fail)?,

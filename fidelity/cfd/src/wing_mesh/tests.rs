@@ -224,7 +224,7 @@ fn explore_steady_wing() {
     let spec = WingMeshSpec::level(&level).unwrap();
     let w = WingMesh::new(agard(), &section, &spec);
     let t = std::time::Instant::now();
-    let mut e = Euler::new(w.mesh.clone(), free_stream(0.5, 1f64.to_radians()));
+    let mut e = Euler::new(w.mesh.clone(), free_stream(0.5, 0.0));
     e.order = crate::residual::Order::Second;
     let params = SteadyParams {
         linear_solver: crate::steady::NewtonLinearSolver::BlockIlu,
@@ -243,16 +243,19 @@ fn explore_steady_wing() {
         f
     );
     for pre in [
+        crate::lfd::Preconditioner::FirstOrderIlu,
         crate::lfd::Preconditioner::BlockIlu,
-        crate::lfd::Preconditioner::FirstOrder,
     ] {
         let t = std::time::Instant::now();
         let lfd = crate::lfd::LfdOperator::with_preconditioner(e.clone(), q.clone(), pre);
         let t1 = t.elapsed().as_secs_f64();
-        let fac = lfd.factor(0.5, crate::lfd::Symbol::Exact).unwrap();
+        let mut lfd = lfd;
+        lfd.params.max_iterations = 400;
+        let omega: f64 = std::env::var("WING_OMEGA").map_or(0.5, |v| v.parse().unwrap());
+        let fac = lfd.factor(omega, crate::lfd::Symbol::Exact).unwrap();
         let t2 = t.elapsed().as_secs_f64();
         let g = lfd.gust_rhs(
-            0.5,
+            omega,
             &crate::lfd::HarmonicGust {
                 convection: 0.5,
                 x0: 0.0,
