@@ -187,20 +187,25 @@ pub struct ModeShapes {
     pub(crate) unit: String,
 }
 
+/// The corner polygons (x, y) of every plate element, in units of `to_m` metres.
+pub fn element_polygons(model: &PlateModel, to_m: f64) -> Vec<Vec<(f64, f64)>> {
+    let xy = model.node_xy();
+    model
+        .mesh
+        .elements
+        .iter()
+        .map(|e| {
+            e.iter()
+                .map(|&n| (xy[n][0] / to_m, xy[n][1] / to_m))
+                .collect()
+        })
+        .collect()
+}
+
 impl ModeShapes {
     /// Builds the figure data; lengths are shown in `unit` (`to_m` metres each).
     pub fn new(model: &PlateModel, modes: &Modes, unit: &str, to_m: f64) -> Self {
-        let xy = model.node_xy();
-        let polygons = model
-            .mesh
-            .elements
-            .iter()
-            .map(|e| {
-                e.iter()
-                    .map(|&n| (xy[n][0] / to_m, xy[n][1] / to_m))
-                    .collect()
-            })
-            .collect();
+        let polygons = element_polygons(model, to_m);
         let panels = modes
             .modes
             .iter()

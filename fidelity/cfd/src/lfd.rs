@@ -477,7 +477,7 @@ pub fn fourier_coefficient(samples: &[(f64, f64)], omega: f64) -> C64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::airfoil::AirfoilShape;
     use crate::deform::Deformation;
@@ -611,7 +611,7 @@ mod tests {
     /// a tiny gust or a tiny mode motion, its lift Fourier coefficient over the last of `periods`
     /// periods per unit amplitude, against the BDF2-symbol LFD: they differ by the nonlinearity
     /// (relative size of the amplitude) and the decayed transient only.
-    fn nonlinear_lift(
+    pub(crate) fn nonlinear_lift(
         lfd: &LfdOperator,
         omega: f64,
         steps_per_period: usize,

@@ -94,6 +94,23 @@ pub fn swept_volume<S: Scalar>(a: &[[S; 3]], b: &[[S; 3]]) -> S {
 }
 
 impl Mesh {
+    /// Σ over each cell's faces of the volume they sweep as the nodes move from `a` to `b`
+    /// (outward positive): the left-hand side of the discrete GCL, equal to the cell's volume
+    /// change.
+    pub fn swept_volume_sums(&self, a: &[[f64; 3]], b: &[[f64; 3]]) -> Vec<f64> {
+        let mut sum = vec![0.0; self.n_cells];
+        for f in &self.faces {
+            let pa: Vec<[f64; 3]> = f.nodes.iter().map(|&n| a[n]).collect();
+            let pb: Vec<[f64; 3]> = f.nodes.iter().map(|&n| b[n]).collect();
+            let dv = swept_volume(&pa, &pb);
+            sum[f.left] += dv;
+            if let Side::Cell(c) = f.right {
+                sum[c] -= dv;
+            }
+        }
+        sum
+    }
+
     /// Area vector of face `f`.
     pub fn area(&self, f: usize) -> [f64; 3] {
         let pts: Vec<[f64; 3]> = self.faces[f].nodes.iter().map(|&n| self.nodes[n]).collect();

@@ -163,7 +163,7 @@ pub fn fourier_fit(samples: &[(f64, f64)], omega: f64) -> (f64, num_complex::Com
 mod tests {
     use super::*;
     use crate::airfoil::AirfoilShape;
-    use crate::mesh::{o_mesh, Boundary, Side};
+    use crate::mesh::{o_mesh, Boundary};
     use crate::residual::free_stream;
 
     fn mesh(n_around: usize, n_radial: usize) -> crate::mesh::Mesh {
@@ -245,16 +245,7 @@ mod tests {
             },
             moved.volumes(),
         );
-        let mut sum = vec![0.0; m.n_cells];
-        for f in &m.faces {
-            let pa: Vec<[f64; 3]> = f.nodes.iter().map(|&n| a[n]).collect();
-            let pb: Vec<[f64; 3]> = f.nodes.iter().map(|&n| b[n]).collect();
-            let dv = crate::mesh::swept_volume(&pa, &pb);
-            sum[f.left] += dv;
-            if let Side::Cell(c) = f.right {
-                sum[c] -= dv;
-            }
-        }
+        let sum = m.swept_volume_sums(&a, &b);
         for c in 0..m.n_cells {
             assert!((sum[c] - (vb[c] - va[c])).abs() < 1e-14 * vb[c], "cell {c}");
         }

@@ -5,7 +5,7 @@ use super::gust::psd_series;
 use super::unit_label;
 use crate::flutter::margin::{DAMPING_SCALE, KS_RHO};
 use crate::optim::{Checkpointing, Control, Executor};
-use crate::report::results::{DesignSnapshot, HistoryRow, OptimizationResults};
+use crate::report::results::{element_polygons, DesignSnapshot, HistoryRow, OptimizationResults};
 use crate::report::write_atomic;
 use crate::study::Study;
 use anyhow::{Context, Result};
@@ -97,7 +97,6 @@ fn snapshot(
     unit_scale: f64,
 ) -> DesignSnapshot {
     let to_m = study.spec.length_unit.to_m();
-    let xy = ev.plate.node_xy();
     let mesh = &ev.plate.mesh;
     DesignSnapshot {
         mass_kg: ev.mass_kg,
@@ -106,15 +105,7 @@ fn snapshot(
         rms: ev.rms_m[output],
         frequencies_hz: ev.freq_hz.clone(),
         design_variables: ev.x.clone(),
-        elements: mesh
-            .elements
-            .iter()
-            .map(|e| {
-                e.iter()
-                    .map(|&n| (xy[n][0] / to_m, xy[n][1] / to_m))
-                    .collect()
-            })
-            .collect(),
+        elements: element_polygons(&ev.plate, to_m),
         thickness: (0..mesh.elements.len())
             .map(|e| ev.plate.element_thickness(e) / to_m)
             .collect(),

@@ -2,7 +2,6 @@
 //! preservation at rest and moving (discrete GCL), exact planform derivatives of the nodes.
 
 use super::*;
-use crate::mesh::swept_volume;
 use crate::residual::{free_stream, Euler};
 use crate::steady::SteadyParams;
 use crate::unsteady::march;
@@ -125,16 +124,7 @@ fn moving_mesh_preserves_uniform_flow() {
         m.volumes()
     };
     let (va, vb) = (vol(&a), vol(&b));
-    let mut sum = vec![0.0; w.mesh.n_cells];
-    for f in &w.mesh.faces {
-        let pa: Vec<[f64; 3]> = f.nodes.iter().map(|&n| a[n]).collect();
-        let pb: Vec<[f64; 3]> = f.nodes.iter().map(|&n| b[n]).collect();
-        let dv = swept_volume(&pa, &pb);
-        sum[f.left] += dv;
-        if let Side::Cell(c) = f.right {
-            sum[c] -= dv;
-        }
-    }
+    let sum = w.mesh.swept_volume_sums(&a, &b);
     let vmax = vb.iter().copied().fold(0.0, f64::max);
     for c in 0..w.mesh.n_cells {
         assert!(
@@ -374,26 +364,7 @@ fn gust_lfd_matches_small_amplitude_time_domain_on_the_wing() {
         convection: mach,
         x0: 0.0,
     };
-    let mut m = e.clone();
-    let params = SteadyParams {
-        exact_jacobian: true,
-        ..SteadyParams::small_amplitude()
-    };
-    let (_, samples) = march(
-        &mut m,
-        q0.clone(),
-        Some(&sine),
-        None,
-        dt,
-        periods * n,
-        &params,
-    )
-    .unwrap();
-    let lift0 = e.wall_force(&q0)[1];
-    let lift: Vec<(f64, f64)> = samples[samples.len() - n..]
-        .iter()
-        .map(|s| (s.time, s.force[1] - lift0))
-        .collect();
+    let lift = crate::lfd::tests::nonlinear_lift(&lfd, omega, n, periods, Some(&sine), None);
     // w = Re(−i amp ŵ e^{iωt})
     let c = fourier_coefficient(&lift, omega) * C64::new(0.0, 1.0 / amp);
     let digits = -((c - lift_hat).norm() / lift_hat.norm()).log10();
