@@ -118,14 +118,15 @@ fn wing(file: &Path, command: &str) -> Result<crate::study::Study> {
 }
 
 /// Runs the parsed command line.
-pub fn dispatch(cli: Cli) -> Result<()> {
+pub fn dispatch(cli: Cli) -> Result<runner::Outcome> {
+    let done = |r: Result<()>| r.map(|()| runner::Outcome::Done);
     match cli.command {
         Command::Run {
             study,
             reports,
             resume,
         } => runner::run(&study, &reports, resume),
-        Command::Report { run_dir } => runner::report(&run_dir),
+        Command::Report { run_dir } => done(runner::report(&run_dir)),
         Command::Sweep {
             study,
             reports,
@@ -135,38 +136,54 @@ pub fn dispatch(cli: Cli) -> Result<()> {
             study,
             json,
             reports,
-        } => runner::wing::modes(&wing(&study, "modes")?, json, &reports),
-        Command::Gafs { study, out } => runner::export::gafs(&wing(&study, "gafs")?, &out),
+        } => done(runner::wing::modes(&wing(&study, "modes")?, json, &reports)),
+        Command::Gafs { study, out } => done(runner::export::gafs(&wing(&study, "gafs")?, &out)),
         Command::Aic {
             input,
             mach,
             k,
             out,
-        } => runner::export::aic(&input, mach, &k, &out),
+        } => done(runner::export::aic(&input, mach, &k, &out)),
         Command::Flutter {
             study,
             json,
             reports,
-        } => runner::wing::flutter::flutter(&wing(&study, "flutter")?, json, &reports),
-        Command::CheckGradient { study, dv, json } => {
-            runner::wing::gradient::check_gradient(&wing(&study, "check-gradient")?, &dv, json)
-        }
+        } => done(runner::wing::flutter::flutter(
+            &wing(&study, "flutter")?,
+            json,
+            &reports,
+        )),
+        Command::CheckGradient { study, dv, json } => done(runner::wing::gradient::check_gradient(
+            &wing(&study, "check-gradient")?,
+            &dv,
+            json,
+        )),
         Command::Bench {
             study,
             repeat,
             optimization,
-        } => runner::bench::bench(&wing(&study, "bench")?, repeat, optimization),
+        } => done(runner::bench::bench(
+            &wing(&study, "bench")?,
+            repeat,
+            optimization,
+        )),
     }
 }
 
 /// Parses the process arguments, runs them and prints an error the way a user reads it: one
 /// line with its chain of causes (`error: file: field: reason`), no backtrace unless `--debug`.
-/// Exit status 0 on success, 1 on an error, 2 on a command-line usage error (clap's).
+/// Exit status: 0 success; 1 an error (bad input, a failed solve: nothing new written); 2 a
+/// command-line usage error (clap's); 3 a run that wrote its results without reaching its goal
+/// (an optimization that did not converge, sweep cases that failed or did not converge).
 pub fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     let debug = cli.debug;
     match dispatch(cli) {
-        Ok(()) => std::process::ExitCode::SUCCESS,
+        Ok(runner::Outcome::Done) => std::process::ExitCode::SUCCESS,
+        Ok(runner::Outcome::GoalNotReached(why)) => {
+            eprintln!("gustkit: {why} (the results are written)");
+            std::process::ExitCode::from(runner::EXIT_GOAL_NOT_REACHED)
+        }
         Err(e) => {
             if debug {
                 eprintln!("error: {e:?}");

@@ -15,12 +15,28 @@ use anyhow::Result;
 pub use load::LoadedStudy;
 use std::path::Path;
 
+/// How a run that wrote its results ended: it reached its goal, or it did not (an optimization
+/// stopped before its KKT test passed, sweep cases failed); the command line exits with
+/// [`EXIT_GOAL_NOT_REACHED`] then.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Outcome {
+    Done,
+    GoalNotReached(String),
+}
+
+/// Exit status of a run that wrote its results without reaching its goal.
+pub const EXIT_GOAL_NOT_REACHED: u8 = 3;
+
 /// `gustkit run`: every analysis the study defines, with its report, whatever its kind.
-pub fn run(file: &Path, reports: &Path, resume: bool) -> Result<()> {
+pub fn run(file: &Path, reports: &Path, resume: bool) -> Result<Outcome> {
     match LoadedStudy::load(file)? {
         LoadedStudy::Wing(study) => wing::run(&study, reports, resume),
-        LoadedStudy::TypicalSection(study) => crate::typical_section::run(&study, reports),
-        LoadedStudy::CfdVerification(study) => crate::verification::run(&study, reports),
+        LoadedStudy::TypicalSection(study) => {
+            crate::typical_section::run(&study, reports).map(|()| Outcome::Done)
+        }
+        LoadedStudy::CfdVerification(study) => {
+            crate::verification::run(&study, reports).map(|()| Outcome::Done)
+        }
     }
 }
 

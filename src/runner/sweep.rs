@@ -79,7 +79,7 @@ fn sweep_metrics(
 
 /// `gustkit sweep`: every case of the study's sweep in parallel (rayon), each case's result
 /// written as it finishes so that `--resume` skips it; then the table, CSV and figure.
-pub fn sweep(study: &Study, reports: &Path, resume: bool) -> Result<()> {
+pub fn sweep(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner::Outcome> {
     use crate::report::sweep::{CaseResult, SweepResults};
     use rayon::prelude::*;
     let cases = study.sweep_cases()?;
@@ -150,5 +150,22 @@ pub fn sweep(study: &Study, reports: &Path, resume: bool) -> Result<()> {
     crate::report::sweep::render(&dir, &r)?;
     print!("{}", crate::report::sweep::summary(&r));
     println!("sweep written to {}", dir.display());
-    Ok(())
+    let short = r
+        .cases
+        .iter()
+        .filter(|c| {
+            c.error.is_some()
+                || c.metrics
+                    .iter()
+                    .any(|m| m.name == "converged" && m.value == 0.0)
+        })
+        .count();
+    Ok(if short == 0 {
+        crate::runner::Outcome::Done
+    } else {
+        crate::runner::Outcome::GoalNotReached(format!(
+            "{short} of {} sweep cases failed or did not converge",
+            r.cases.len()
+        ))
+    })
 }

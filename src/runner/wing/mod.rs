@@ -107,7 +107,7 @@ pub fn modes(study: &Study, json: bool, reports: &Path) -> Result<()> {
 }
 
 /// `gustkit run`: every analysis the study defines, with its report.
-pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<()> {
+pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner::Outcome> {
     let study = study.clone();
     let t0 = Instant::now();
     let (model, modes, summary) = analyze(&study)?;
@@ -160,5 +160,11 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<()> {
     };
     report::run::render(&dir, &results)?;
     println!("report written to {}", dir.display());
-    Ok(())
+    Ok(match &results.optimization {
+        Some(o) if !o.converged => crate::runner::Outcome::GoalNotReached(format!(
+            "the optimization did not converge: {} after {} iterations",
+            o.message, o.iterations
+        )),
+        _ => crate::runner::Outcome::Done,
+    })
 }
