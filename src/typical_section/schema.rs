@@ -82,11 +82,6 @@ pub struct SectionFlutter {
 }
 
 impl SectionStudyFile {
-    /// Reads and checks a study; errors name the file and the field.
-    pub fn load(file: &Path) -> Result<Self> {
-        Self::from_value(file, &crate::report::read_json(file)?)
-    }
-
     /// Checks a parsed study document; errors name the file and the field.
     pub fn from_value(file: &Path, doc: &serde_json::Value) -> Result<Self> {
         let mut s: Self = crate::report::from_json(file, doc)?;

@@ -71,11 +71,6 @@ pub struct TimeGustSpec {
 }
 
 impl CfdStudyFile {
-    /// Reads and checks a CFD study; errors name the file and the JSON path.
-    pub fn load(file: &Path) -> Result<Self> {
-        Self::from_value(file, &crate::report::read_json(file)?)
-    }
-
     /// Checks a parsed CFD study document; errors name the file and the JSON path.
     pub fn from_value(file: &Path, doc: &serde_json::Value) -> Result<Self> {
         let mut s: Self = crate::report::from_json(file, doc)?;

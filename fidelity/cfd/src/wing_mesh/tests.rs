@@ -17,6 +17,17 @@ fn section(x: f64) -> f64 {
     0.08 * x * (1.0 - x)
 }
 
+/// The steady state of `e` from the free stream (Newton–Krylov with block ILU(0)).
+fn steady_state(e: &Euler) -> Vec<[f64; crate::gas::NVAR]> {
+    let params = SteadyParams {
+        linear_solver: crate::steady::NewtonLinearSolver::BlockIlu,
+        ..SteadyParams::default()
+    };
+    e.solve_steady(vec![e.q_inf; e.mesh.n_cells], &params)
+        .unwrap()
+        .0
+}
+
 /// A small mesh for the tests that march in time.
 fn small() -> WingMeshSpec {
     WingMeshSpec {
@@ -278,13 +289,7 @@ fn lfd_operator_matches_finite_differences() {
     use num_complex::Complex64 as C64;
     let w = WingMesh::new(agard(), &section, &small());
     let e = Euler::new(w.mesh.clone(), free_stream(0.5, 0.0));
-    let params = SteadyParams {
-        linear_solver: crate::steady::NewtonLinearSolver::BlockIlu,
-        ..SteadyParams::default()
-    };
-    let (q0, _) = e
-        .solve_steady(vec![e.q_inf; e.mesh.n_cells], &params)
-        .unwrap();
+    let q0 = steady_state(&e);
     let n = e.mesh.n_cells;
     let op = LfdOperator::new(e.clone(), q0.clone());
     let r = gustkit_testkit::rand_vec(2 * n * NVAR, 31);
@@ -335,13 +340,7 @@ fn gust_lfd_matches_small_amplitude_time_domain_on_the_wing() {
     let w = WingMesh::new(agard(), &section, &small());
     let mach = 0.5;
     let e = Euler::new(w.mesh.clone(), free_stream(mach, 0.0));
-    let steady = SteadyParams {
-        linear_solver: crate::steady::NewtonLinearSolver::BlockIlu,
-        ..SteadyParams::default()
-    };
-    let (q0, _) = e
-        .solve_steady(vec![e.q_inf; e.mesh.n_cells], &steady)
-        .unwrap();
+    let q0 = steady_state(&e);
     let lfd = LfdOperator::new(e.clone(), q0.clone());
     // k = 0.5 on the root semichord
     let omega = 0.5 * mach / (0.5 * 0.5587);
