@@ -88,15 +88,14 @@ impl PkProblem<'_> {
         let speeds: Vec<f64> = (0..steps)
             .map(|i| v * (0.2 + 0.8 * i as f64 / (steps - 1) as f64))
             .collect();
-        let r = self.sweep(&speeds)?;
+        let (r, p) = self.sweep_roots(&speeds)?;
         let mut roots = Vec::new();
-        for c in &r.curves {
+        for (c, p) in r.curves.iter().zip(&p) {
             for (i, &velocity) in c.velocity_m_s.iter().enumerate() {
-                let omega = 2.0 * std::f64::consts::PI * c.frequency_hz[i];
                 roots.push(DampingRoot {
                     mode: c.mode,
                     velocity,
-                    p: Complex64::new(0.5 * c.damping_g[i] * omega, omega),
+                    p: p[i],
                     k: c.k[i],
                     g: c.damping_g[i],
                 });
@@ -123,17 +122,25 @@ impl PkProblem<'_> {
         }
         let beta = self.table.b_ref / v;
         let (pr, pi) = (r.p.re, r.p.im);
-        let a_re = 2.0 / pi;
-        let a_im = -2.0 * pr / (pi * pi);
+        // an aperiodic root stays real under real perturbations (k = 0 throughout), and its
+        // g = 2 b Re p / V
+        let (a_re, gamma) = if super::is_aperiodic(r.p) {
+            (2.0 * beta, 0.0)
+        } else {
+            let a_re = 2.0 / pi;
+            let a_im = -2.0 * pr / (pi * pi);
+            (a_re, (a_re * beta * c.re + a_im) / (1.0 - beta * c.im))
+        };
         Ok(Linearization {
             s,
             a_re,
-            gamma: (a_re * beta * c.re + a_im) / (1.0 - beta * c.im),
+            gamma,
             weights: self.spline_at(r.k)?.0,
+            weights_im: self.spline_at(r.k.max(super::K_HOLD))?.0,
             beta,
             qd: 0.5 * self.density * v * v,
             // as in the state matrix: the Q_I/k term is held below k = 1e-6
-            kk: r.k.max(1e-6),
+            kk: r.k.max(super::K_HOLD),
         })
     }
 
@@ -149,14 +156,14 @@ impl PkProblem<'_> {
         let mut e = Complex64::new(0.0, 0.0);
         for i in 0..n {
             for j in 0..n {
-                let dq: Complex64 = l
-                    .weights
-                    .iter()
-                    .enumerate()
-                    .map(|(t, wt)| d_table.q_ss[t][i][j] * *wt)
-                    .sum();
-                let mut dk = -l.qd * dq.re;
-                let mut dc = -l.qd * l.beta * dq.im / l.kk;
+                let dq = |w: &[f64]| -> Complex64 {
+                    w.iter()
+                        .enumerate()
+                        .map(|(t, wt)| d_table.q_ss[t][i][j] * *wt)
+                        .sum()
+                };
+                let mut dk = -l.qd * dq(&l.weights).re;
+                let mut dc = -l.qd * l.beta * dq(&l.weights_im).im / l.kk;
                 if i == j {
                     dk += d_omega2[i];
                     dc += self.damping_ratio * d_omega2[i] / self.omega_n[i];
@@ -187,9 +194,12 @@ impl PkProblem<'_> {
                 if i == j {
                     omega2_bar[i] += k_bar + c_bar * self.damping_ratio / self.omega_n[i];
                 }
-                let q_bar = Complex64::new(-l.qd * k_bar, -l.qd * l.beta * c_bar / l.kk);
+                let (qr_bar, qi_bar) = (-l.qd * k_bar, -l.qd * l.beta * c_bar / l.kk);
                 for (t, wt) in l.weights.iter().enumerate() {
-                    table_bar.q_ss[t][i][j] += q_bar * *wt;
+                    table_bar.q_ss[t][i][j] += Complex64::new(qr_bar * *wt, 0.0);
+                }
+                for (t, wt) in l.weights_im.iter().enumerate() {
+                    table_bar.q_ss[t][i][j] += Complex64::new(0.0, qi_bar * *wt);
                 }
             }
         }
@@ -204,8 +214,10 @@ struct Linearization {
     s: Mat<Complex64>,
     a_re: f64,
     gamma: f64,
-    /// Spline weights of the table at the root's k.
+    /// Spline weights of the table at the root's k, and at the k of the Q_I/k term (held below
+    /// `K_HOLD`).
     weights: Vec<f64>,
+    weights_im: Vec<f64>,
     /// b_ref / V, ½ ρ V², and k as used in the Q_I/k damping term.
     beta: f64,
     qd: f64,

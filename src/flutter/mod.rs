@@ -5,7 +5,12 @@
 //!   [p² I + p (C̄ − q (b_ref/V) Q_I(k)/k) + (K̄ − q Q_R(k))] η = 0,   q = ½ ρ V²,
 //! are solved as a real 2n × 2n eigenproblem; for each mode the root whose frequency matches the
 //! k it was evaluated at is found by fixed-point iteration on k. Damping g = 2 Re p / Im p, frequency
-//! Im p / 2π. Flutter is the lowest speed where a mode's g crosses zero upward, refined by the
+//! Im p / 2π. An aperiodic root (Im p = 0, k = 0: a divergence or an overdamped branch) has
+//! frequency 0 and reports g = 2 b_ref Re p / V (its decay per half-chord of travel, same sign).
+//!
+//! Branch identity: at every k the roots are assigned to all modes at once (each mode to its own
+//! root, nearest pairs of the previous speed's roots first), so two modes never settle on one root,
+//! also where frequencies coalesce. Flutter is the lowest speed where a mode's g crosses zero upward, refined by the
 //! secant method. Beyond the table's largest k the GAFs are held at that k (only low speeds reach
 //! it, where q is small) and the curve point is flagged.
 
@@ -20,7 +25,7 @@ use serde::{Deserialize, Serialize};
 pub enum FlutterError {
     #[error("{0}")]
     Input(String),
-    #[error("p-k iteration for mode {mode} at V = {velocity:.3} m/s did not converge; k history {history:?}")]
+    #[error("the p-k iteration for mode {mode} (counted from 1) at V = {velocity:.2} m/s did not converge in {} steps; its last reduced frequencies: {}", history.len(), last_k(history))]
     NoConvergence {
         mode: usize,
         velocity: f64,
@@ -28,6 +33,15 @@ pub enum FlutterError {
     },
     #[error("the eigensolver failed at V = {velocity:.3} m/s")]
     Eigen { velocity: f64 },
+}
+
+/// The last four values of a k history, for an error message.
+fn last_k(history: &[f64]) -> String {
+    let tail = &history[history.len().saturating_sub(4)..];
+    tail.iter()
+        .map(|k| format!("{k:.6}"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// Damping and frequency of one mode against speed.
@@ -40,6 +54,9 @@ pub struct ModeCurve {
     pub k: Vec<f64>,
     /// Whether k exceeded the GAF table (aerodynamics held at the largest k).
     pub extrapolated: Vec<bool>,
+    /// Whether the root is aperiodic (real: frequency 0, g = 2 b_ref Re p / V).
+    #[serde(default)]
+    pub aperiodic: Vec<bool>,
 }
 
 /// The result of a p-k sweep.
@@ -57,6 +74,53 @@ pub struct PkProblem<'a> {
     pub damping_ratio: f64,
     pub table: &'a GafTable,
     pub density: f64,
+}
+
+/// Reduced frequency below which the Q_I/k damping term is held at its value at this k.
+pub(crate) const K_HOLD: f64 = 1e-6;
+
+/// A root with |Im p| at most this fraction of |p| counts as aperiodic (real).
+const APERIODIC_TOL: f64 = 1e-12;
+
+/// Whether root `p` is aperiodic (real).
+pub(crate) fn is_aperiodic(p: Complex64) -> bool {
+    p.im.abs() <= APERIODIC_TOL * p.norm()
+}
+
+/// The damping g of root `p` at speed `v`: 2 Re p / Im p, or 2 b_ref Re p / V when aperiodic.
+pub(crate) fn damping_of(p: Complex64, v: f64, b_ref: f64) -> f64 {
+    if is_aperiodic(p) {
+        2.0 * b_ref * p.re / v
+    } else {
+        2.0 * p.re / p.im
+    }
+}
+
+/// Assigns each of the `refs` (one per mode) its own root among `roots` (those with Im p ≥ 0),
+/// nearest pairs first; a mode left over when there are fewer roots than modes takes its nearest.
+/// Returns the root index of each mode.
+fn assign_roots(refs: &[Complex64], roots: &[Complex64]) -> Vec<usize> {
+    let mut pairs: Vec<(f64, usize, usize)> = Vec::with_capacity(refs.len() * roots.len());
+    for (m, r) in refs.iter().enumerate() {
+        for (j, p) in roots.iter().enumerate() {
+            pairs.push(((*p - *r).norm(), m, j));
+        }
+    }
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+    let mut of_mode = vec![usize::MAX; refs.len()];
+    let mut taken = vec![false; roots.len()];
+    for &(_, m, j) in &pairs {
+        if of_mode[m] == usize::MAX && !taken[j] {
+            of_mode[m] = j;
+            taken[j] = true;
+        }
+    }
+    for &(_, m, j) in &pairs {
+        if of_mode[m] == usize::MAX {
+            of_mode[m] = j;
+        }
+    }
+    of_mode
 }
 
 struct Root {
@@ -106,6 +170,12 @@ impl PkProblem<'_> {
     /// slope dQ/dk the same way (zero outside the table, where Q is held).
     fn q_at(&self, k: f64) -> Result<[Mat<f64>; 4], FlutterError> {
         let (w, dw) = self.spline_at(k)?;
+        // the Q_I/k damping term is held at k = 1e-6 below it (the steady limit dQ_I/dk)
+        let (w_im, dw_im) = if k < K_HOLD {
+            self.spline_at(K_HOLD)?
+        } else {
+            (w.clone(), dw.clone())
+        };
         let n = self.omega_n.len();
         let q = |w: &[f64], m: usize, j: usize| -> Complex64 {
             w.iter()
@@ -115,9 +185,9 @@ impl PkProblem<'_> {
         };
         Ok([
             Mat::from_fn(n, n, |m, j| q(&w, m, j).re),
-            Mat::from_fn(n, n, |m, j| q(&w, m, j).im),
+            Mat::from_fn(n, n, |m, j| q(&w_im, m, j).im),
             Mat::from_fn(n, n, |m, j| q(&dw, m, j).re),
-            Mat::from_fn(n, n, |m, j| q(&dw, m, j).im),
+            Mat::from_fn(n, n, |m, j| q(&dw_im, m, j).im),
         ])
     }
 
@@ -144,7 +214,7 @@ impl PkProblem<'_> {
         let qd = 0.5 * self.density * v * v;
         let [qr, qi, dqr, dqi] = self.q_at(k)?;
         // below k = 1e-6 the Q_I/k term is held, as the steady limit of the damping
-        let (kk, dkk) = if k > 1e-6 { (k, 1.0) } else { (1e-6, 0.0) };
+        let (kk, dkk) = if k >= K_HOLD { (k, 1.0) } else { (K_HOLD, 0.0) };
         let mut a = Mat::<f64>::zeros(2 * n, 2 * n);
         let mut a_k = Mat::<f64>::zeros(2 * n, 2 * n);
         for i in 0..n {
@@ -173,38 +243,35 @@ impl PkProblem<'_> {
             .map_err(|_| FlutterError::Eigen { velocity: v })
     }
 
-    /// Converges mode `mode`'s root at speed `v` starting from the root `p0` (rad/s): at each step
-    /// the root nearest in the complex plane to the previous one is followed, so modes that
-    /// coalesce in frequency stay apart by their damping.
-    fn track(&self, mode: usize, v: f64, p0: Complex64) -> Result<Root, FlutterError> {
+    /// Converges mode `mode`'s root at speed `v` from the roots `refs` of every mode at the
+    /// previous speed: at each k the roots are assigned to all modes at once
+    /// ([`assign_roots`]), and `mode` follows its own, so modes that coalesce in frequency stay
+    /// apart by their damping and no two modes share a root.
+    fn track(&self, mode: usize, v: f64, refs: &[Complex64]) -> Result<Root, FlutterError> {
         let b = self.table.b_ref;
         let kmax = *self.table.k.last().expect("table has k");
-        let mut p_prev = p0;
-        let mut k = p0.im * b / v;
+        let mut k = refs[mode].im.max(0.0) * b / v;
         let mut history = vec![k];
         let mut last_step = f64::INFINITY;
         for _ in 0..200 {
-            let roots = self.roots(v, k)?;
-            let p = roots
-                .iter()
-                .filter(|p| p.im > 0.0)
-                .min_by(|a, c| (**a - p_prev).norm().total_cmp(&(**c - p_prev).norm()))
-                .copied()
-                .ok_or(FlutterError::NoConvergence {
-                    mode,
-                    velocity: v,
-                    history: history.clone(),
-                })?;
-            let k_new = p.im * b / v;
+            let roots: Vec<Complex64> = self
+                .roots(v, k)?
+                .into_iter()
+                .filter(|p| p.im > 0.0 || is_aperiodic(*p))
+                .collect();
+            if roots.is_empty() {
+                break;
+            }
+            let p = roots[assign_roots(refs, &roots)[mode]];
+            let k_new = if is_aperiodic(p) { 0.0 } else { p.im * b / v };
             history.push(k_new);
-            p_prev = p;
             // converged to round-off, or at the eigensolver's noise floor (the step has stopped
             // shrinking once below 1e-10): the damping derivatives need the root that tight
             let step = (k_new - k).abs();
             let scale = k.max(1e-8);
             if step <= 1e-13 * scale || (step <= 1e-10 * scale && step >= last_step) {
                 return Ok(Root {
-                    g: 2.0 * p.re / p.im,
+                    g: damping_of(p, v, b),
                     p,
                     k: k_new,
                     extrapolated: k_new > kmax,
@@ -214,7 +281,7 @@ impl PkProblem<'_> {
             last_step = step;
         }
         Err(FlutterError::NoConvergence {
-            mode,
+            mode: mode + 1,
             velocity: v,
             history,
         })
@@ -238,6 +305,14 @@ impl PkProblem<'_> {
 
     /// p-k sweep over `velocities` (increasing) with the flutter crossing refined.
     pub fn sweep(&self, velocities: &[f64]) -> Result<FlutterResult, FlutterError> {
+        Ok(self.sweep_roots(velocities)?.0)
+    }
+
+    /// The p-k sweep and every curve point's root p (rad/s), per mode and speed.
+    pub(crate) fn sweep_roots(
+        &self,
+        velocities: &[f64],
+    ) -> Result<(FlutterResult, Vec<Vec<Complex64>>), FlutterError> {
         self.check()?;
         if velocities.is_empty()
             || velocities.iter().any(|v| !(*v > 0.0))
@@ -256,8 +331,10 @@ impl PkProblem<'_> {
                 frequency_hz: Vec::new(),
                 k: Vec::new(),
                 extrapolated: Vec::new(),
+                aperiodic: Vec::new(),
             })
             .collect();
+        let mut roots: Vec<Vec<Complex64>> = vec![Vec::with_capacity(velocities.len()); n];
         let mut p_prev: Vec<Complex64> = self
             .omega_n
             .iter()
@@ -265,10 +342,11 @@ impl PkProblem<'_> {
             .collect();
         let mut flutter: Option<(f64, f64, usize)> = None;
         for (iv, &v) in velocities.iter().enumerate() {
+            // every mode starts from the previous speed's roots of all modes
+            let mut p_now = p_prev.clone();
             for m in 0..n {
-                // start from the previous speed's root
-                let r = self.track(m, v, p_prev[m])?;
-                p_prev[m] = r.p;
+                let r = self.track(m, v, &p_prev)?;
+                p_now[m] = r.p;
                 let c = &mut curves[m];
                 if iv > 0 && flutter.is_none() {
                     let (g0, v0) = (
@@ -276,40 +354,46 @@ impl PkProblem<'_> {
                         velocities[iv - 1],
                     );
                     if g0 < 0.0 && r.g >= 0.0 {
-                        flutter = Some(self.refine(m, (v0, g0), (v, r.g), r.p)?);
+                        flutter = Some(self.refine(m, (v0, g0), (v, r.g), &p_prev)?);
                     }
                 }
                 c.velocity_m_s.push(v);
                 c.damping_g.push(r.g);
-                c.frequency_hz.push(r.p.im / (2.0 * std::f64::consts::PI));
+                c.frequency_hz
+                    .push(r.p.im.max(0.0) / (2.0 * std::f64::consts::PI));
                 c.k.push(r.k);
                 c.extrapolated.push(r.extrapolated);
+                c.aperiodic.push(is_aperiodic(r.p));
+                roots[m].push(r.p);
             }
+            p_prev = p_now;
         }
-        Ok(FlutterResult {
-            flutter_speed_m_s: flutter.map(|f| f.0),
-            flutter_frequency_hz: flutter.map(|f| f.1),
-            flutter_mode: flutter.map(|f| f.2 + 1),
-            curves,
-        })
+        Ok((
+            FlutterResult {
+                flutter_speed_m_s: flutter.map(|f| f.0),
+                flutter_frequency_hz: flutter.map(|f| f.1),
+                flutter_mode: flutter.map(|f| f.2 + 1),
+                curves,
+            },
+            roots,
+        ))
     }
 
-    /// Secant refinement of g(V) = 0 between two bracketing speeds.
+    /// Secant refinement of g(V) = 0 between two bracketing speeds, every mode's branch followed
+    /// from the roots `refs` at the lower speed.
     fn refine(
         &self,
         mode: usize,
         lo: (f64, f64),
         hi: (f64, f64),
-        p_hint: Complex64,
+        refs: &[Complex64],
     ) -> Result<(f64, f64, usize), FlutterError> {
         let (mut a, mut b) = (lo, hi);
-        let mut p = p_hint;
         let mut best = (b.0, 0.0);
         for _ in 0..60 {
             let v = a.0 - a.1 * (b.0 - a.0) / (b.1 - a.1);
-            let r = self.track(mode, v, p)?;
-            p = r.p;
-            best = (v, r.p.im / (2.0 * std::f64::consts::PI));
+            let r = self.track(mode, v, refs)?;
+            best = (v, r.p.im.max(0.0) / (2.0 * std::f64::consts::PI));
             if r.g.abs() < 1e-10 || (b.0 - a.0).abs() < 1e-10 * v {
                 break;
             }

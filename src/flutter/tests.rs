@@ -158,3 +158,40 @@ fn typical_section_flutter_matches_k_method() {
         }
     }
 }
+
+/// Every p-k branch keeps its own root: at every speed no two modes report the same (g, f), also
+/// above the coalescence of the typical section's bending and torsion (the branch merging seen
+/// before the roots were assigned jointly). The bending branch turns aperiodic and its real root
+/// crosses zero at the static divergence speed U_D = b ω_α √(μ r_α² / (1 + 2a)) = √8 (steady
+/// thin-airfoil lift; exact at p = 0), found here by linear interpolation between speeds 0.05
+/// apart: 1e-3.
+#[test]
+fn branches_never_share_a_root() {
+    let s = section();
+    let ks: Vec<f64> = (0..=40).map(|i| 0.05 * i as f64).collect();
+    let (t, wn) = table(&s, &ks);
+    let pk = PkProblem {
+        omega_n: wn.to_vec(),
+        damping_ratio: 0.0,
+        table: &t,
+        density: 1.0,
+    };
+    let v: Vec<f64> = (1..=80).map(|i| 0.05 * i as f64).collect();
+    let r = pk.sweep(&v).unwrap();
+    for iv in 0..v.len() {
+        let (a, b) = (&r.curves[0], &r.curves[1]);
+        let da = (a.damping_g[iv] - b.damping_g[iv]).abs();
+        let df = (a.frequency_hz[iv] - b.frequency_hz[iv]).abs();
+        assert!(da + df > 1e-6, "V {}: modes 1 and 2 share a root", v[iv]);
+    }
+    let bend = &r.curves[0];
+    let iv = (1..v.len())
+        .find(|&i| bend.aperiodic[i] && bend.damping_g[i - 1] < 0.0 && bend.damping_g[i] >= 0.0)
+        .expect("an aperiodic root crosses zero");
+    let (g0, g1) = (bend.damping_g[iv - 1], bend.damping_g[iv]);
+    let v_div = v[iv - 1] + (v[iv] - v[iv - 1]) * (-g0) / (g1 - g0);
+    let u_d = (20.0f64 * 0.24 / (1.0 - 0.4)).sqrt();
+    println!("divergence: p-k {v_div:.5}, theory {u_d:.5}");
+    assert!((v_div - u_d).abs() < 1e-3 * u_d, "{v_div} vs {u_d}");
+    assert_eq!(bend.frequency_hz[iv], 0.0);
+}
