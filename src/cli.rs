@@ -71,10 +71,15 @@ pub enum Command {
     Aic {
         /// A study file or a surface file {"b_ref", "symmetry", "surfaces": [...]} (SI).
         input: PathBuf,
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         mach: f64,
         /// Reduced frequencies, comma separated.
-        #[arg(long, value_delimiter = ',', required = true)]
+        #[arg(
+            long,
+            value_delimiter = ',',
+            required = true,
+            allow_negative_numbers = true
+        )]
         k: Vec<f64>,
         /// Output file.
         #[arg(long)]
@@ -93,8 +98,9 @@ pub enum Command {
     /// Adjoint gradient of the gust RMS against finite differences (like paper Table 4).
     CheckGradient {
         study: PathBuf,
-        /// Design variables to check (t[i], span, sweep_c4, root_chord, tip_chord).
-        #[arg(long = "dv", default_values_t = ["t[9]".to_string(), "sweep_c4".to_string()])]
+        /// Design variables to check (t[i], span, sweep_c4, root_chord, tip_chord), one or more
+        /// after one `--dv` or each after its own.
+        #[arg(long = "dv", num_args = 1.., default_values_t = ["t[9]".to_string(), "sweep_c4".to_string()])]
         dv: Vec<String>,
         /// Print the rows as JSON (dv, adjoint, fd, fd_best, rel_error).
         #[arg(long)]
@@ -103,8 +109,8 @@ pub enum Command {
     /// Time the structural chain (assembly, modes, all sensitivities) of a study.
     Bench {
         study: PathBuf,
-        /// Repetitions (the median is reported).
-        #[arg(long, default_value_t = 20)]
+        /// Repetitions (the median is reported), at least 1.
+        #[arg(long, default_value_t = 20, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
         repeat: usize,
         /// Also time the study's whole optimization once (from scratch, no checkpoint).
         #[arg(long)]

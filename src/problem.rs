@@ -35,6 +35,9 @@ pub struct DesignProblem<'a> {
     pub settings: GustSettings,
     pub spec: DesignSpec,
     last: Option<(Evaluation, Option<FlutterState>)>,
+    /// The largest p-k damping up to the margin speed at every point evaluated (with a flutter
+    /// margin): the quantity the KS constraint bounds, for the report.
+    pub damping_peaks: Vec<(Vec<f64>, f64)>,
 }
 
 impl<'a> DesignProblem<'a> {
@@ -44,6 +47,7 @@ impl<'a> DesignProblem<'a> {
             settings,
             spec,
             last: None,
+            damping_peaks: Vec::new(),
         }
     }
 
@@ -67,6 +71,12 @@ impl Problem for DesignProblem<'_> {
         if let Some(m) = &self.spec.flutter {
             let (ks, weights, seed) = ev.flutter_damping(m).map_err(|e| format!("{e:#}"))?;
             ineq.push((ks - m.damping_max) / DAMPING_SCALE);
+            let peak = seed
+                .roots
+                .iter()
+                .map(|r| r.g)
+                .fold(f64::NEG_INFINITY, f64::max);
+            self.damping_peaks.push((x.to_vec(), peak));
             flutter = Some((weights, seed));
         }
         let v = Values {

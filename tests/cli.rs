@@ -74,7 +74,8 @@ fn run_writes_results_and_summary() {
     .unwrap();
     assert!(r["mass_kg"].as_f64().unwrap() > 1.6);
     let md = std::fs::read_to_string(dir.join("agard445_dlm_analysis/summary.md")).unwrap();
-    assert!(md.contains("| 1 | bending |"));
+    assert!(md.contains("| 1 | 1st bending |"), "{md}");
+    assert!(md.contains("| 2 | 1st torsion |"), "{md}");
     // the gust analysis: RMS of each output, in SI, and the PSD figure
     let outs = r["gust"]["outputs"].as_array().unwrap();
     assert_eq!(outs[0]["name"], "tip_te_w");

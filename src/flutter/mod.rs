@@ -39,7 +39,7 @@ pub enum FlutterError {
 fn last_k(history: &[f64]) -> String {
     let tail = &history[history.len().saturating_sub(4)..];
     tail.iter()
-        .map(|k| format!("{k:.6}"))
+        .map(|k| format!("{k:.10}"))
         .collect::<Vec<_>>()
         .join(", ")
 }
@@ -266,9 +266,11 @@ impl PkProblem<'_> {
             let k_new = if is_aperiodic(p) { 0.0 } else { p.im * b / v };
             history.push(k_new);
             // converged to round-off, or at the eigensolver's noise floor (the step has stopped
-            // shrinking once below 1e-10): the damping derivatives need the root that tight
+            // shrinking once below 1e-10): the damping derivatives need the root that tight. The
+            // noise of Im p scales with |p| (a heavily damped root has |p| ≫ Im p), so does the
+            // tolerance
             let step = (k_new - k).abs();
-            let scale = k.max(1e-8);
+            let scale = k.max(p.norm() * b / v).max(1e-8);
             if step <= 1e-13 * scale || (step <= 1e-10 * scale && step >= last_step) {
                 return Ok(Root {
                     g: damping_of(p, v, b),

@@ -22,6 +22,26 @@ pub enum Turbulence {
     },
 }
 
+impl std::fmt::Display for Turbulence {
+    /// The spectrum in words, as a report states it.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (name, sigma, l) = match self {
+            Turbulence::Dryden {
+                sigma_w_m_s,
+                scale_length_m,
+            } => ("Dryden", sigma_w_m_s, scale_length_m),
+            Turbulence::VonKarman {
+                sigma_w_m_s,
+                scale_length_m,
+            } => ("von Kármán", sigma_w_m_s, scale_length_m),
+        };
+        write!(
+            f,
+            "{name} turbulence, σ_w = {sigma:.4} m/s, scale length L = {l:.1} m"
+        )
+    }
+}
+
 /// von Kármán constant a = Γ(1/3) / (√π Γ(5/6)) = 1.33899 (quoted as 1.339), the value for which
 /// the spectrum integrates exactly to σ².
 const KARMAN_A: f64 = 1.338_985_279_065_280_3;

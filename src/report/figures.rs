@@ -45,7 +45,8 @@ impl Figure for ModeShapes {
                 .disable_mesh()
                 .x_desc(format!("x [{}]", self.unit))
                 .y_desc(format!("y [{}]", self.unit))
-                .label_style(("sans-serif", 12))
+                .label_style(("sans-serif", 14))
+                .axis_desc_style(("sans-serif", 14))
                 .draw()
                 .map_err(err)?;
             chart
@@ -115,8 +116,21 @@ impl Figure for VgVf<'_> {
             .cloned()
             .fold(0.0, f64::max);
         let pad = 0.05 * (gmax - gmin).max(1e-3);
+        let clipped_any = curves
+            .iter()
+            .flat_map(|c| c.damping_g.iter())
+            .any(|g| g.abs() > 1.0);
         for (panel, (ylo, yhi), ylabel, is_g) in [
-            (&top, (gmin - pad, gmax + pad), "damping g", true),
+            (
+                &top,
+                (gmin - pad, gmax + pad),
+                if clipped_any {
+                    "damping g (▲: beyond ±1, drawn at the edge)"
+                } else {
+                    "damping g"
+                },
+                true,
+            ),
             (&bottom, (0.0, 1.05 * fmax), "frequency [Hz]", false),
         ] {
             let mut chart = ChartBuilder::on(panel)
@@ -133,15 +147,34 @@ impl Figure for VgVf<'_> {
                 .configure_mesh()
                 .x_desc("velocity [m/s]")
                 .y_desc(ylabel)
-                .label_style(("sans-serif", 13))
+                .label_style(("sans-serif", 14))
+                .axis_desc_style(("sans-serif", 14))
                 .draw()
                 .map_err(err)?;
             for (i, c) in curves.iter().enumerate() {
                 let color = Palette99::pick(i).to_rgba();
                 let ys = if is_g { &c.damping_g } else { &c.frequency_hz };
+                // dampings beyond the axis are drawn on its edge and marked by a triangle
+                let clipped = |y: f64| y.clamp(ylo, yhi);
+                if is_g {
+                    chart
+                        .draw_series(
+                            c.velocity_m_s
+                                .iter()
+                                .zip(ys)
+                                .filter(|(_, y)| **y < ylo || **y > yhi)
+                                .map(|(v, y)| {
+                                    TriangleMarker::new((*v, clipped(*y)), 5, color.filled())
+                                }),
+                        )
+                        .map_err(err)?;
+                }
                 chart
                     .draw_series(LineSeries::new(
-                        c.velocity_m_s.iter().cloned().zip(ys.iter().cloned()),
+                        c.velocity_m_s
+                            .iter()
+                            .cloned()
+                            .zip(ys.iter().map(|y| clipped(*y))),
                         color.stroke_width(2),
                     ))
                     .map_err(err)?
@@ -164,12 +197,21 @@ impl Figure for VgVf<'_> {
                     .configure_series_labels()
                     .background_style(WHITE.mix(0.8))
                     .border_style(BLACK)
-                    .label_font(("sans-serif", 13))
+                    .label_font(("sans-serif", 14))
                     .draw()
                     .map_err(err)?;
             }
         }
         Ok(())
+    }
+}
+
+/// A unit squared as an axis label writes it: `m²`, but `(N m)²` for a compound unit.
+fn squared_unit(unit: &str) -> String {
+    if unit.contains(' ') {
+        format!("({unit})²")
+    } else {
+        format!("{unit}²")
     }
 }
 
@@ -226,12 +268,13 @@ impl Figure for PsdPlot {
                 .configure_mesh()
                 .x_desc("circular frequency [rad/s]")
                 .y_desc(format!(
-                    "PSD [{}² s/rad]",
-                    series.first().map_or("", |s| s.unit.as_str())
+                    "PSD [{} s/rad]",
+                    squared_unit(series.first().map_or("", |s| s.unit.as_str()))
                 ))
                 .x_label_formatter(&|v| format!("{v:.0e}"))
                 .y_label_formatter(&|v| format!("{v:.0e}"))
-                .label_style(("sans-serif", 12))
+                .label_style(("sans-serif", 14))
+                .axis_desc_style(("sans-serif", 14))
                 .draw()
                 .map_err(err)?;
             for (j, (s, pts)) in series.iter().zip(&curves).enumerate() {
@@ -252,7 +295,7 @@ impl Figure for PsdPlot {
                 .position(SeriesLabelPosition::UpperRight)
                 .background_style(WHITE.mix(0.8))
                 .border_style(BLACK)
-                .label_font(("sans-serif", 13))
+                .label_font(("sans-serif", 14))
                 .draw()
                 .map_err(err)?;
         }
@@ -289,10 +332,17 @@ impl Convergence {
         if o.fix_area {
             curves.push(("area / initial area".to_string(), it(&|h| h.area_m2 / a0)));
         }
-        if let Some((_, g_max)) = o.flutter_margin {
+        if let Some((factor, g_max)) = o.flutter_margin {
+            let scale = o.damping_scale;
+            if o.history.iter().all(|h| h.flutter_damping_peak.is_some()) {
+                curves.push((
+                    format!("largest p-k damping up to {factor} V: 1 + (g − g_max) / {scale}"),
+                    it(&|h| 1.0 + (h.flutter_damping_peak.unwrap_or(g_max) - g_max) / scale),
+                ));
+            }
             curves.push((
-                "flutter margin: 1 + (g_KS − g_max) / 0.1".to_string(),
-                it(&|h| 1.0 + (h.flutter_damping.unwrap_or(g_max) - g_max) / 0.1),
+                format!("its KS bound, the constraint: 1 + (g_KS − g_max) / {scale}"),
+                it(&|h| 1.0 + (h.flutter_damping.unwrap_or(g_max) - g_max) / scale),
             ));
         }
         Self {
@@ -318,19 +368,25 @@ impl Figure for Convergence {
         let ylo = pts().map(|p| p.1).fold(1.0, f64::min).min(0.9);
         let yhi = pts().map(|p| p.1).fold(1.0, f64::max).max(1.1);
         let pad = 0.05 * (yhi - ylo);
+        // headroom above the curves for the legend (one line of it per curve)
+        let legend = 0.07 * self.curves.len() as f64 * (yhi - ylo);
         let mut chart = ChartBuilder::on(area)
             .caption(&self.title, ("sans-serif", 20))
             .margin(12)
+            .margin_right(30)
             .x_label_area_size(35)
             .y_label_area_size(60)
-            .build_cartesian_2d(0.0..n, ylo - pad..yhi + pad)
+            .build_cartesian_2d(0.0..n, ylo - pad..yhi + pad + legend)
             .map_err(err)?;
         chart
             .configure_mesh()
             .x_desc("iteration")
             .y_desc("normalized value")
+            // integer iterations: at most one label per iteration
+            .x_labels((n as usize).clamp(1, 10) + 1)
             .x_label_formatter(&|v| format!("{v:.0}"))
-            .label_style(("sans-serif", 13))
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 14))
             .draw()
             .map_err(err)?;
         chart
@@ -357,7 +413,7 @@ impl Figure for Convergence {
             .position(SeriesLabelPosition::UpperRight)
             .background_style(WHITE.mix(0.8))
             .border_style(BLACK)
-            .label_font(("sans-serif", 13))
+            .label_font(("sans-serif", 14))
             .draw()
             .map_err(err)?;
         Ok(())
@@ -416,7 +472,7 @@ impl Figure for ThicknessMaps {
         let scale = |t: f64| (t - tmin) / (tmax - tmin).max(1e-300);
         for (cell, (title, polys, t)) in cells.iter().zip(&self.panels) {
             let mut chart = ChartBuilder::on(cell)
-                .caption(title, ("sans-serif", 17))
+                .caption(title, ("sans-serif", 18))
                 .margin(8)
                 .x_label_area_size(30)
                 .y_label_area_size(45)
@@ -427,7 +483,8 @@ impl Figure for ThicknessMaps {
                 .disable_mesh()
                 .x_desc(format!("x [{}] (flow →)", self.unit))
                 .y_desc(format!("y [{}]", self.unit))
-                .label_style(("sans-serif", 12))
+                .label_style(("sans-serif", 14))
+                .axis_desc_style(("sans-serif", 14))
                 .draw()
                 .map_err(err)?;
             chart
@@ -458,7 +515,8 @@ impl Figure for ThicknessMaps {
             .disable_mesh()
             .disable_y_axis()
             .x_desc(format!("element thickness [{}]", self.unit))
-            .label_style(("sans-serif", 12))
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 14))
             .draw()
             .map_err(err)?;
         let steps = 100;
@@ -529,7 +587,8 @@ impl Figure for LinePlot {
                 .x_desc(self.x_label.as_str())
                 .y_desc(self.y_label.as_str())
                 .y_label_formatter(&|v| format!("{v:.0e}"))
-                .label_style(("sans-serif", 13))
+                .label_style(("sans-serif", 14))
+                .axis_desc_style(("sans-serif", 14))
                 .draw()
                 .map_err(err)?;
             for (i, (label, p)) in self.series.iter().enumerate() {
@@ -547,7 +606,7 @@ impl Figure for LinePlot {
             c.configure_series_labels()
                 .background_style(WHITE.mix(0.8))
                 .border_style(BLACK)
-                .label_font(("sans-serif", 13))
+                .label_font(("sans-serif", 14))
                 .draw()
                 .map_err(err)?;
         } else {
@@ -561,7 +620,8 @@ impl Figure for LinePlot {
                 .x_desc(self.x_label.as_str())
                 .y_desc(self.y_label.as_str())
                 .y_label_formatter(&move |v| format!("{:.3}", f(*v)))
-                .label_style(("sans-serif", 13))
+                .label_style(("sans-serif", 14))
+                .axis_desc_style(("sans-serif", 14))
                 .draw()
                 .map_err(err)?;
             for (i, (label, p)) in self.series.iter().enumerate() {
@@ -579,7 +639,7 @@ impl Figure for LinePlot {
             c.configure_series_labels()
                 .background_style(WHITE.mix(0.8))
                 .border_style(BLACK)
-                .label_font(("sans-serif", 13))
+                .label_font(("sans-serif", 14))
                 .draw()
                 .map_err(err)?;
         }

@@ -1,6 +1,7 @@
 //! Reports: figures (plotters, PNG and SVG), VTK files and markdown, always written atomically.
 
 pub mod figures;
+pub mod folder;
 pub mod results;
 pub mod run;
 pub mod sweep;
@@ -22,13 +23,22 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         path.file_name().and_then(|n| n.to_str()).unwrap_or("out"),
         std::process::id()
     ));
-    std::fs::write(&tmp, bytes).with_context(|| format!("cannot write {}", tmp.display()))?;
-    std::fs::rename(&tmp, path)
-        .with_context(|| format!("cannot move {} into place", path.display()))?;
-    Ok(())
+    if path.is_dir() {
+        anyhow::bail!("{}: is a folder; give a file name", path.display());
+    }
+    // a failed write or rename leaves no temporary file behind
+    let done = std::fs::write(&tmp, bytes)
+        .with_context(|| format!("cannot write {}", tmp.display()))
+        .and_then(|()| {
+            std::fs::rename(&tmp, path)
+                .with_context(|| format!("cannot move {} into place", path.display()))
+        });
+    if done.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    done
 }
 
-/// Reads and parses a JSON file; errors name the file.
 /// Writes a run's `results.json` (pretty JSON of `results`) and `summary.md`, atomically.
 pub fn write_results(dir: &Path, results: &impl serde::Serialize, summary: &str) -> Result<()> {
     write_atomic(
@@ -38,9 +48,10 @@ pub fn write_results(dir: &Path, results: &impl serde::Serialize, summary: &str)
     write_atomic(&dir.join("summary.md"), summary.as_bytes())
 }
 
+/// Reads and parses a JSON file; errors name the file.
 pub fn read_json(path: &Path) -> Result<serde_json::Value> {
     let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+        crate::study::read_text(path).with_context(|| format!("cannot read {}", path.display()))?;
     serde_json::from_str(&text).with_context(|| format!("{}: not valid JSON", path.display()))
 }
 

@@ -14,8 +14,11 @@ use serde::{Deserialize, Serialize};
 pub struct ModeRow {
     pub mode: usize,
     pub frequency_hz: f64,
-    /// "bending" or "membrane".
+    /// "bending" or "membrane": the plate field the mode lives in.
     pub field: String,
+    /// What the mode looks like: "1st bending", "1st torsion", … ([`mode_names`]).
+    #[serde(default)]
+    pub shape: String,
     /// Vertical displacement of the wing-tip trailing edge in the mass-normalized mode, m/√kg.
     pub tip_te_w: f64,
 }
@@ -101,9 +104,13 @@ pub struct HistoryRow {
     #[serde(alias = "rms_tip_in")]
     pub rms_display: f64,
     pub area_m2: f64,
-    /// KS aggregate of the p-k dampings at the margin speed (with a flutter-margin constraint).
+    /// KS aggregate of the p-k dampings up to the margin speed (with a flutter-margin
+    /// constraint): the constrained value, above the largest damping by up to ln(n)/ρ.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub flutter_damping: Option<f64>,
+    /// The largest of those p-k dampings itself (what the margin means).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flutter_damping_peak: Option<f64>,
     pub violation: f64,
     pub kkt: f64,
     pub evaluations: usize,
@@ -143,6 +150,35 @@ pub struct OptimizationResults {
     #[serde(rename = "final")]
     pub final_: DesignSnapshot,
     pub history: Vec<HistoryRow>,
+    /// Flutter speeds of the initial and final designs (absent in results before this field).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flutter: Option<FlutterCheck>,
+}
+
+/// Where a design flutters: the p-k crossing, if any, below `searched_up_to_m_s`.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct FlutterPoint {
+    pub speed_m_s: Option<f64>,
+    pub frequency_hz: Option<f64>,
+    pub mode: Option<usize>,
+}
+
+/// The flutter speeds of an optimization's initial and final designs at the flight Mach number
+/// and density, and of the final design with more modes than the study retains (the margin
+/// constraint sees only the retained ones).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct FlutterCheck {
+    pub flight_speed_m_s: f64,
+    pub searched_up_to_m_s: f64,
+    pub initial: FlutterPoint,
+    #[serde(rename = "final")]
+    pub final_: FlutterPoint,
+    pub modes: usize,
+    /// The final design with `more_modes` modes, where the plate has that many.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub more_modes: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub final_more_modes: Option<FlutterPoint>,
 }
 
 fn default_ks_rho() -> f64 {
@@ -202,10 +238,52 @@ pub fn element_polygons(model: &PlateModel, to_m: f64) -> Vec<Vec<(f64, f64)>> {
         .collect()
 }
 
+/// English ordinal of n ≥ 1 ("1st", "2nd", "3rd", "4th", …, "11th", "21st").
+fn ordinal(n: usize) -> String {
+    let suffix = match (n % 10, n % 100) {
+        (_, 11..=13) => "th",
+        (1, _) => "st",
+        (2, _) => "nd",
+        (3, _) => "rd",
+        _ => "th",
+    };
+    format!("{n}{suffix}")
+}
+
+/// A name for each mode from its shape at the wing tip: torsion where the leading and trailing
+/// edges move in opposite directions (a nodal line along the span), bending where they move
+/// together; in-plane modes of the membrane field are "in-plane". Numbered in frequency order
+/// within each kind ("1st bending", "1st torsion", "2nd bending", …).
+pub fn mode_names(model: &PlateModel, modes: &Modes) -> Vec<String> {
+    let tip = crate::structure::Sampler::new(model, &[[0.0, 1.0], [1.0, 1.0]]);
+    let mut count = [0usize; 3];
+    modes
+        .modes
+        .iter()
+        .map(|m| {
+            let kind = match m.field {
+                Field::Membrane => 2,
+                Field::Bending => {
+                    let w = tip.sample(model, &m.shape);
+                    let (le, te) = (w[0][0], w[1][0]);
+                    usize::from(le * te < 0.0)
+                }
+            };
+            count[kind] += 1;
+            format!(
+                "{} {}",
+                ordinal(count[kind]),
+                ["bending", "torsion", "in-plane"][kind]
+            )
+        })
+        .collect()
+}
+
 impl ModeShapes {
     /// Builds the figure data; lengths are shown in `unit` (`to_m` metres each).
     pub fn new(model: &PlateModel, modes: &Modes, unit: &str, to_m: f64) -> Self {
         let polygons = element_polygons(model, to_m);
+        let names = mode_names(model, modes);
         let panels = modes
             .modes
             .iter()
@@ -228,12 +306,8 @@ impl ModeShapes {
                     .iter()
                     .fold(0.0f64, |a, v| a.max(v.abs()))
                     .max(f64::MIN_POSITIVE);
-                let kind = match m.field {
-                    Field::Bending => "bending field",
-                    Field::Membrane => "in-plane field",
-                };
                 (
-                    format!("Mode {}: {:.2} Hz ({kind})", i + 1, m.freq_hz()),
+                    format!("Mode {}: {:.2} Hz ({})", i + 1, m.freq_hz(), names[i]),
                     vals.iter().map(|v| v / peak).collect(),
                 )
             })

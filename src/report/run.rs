@@ -11,11 +11,63 @@ use std::path::Path;
 
 /// Markdown frequency table.
 pub fn frequency_table(modes: &[ModeRow]) -> String {
-    let mut t = String::from("| mode | field | frequency [Hz] |\n|---:|---|---:|\n");
+    let mut t = String::from("| mode | shape | frequency [Hz] |\n|---:|---|---:|\n");
     for r in modes {
-        t += &format!("| {} | {} | {:.3} |\n", r.mode, r.field, r.frequency_hz);
+        let shape = if r.shape.is_empty() {
+            &r.field
+        } else {
+            &r.shape
+        };
+        t += &format!("| {} | {shape} | {:.3} |\n", r.mode, r.frequency_hz);
     }
     t
+}
+
+/// One design's flutter point in words: speed as a multiple of the flight speed.
+fn flutter_point_words(
+    p: &crate::report::results::FlutterPoint,
+    fc: &crate::report::results::FlutterCheck,
+) -> String {
+    match (p.speed_m_s, p.frequency_hz, p.mode) {
+        (Some(v), Some(f), Some(m)) => format!(
+            "{:.3} × the flight speed ({v:.1} m/s, mode {m}, {f:.2} Hz)",
+            v / fc.flight_speed_m_s
+        ),
+        _ => format!(
+            "none below {:.2} × the flight speed ({:.1} m/s)",
+            fc.searched_up_to_m_s / fc.flight_speed_m_s,
+            fc.searched_up_to_m_s
+        ),
+    }
+}
+
+/// The flutter speeds of an optimization's initial and final designs (and of the final design
+/// with more modes), with a warning when the extra modes flutter below the margin.
+fn flutter_check_text(
+    fc: &crate::report::results::FlutterCheck,
+    margin: Option<(f64, f64)>,
+) -> String {
+    let mut md = format!(
+        "\nFlutter (p-k at the flight Mach number and density, {} modes): initial design {}; final design {}.",
+        fc.modes,
+        flutter_point_words(&fc.initial, fc),
+        flutter_point_words(&fc.final_, fc)
+    );
+    if let (Some(n), Some(p)) = (fc.more_modes, &fc.final_more_modes) {
+        md += &format!(
+            " With {n} modes the final design flutters at {}.",
+            flutter_point_words(p, fc)
+        );
+        if let (Some((factor, _)), Some(v)) = (margin, p.speed_m_s) {
+            if v < factor * fc.flight_speed_m_s {
+                md += &format!(
+                    " **That is below the margin of {factor} × the flight speed**: the margin constraint sees only the {} retained modes; retain more modes (structure.modes) and run again.",
+                    fc.modes
+                );
+            }
+        }
+    }
+    md + "\n"
 }
 
 /// One sentence on the flutter point of a sweep.
@@ -54,7 +106,7 @@ pub fn summary(r: &RunResults) -> String {
     );
     if let Some(g) = &r.gust {
         md += &format!(
-            "\n## Gust response\n\nM = {}, V = {} m/s, ρ = {} kg/m³, q = {:.1} Pa; {:?}; {} frequencies on a log grid up to {:.1} rad/s.\n\n| output | RMS | unit | N0 [Hz] |\n|---|---:|---|---:|\n",
+            "\n## Gust response\n\nM = {}, V = {} m/s, ρ = {} kg/m³, q = {:.1} Pa; {}; {} frequencies on a log grid up to {:.1} rad/s.\n\n| output | RMS | unit | N0 [Hz] |\n|---|---:|---|---:|\n",
             g.mach, g.velocity_m_s, g.density_kg_m3, g.q_inf_pa, g.turbulence, g.n_omega, g.omega_max_rad_s
         );
         for o in &g.outputs {
@@ -108,6 +160,9 @@ pub fn summary(r: &RunResults) -> String {
             f.area_m2,
             100.0 * (f.area_m2 / i.area_m2 - 1.0),
         );
+        if let Some(fc) = &o.flutter {
+            md += &flutter_check_text(fc, o.flutter_margin);
+        }
         if let Some(refr) = &o.reference {
             let opt = |v: Option<String>| v.unwrap_or_else(|| "–".into());
             md += &format!(

@@ -207,7 +207,8 @@ impl Figure for SweepPlot<'_> {
                 .x_desc(r.parameters[0].as_str())
                 .y_desc(format!("{name} [{unit}]"))
                 .y_label_formatter(&|v| format!("{v:.4}"))
-                .label_style(("sans-serif", 12))
+                .label_style(("sans-serif", 14))
+                .axis_desc_style(("sans-serif", 14))
                 .draw()
                 .map_err(err)?;
             for (gi, (key, cases)) in groups.iter().enumerate() {

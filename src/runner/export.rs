@@ -131,7 +131,7 @@ struct AicRow {
 /// surface file, for cross-checks against other DLM codes.
 pub fn aic(file: &Path, mach: f64, ks: &[f64], out: &Path) -> Result<()> {
     let text =
-        std::fs::read_to_string(file).with_context(|| format!("cannot read {}", file.display()))?;
+        crate::study::read_text(file).with_context(|| format!("cannot read {}", file.display()))?;
     let value: serde_json::Value = serde_json::from_str(&text)
         .with_context(|| format!("{}: not valid JSON", file.display()))?;
     let (dlm, b_ref) = if value.get("schema_version").is_some() {
@@ -147,6 +147,15 @@ pub fn aic(file: &Path, mach: f64, ks: &[f64], out: &Path) -> Result<()> {
                 aero.fidelity.builder().name()
             );
         };
+        let boxes = spec.n_chord.saturating_mul(spec.n_span);
+        crate::study::limits::check_bytes(
+            &format!(
+                "the influence matrices of {boxes} boxes at {} reduced frequencies",
+                ks.len()
+            ),
+            crate::study::limits::dlm_bytes(boxes, ks.len(), false) * 4.0,
+        )
+        .map_err(|e| anyhow::anyhow!("{}: aero.fidelity.dlm: {e}", file.display()))?;
         let dlm = spec
             .lattice(plate.planform())
             .map_err(|e| anyhow::anyhow!("{}: aero.fidelity.dlm: {e}", file.display()))?;
@@ -166,6 +175,20 @@ pub fn aic(file: &Path, mach: f64, ks: &[f64], out: &Path) -> Result<()> {
                 sf.b_ref
             );
         }
+        let boxes = sf
+            .surfaces
+            .iter()
+            .map(|s| s.n_chord.saturating_mul(s.n_span))
+            .fold(0usize, usize::saturating_add);
+        // the matrices, and their JSON text (about 50 bytes a number)
+        crate::study::limits::check_bytes(
+            &format!(
+                "the influence matrices of {boxes} boxes at {} reduced frequencies",
+                ks.len()
+            ),
+            crate::study::limits::dlm_bytes(boxes, ks.len(), false) * 4.0,
+        )
+        .map_err(|e| anyhow::anyhow!("{}: surfaces: {e}", file.display()))?;
         let dlm = gustkit_dlm::Dlm::new(sf.surfaces, sf.symmetry)
             .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
         (dlm, sf.b_ref)

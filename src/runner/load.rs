@@ -17,7 +17,7 @@ pub enum LoadedStudy {
 impl LoadedStudy {
     /// Reads a study file once, decides its kind and validates it as that kind.
     pub fn load(file: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(file)
+        let text = crate::study::read_text(file)
             .with_context(|| format!("{}: .: cannot read the file", file.display()))?;
         let doc: serde_json::Value = serde_json::from_str(&text)
             .map_err(|e| anyhow::anyhow!("{}: .: not valid JSON: {e}", file.display()))?;

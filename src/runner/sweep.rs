@@ -84,6 +84,19 @@ pub fn sweep(study: &Study, reports: &Path, resume: bool) -> Result<crate::runne
     use rayon::prelude::*;
     let cases = study.sweep_cases()?;
     let spec = study.spec.sweep.as_ref().expect("checked by sweep_cases");
+    // cases run in parallel, one per thread: their memory adds up
+    let at_once = rayon::current_num_threads().min(cases.len());
+    for case in &cases {
+        case.study.check_memory(at_once).map_err(|e| {
+            anyhow::anyhow!(
+                "{}: sweep case {}: {}: {}",
+                study.file.display(),
+                case.index,
+                e.path,
+                e.reason
+            )
+        })?;
+    }
     let dir = study.report_dir(reports).join("sweep");
     std::fs::create_dir_all(dir.join("cases"))
         .with_context(|| format!("cannot create the sweep folder {}", dir.display()))?;

@@ -5,6 +5,8 @@
 //! Lengths are given in `length_unit` (m, in or ft) and converted to SI here; angles in degrees;
 //! material constants in SI with the unit in the field name.
 
+pub mod limits;
+pub mod ranges;
 pub(crate) mod schema;
 pub mod sweep;
 
@@ -64,6 +66,37 @@ pub fn check_header(file: &Path, schema_version: u32, name: &str) -> Result<(), 
     Ok(())
 }
 
+/// Reads a text input file; a leading UTF-8 byte-order mark (as some Windows editors write) is
+/// dropped, since JSON parsers refuse it.
+pub fn read_text(file: &Path) -> std::io::Result<String> {
+    let text = std::fs::read_to_string(file)?;
+    Ok(match text.strip_prefix('\u{feff}') {
+        Some(rest) => rest.to_string(),
+        None => text,
+    })
+}
+
+/// A JSON decoding message in words a study author reads: serde's "trailing characters" inside a
+/// field means a list with more entries than the field takes (a point is [ξ, η]).
+pub fn explain_json_error(path: &str, reason: &str) -> String {
+    match reason.strip_prefix("trailing characters") {
+        Some(at) if path != "." && !path.is_empty() => {
+            format!("more entries than this field takes{at}")
+        }
+        Some(at) => format!("text after the end of the JSON document{at}"),
+        None => reason.to_string(),
+    }
+}
+
+/// An error message without its leading field name (`clamp: …` → `…`), where the JSON path
+/// already names the field.
+fn without_field(msg: &str) -> String {
+    match msg.split_once(": ") {
+        Some((head, rest)) if !head.contains(' ') => rest.to_string(),
+        _ => msg.to_string(),
+    }
+}
+
 /// A loaded, validated study.
 #[derive(Clone, Debug)]
 pub struct Study {
@@ -74,7 +107,7 @@ pub struct Study {
 impl Study {
     /// Reads and validates a study file.
     pub fn load(file: &Path) -> Result<Self, StudyError> {
-        let text = std::fs::read_to_string(file).map_err(|e| StudyError {
+        let text = read_text(file).map_err(|e| StudyError {
             file: file.to_path_buf(),
             path: ".".into(),
             reason: format!("cannot read the file: {e}"),
@@ -87,11 +120,12 @@ impl Study {
         let de = &mut serde_json::Deserializer::from_str(text);
         let spec: StudyFile = serde_path_to_error::deserialize(de).map_err(|e| {
             let path = e.path().to_string();
-            let inner = e.into_inner();
+            let path = if path.is_empty() { ".".into() } else { path };
+            let reason = explain_json_error(&path, &e.into_inner().to_string());
             StudyError {
                 file: file.to_path_buf(),
-                path: if path.is_empty() { ".".into() } else { path },
-                reason: inner.to_string(),
+                path,
+                reason,
             }
         })?;
         let study = Self {
@@ -113,6 +147,7 @@ impl Study {
     fn validate(&self) -> Result<(), StudyError> {
         let s = &self.spec;
         check_header(&self.file, s.schema_version, &s.name)?;
+        self.check_ranges()?;
         self.planform()?;
         self.airfoil()?;
         self.material()?;
@@ -126,7 +161,32 @@ impl Study {
                 format!("must lie in [0, 1) (got {})", st.damping_ratio),
             ));
         }
-        self.build_model()?;
+        // sizes before anything large is built
+        if let Some(g) = &self.spec.gust {
+            if g.points > limits::MAX_GUST_POINTS {
+                return Err(self.err(
+                    "gust.points",
+                    format!(
+                        "at most {} frequency points (got {}): the PSD integral converges long before",
+                        limits::MAX_GUST_POINTS,
+                        g.points
+                    ),
+                ));
+            }
+        }
+        // the plate first (the mode count below needs its degrees of freedom), then everything
+        let footprints = self.memory_footprints(self.spec.optimization.is_some());
+        limits::check(self, &footprints[..1], 1, "the modal analysis")?;
+        let plate = self.build_model()?;
+        let fields = self.mode_fields();
+        let dofs: usize = fields.iter().map(|f| plate.n_dofs(*f)).sum();
+        if st.modes > dofs {
+            return Err(self.err(
+                "structure.modes",
+                format!("the plate has {dofs} degrees of freedom in the retained fields, fewer than the {} modes asked for", st.modes),
+            ));
+        }
+        self.check_memory(1)?;
         if self.spec.aero.is_some() || self.spec.flight.is_some() {
             self.flight_condition()?;
             let aero = self
@@ -226,10 +286,13 @@ impl Study {
                 format!("must be positive (got {})", o.rms_max),
             ));
         }
-        if !(o.tolerance > 0.0) || o.max_iterations == 0 {
+        if o.max_iterations == 0 {
+            return Err(self.err("optimization.max_iterations", "must be at least 1"));
+        }
+        if !(o.tolerance > 0.0) {
             return Err(self.err(
                 "optimization.tolerance",
-                "tolerance must be positive and max_iterations at least 1",
+                format!("must be positive (got {})", o.tolerance),
             ));
         }
         if let Some(m) = &o.flutter_margin {
@@ -335,10 +398,14 @@ impl Study {
                 ),
             ));
         }
-        if f.points < 2 {
+        if f.points < 2 || f.points > limits::MAX_FLUTTER_POINTS {
             return Err(self.err(
                 "flutter.points",
-                format!("need at least 2 speeds (got {})", f.points),
+                format!(
+                    "need 2 to {} speeds (got {}); the flutter crossing is refined between speeds, so a few hundred suffice",
+                    limits::MAX_FLUTTER_POINTS,
+                    f.points
+                ),
             ));
         }
         Ok((0..f.points)
@@ -574,7 +641,7 @@ impl Study {
                 crate::structure::mesh::MeshError::Empty => "structure.mesh",
                 _ => "structure.clamp",
             };
-            self.err(path, e.to_string())
+            self.err(path, without_field(&e.to_string()))
         })
     }
 
@@ -631,7 +698,18 @@ impl Study {
                 crate::structure::model::ModelError::Material(_) => "material".into(),
                 _ => "wing".into(),
             };
-            self.err(&path, e.to_string())
+            let reason = match &e {
+                crate::structure::model::ModelError::Thickness { value, .. } => {
+                    let unit = self.spec.length_unit;
+                    format!(
+                        "must be positive and finite (got {} {})",
+                        ranges::show(value / unit.to_m()),
+                        unit.name()
+                    )
+                }
+                _ => without_field(&e.to_string()),
+            };
+            self.err(&path, reason)
         })
     }
 

@@ -5,6 +5,9 @@ use super::schema::SweepCombine;
 use super::{Study, StudyError};
 use serde_json::Value;
 
+/// The most cases of one sweep.
+pub const MAX_CASES: usize = 10_000;
+
 /// One case of a sweep: the parameter values and the study they give.
 #[derive(Clone, Debug)]
 pub struct SweepCase {
@@ -86,6 +89,19 @@ impl Study {
             ));
         }
         let lens: Vec<usize> = sweep.parameters.iter().map(|p| p.values.len()).collect();
+        let n_cases = match sweep.combine {
+            SweepCombine::Zip => lens[0],
+            SweepCombine::Grid => lens
+                .iter()
+                .try_fold(1usize, |a, &l| a.checked_mul(l))
+                .unwrap_or(usize::MAX),
+        };
+        if n_cases > MAX_CASES {
+            return Err(self.err(
+                "sweep.parameters",
+                format!("the sweep has {n_cases} cases, more than {MAX_CASES}: use fewer values"),
+            ));
+        }
         let combos: Vec<Vec<f64>> = match sweep.combine {
             SweepCombine::Zip => {
                 if lens.iter().any(|&l| l != lens[0]) {

@@ -9,7 +9,7 @@ use crate::flutter::{FlutterResult, PkProblem};
 use crate::gust::{self, FrequencyGrid, GustProblem};
 use crate::kind::StudyKind;
 use crate::report::figures::PsdSeries;
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use gustkit_core::{Aerodynamics, FlightCondition, GafTable, ModalSurface};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -140,9 +140,9 @@ fn analyze(
 pub fn run(s: &SectionStudyFile, reports: &Path) -> Result<()> {
     let t0 = Instant::now();
     let spec = &s.typical_section;
-    let dir = reports.join(&s.name);
-    std::fs::create_dir_all(&dir)
-        .with_context(|| format!("cannot create the run folder {}", dir.display()))?;
+    let final_dir = reports.join(&s.name);
+    let folder = crate::report::folder::RunFolder::begin(&final_dir, false)?;
+    let dir = folder.path().to_path_buf();
     let st = &spec.structure;
     let (omega_n, shapes) = super::modes(st, spec.flight.density_kg_m3);
     let b = 0.5 * st.chord_m;
@@ -200,7 +200,8 @@ pub fn run(s: &SectionStudyFile, reports: &Path) -> Result<()> {
         run_time_s: t0.elapsed().as_secs_f64(),
     };
     super::render(&dir, &results)?;
-    println!("report written to {}", dir.display());
+    folder.commit()?;
+    println!("report written to {}", final_dir.display());
     Ok(())
 }
 

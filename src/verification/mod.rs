@@ -12,7 +12,7 @@ pub mod table2;
 pub use report::{render, summary, CfdResults};
 pub use schema::{CfdSpec, CfdStudyFile};
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use gustkit_cfd::residual::{Euler, State};
 use std::path::Path;
 use std::time::Instant;
@@ -36,9 +36,9 @@ pub(crate) fn build(c: &CfdSpec, base: &Path, q_inf: State<f64>) -> Result<Euler
 /// `gustkit run` of a CFD verification study.
 pub fn run(s: &CfdStudyFile, reports: &Path) -> Result<()> {
     let file = s.file.as_path();
-    let dir = reports.join(&s.name);
-    std::fs::create_dir_all(&dir)
-        .with_context(|| format!("cannot create the run folder {}", dir.display()))?;
+    let final_dir = reports.join(&s.name);
+    let folder = crate::report::folder::RunFolder::begin(&final_dir, false)?;
+    let dir = folder.path().to_path_buf();
     let t0 = Instant::now();
     let mut cells = 0;
     let steady = match &s.cfd.steady_gust {
@@ -116,6 +116,7 @@ pub fn run(s: &CfdStudyFile, reports: &Path) -> Result<()> {
         run_time_s: t0.elapsed().as_secs_f64(),
     };
     render(&dir, &results)?;
-    println!("report written to {}", dir.display());
+    folder.commit()?;
+    println!("report written to {}", final_dir.display());
     Ok(())
 }

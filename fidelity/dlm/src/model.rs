@@ -372,7 +372,8 @@ impl Dlm {
         let hw = Self::force_weights(&boxes, modes);
         // − Re Σ_k Σ_ji D_ji(k) lc_ji(k), every seed contracted with the same dD_ji
         let zero = || vec![Dual::<N>::cst(0.0); ns];
-        let d_part: Vec<Dual<N>> = (0..n)
+        // rows in parallel, summed in row order: the same bits on every run and thread count
+        let rows: Vec<Vec<Dual<N>>> = (0..n)
             .into_par_iter()
             .map(|j| {
                 let mut acc = zero();
@@ -384,9 +385,10 @@ impl Dlm {
                 });
                 acc
             })
-            .reduce(zero, |a, b| {
-                a.into_iter().zip(b).map(|(x, y)| x + y).collect()
-            });
+            .collect();
+        let d_part: Vec<Dual<N>> = rows.into_iter().fold(zero(), |a, b| {
+            a.into_iter().zip(b).map(|(x, y)| x + y).collect()
+        });
         let mut out = Vec::with_capacity(ns);
         for (mut lag, seed) in d_part.into_iter().zip(frozen) {
             for f in seed {

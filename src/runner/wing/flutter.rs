@@ -8,7 +8,7 @@ use std::path::Path;
 
 /// `gustkit flutter`: p-k sweep of a study at its flight Mach number and density.
 pub fn flutter(study: &Study, json: bool, reports: &Path) -> Result<()> {
-    let (doc, r, velocities) = flutter_analysis(study, reports)?;
+    let (doc, r, velocities) = flutter_analysis(study, &study.report_dir(reports))?;
     if json {
         println!("{}", serde_json::to_string_pretty(&doc)?);
         return Ok(());
@@ -21,10 +21,10 @@ pub fn flutter(study: &Study, json: bool, reports: &Path) -> Result<()> {
     Ok(())
 }
 
-/// The p-k sweep of a study with its V-g/V-f figures and `flutter.json`.
+/// The p-k sweep of a study with its V-g/V-f figures and `flutter.json` in `dir`.
 pub(crate) fn flutter_analysis(
     study: &Study,
-    reports: &Path,
+    dir: &Path,
 ) -> Result<(serde_json::Value, crate::flutter::FlutterResult, Vec<f64>)> {
     let file = &study.file;
     let velocities = study.flutter_velocities()?;
@@ -37,9 +37,8 @@ pub(crate) fn flutter_analysis(
     let r = pk
         .sweep(&velocities)
         .map_err(|e| anyhow::anyhow!("{}: flutter: {e}", file.display()))?;
-    let dir = study.report_dir(reports);
     save_figure(
-        &dir,
+        dir,
         "flutter_vg",
         &report::figures::VgVf {
             result: &r,

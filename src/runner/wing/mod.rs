@@ -44,6 +44,7 @@ pub fn analyze(study: &Study) -> Result<(PlateModel, Modes, ModalSummary)> {
     let modes = modal::solve(&model, st.modes, st.damping_ratio, &study.mode_fields())
         .with_context(|| format!("{}: modal analysis", study.file.display()))?;
     let tip = Sampler::new(&model, &[[1.0, 1.0]]);
+    let names = crate::report::results::mode_names(&model, &modes);
     let summary = ModalSummary {
         study: study.spec.name.clone(),
         mass_kg: model.mass(),
@@ -57,6 +58,7 @@ pub fn analyze(study: &Study) -> Result<(PlateModel, Modes, ModalSummary)> {
                 mode: i + 1,
                 frequency_hz: m.freq_hz(),
                 field: field_name(m.field).to_string(),
+                shape: names[i].clone(),
                 tip_te_w: tip.sample(&model, &m.shape)[0][0],
             })
             .collect(),
@@ -111,10 +113,10 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
     let study = study.clone();
     let t0 = Instant::now();
     let (model, modes, summary) = analyze(&study)?;
-    let dir = study.report_dir(reports);
+    let final_dir = study.report_dir(reports);
     // fail early, before any long computation, when the run folder cannot be written
-    std::fs::create_dir_all(&dir)
-        .with_context(|| format!("cannot create the run folder {}", dir.display()))?;
+    let folder = crate::report::folder::RunFolder::begin(&final_dir, resume)?;
+    let dir = folder.path().to_path_buf();
     let vtk = report::vtk::plate_modes(
         &model,
         &modes,
@@ -128,7 +130,7 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
     };
     let flutter = match study.spec.flutter {
         Some(_) => {
-            let (doc, r, velocities) = flutter::flutter_analysis(&study, reports)?;
+            let (doc, r, velocities) = flutter::flutter_analysis(&study, &dir)?;
             flutter::print_flutter(&study, &r, &velocities, &doc);
             Some(FlutterSummary {
                 mach: doc["mach"].as_f64().unwrap_or(f64::NAN),
@@ -159,7 +161,8 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
         run_time_s: t0.elapsed().as_secs_f64(),
     };
     report::run::render(&dir, &results)?;
-    println!("report written to {}", dir.display());
+    folder.commit()?;
+    println!("report written to {}", final_dir.display());
     Ok(match &results.optimization {
         Some(o) if !o.converged => crate::runner::Outcome::GoalNotReached(format!(
             "the optimization did not converge: {} after {} iterations",

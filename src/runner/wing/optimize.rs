@@ -5,7 +5,9 @@ use super::gust::psd_series;
 use super::unit_label;
 use crate::flutter::margin::{DAMPING_SCALE, KS_RHO};
 use crate::optim::{Checkpointing, Control, Executor};
-use crate::report::results::{element_polygons, DesignSnapshot, HistoryRow, OptimizationResults};
+use crate::report::results::{
+    element_polygons, DesignSnapshot, FlutterCheck, FlutterPoint, HistoryRow, OptimizationResults,
+};
 use crate::report::write_atomic;
 use crate::study::Study;
 use anyhow::{Context, Result};
@@ -89,6 +91,62 @@ pub(crate) fn fnv(text: &str) -> u64 {
     })
 }
 
+/// The part of a study that defines its optimization problem: everything but what only labels
+/// the run (description, reference), decides when it stops (max_iterations, tolerance) or belongs
+/// to other analyses (the flutter sweep, the sweep section). A checkpoint resumes only when this
+/// is unchanged.
+fn defining_spec(study: &Study) -> Result<serde_json::Value> {
+    let mut v = serde_json::to_value(&study.spec)?;
+    if let Some(m) = v.as_object_mut() {
+        for key in ["description", "flutter", "sweep"] {
+            m.remove(key);
+        }
+        if let Some(o) = m.get_mut("optimization").and_then(|o| o.as_object_mut()) {
+            for key in ["max_iterations", "tolerance", "reference"] {
+                o.remove(key);
+            }
+        }
+    }
+    Ok(v)
+}
+
+/// The JSON paths at which `a` and `b` differ (below `at`).
+fn json_differences(a: &serde_json::Value, b: &serde_json::Value, at: &str) -> Vec<String> {
+    use serde_json::Value;
+    let join = |k: &str| {
+        if at.is_empty() {
+            k.to_string()
+        } else {
+            format!("{at}.{k}")
+        }
+    };
+    match (a, b) {
+        (Value::Object(x), Value::Object(y)) => {
+            let mut keys: Vec<&String> = x.keys().chain(y.keys()).collect();
+            keys.sort();
+            keys.dedup();
+            keys.into_iter()
+                .flat_map(|k| match (x.get(k), y.get(k)) {
+                    (Some(p), Some(q)) => json_differences(p, q, &join(k)),
+                    _ => vec![join(k)],
+                })
+                .collect()
+        }
+        (Value::Array(x), Value::Array(y)) if x.len() == y.len() => x
+            .iter()
+            .zip(y)
+            .enumerate()
+            .flat_map(|(i, (p, q))| json_differences(p, q, &format!("{at}[{i}]")))
+            .collect(),
+        _ if a == b => Vec::new(),
+        _ => vec![if at.is_empty() {
+            ".".into()
+        } else {
+            at.to_string()
+        }],
+    }
+}
+
 /// A design as the report shows it: values, planform, thickness map and the PSD of `output`.
 fn snapshot(
     study: &Study,
@@ -164,32 +222,54 @@ pub fn optimize(
         tolerance: o.tolerance,
         ..Default::default()
     };
-    // the study defines the problem; its iteration limit does not (a run may be continued with a
-    // higher one)
-    let mut defining = study.spec.clone();
-    if let Some(o) = defining.optimization.as_mut() {
-        o.max_iterations = 0;
-    }
+    let defining = defining_spec(study)?;
     let problem_id = format!(
         "{}:{:016x}",
         study.spec.name,
         fnv(&serde_json::to_string(&defining)?)
     );
+    let study_copy = dir.join("checkpoint_study.json");
     let checkpoint = if resume {
         let path = dir.join("checkpoint.json");
-        let text = std::fs::read_to_string(&path)
-            .with_context(|| format!("--resume: cannot read {}", path.display()))?;
+        let text = std::fs::read_to_string(&path).with_context(|| {
+            format!(
+                "--resume: cannot read {} (no interrupted run to continue: run without --resume)",
+                path.display()
+            )
+        })?;
         let cp: crate::optim::Checkpoint = serde_json::from_str(&text).with_context(|| {
             format!(
                 "--resume: {} is not a gustkit checkpoint (corrupted?)",
                 path.display()
             )
         })?;
+        if cp.problem_id != problem_id {
+            let changed = std::fs::read_to_string(&study_copy)
+                .ok()
+                .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+                .map(|old| json_differences(&old, &defining, ""))
+                .filter(|d| !d.is_empty());
+            let what = match changed {
+                Some(d) => format!(
+                    "the study changed since the checkpoint was written: {}",
+                    d.iter().take(6).cloned().collect::<Vec<_>>().join(", ")
+                ),
+                None => "the checkpoint belongs to another problem".to_string(),
+            };
+            anyhow::bail!(
+                "{}: --resume: {what}; only the description, the reference, max_iterations, tolerance, the flutter sweep and the sweep section may change between a run and its resumption. Run without --resume to start over",
+                study.file.display()
+            );
+        }
         if !quiet {
             println!("resuming from iteration {}", cp.iteration);
         }
         Some(cp)
     } else {
+        write_atomic(
+            &study_copy,
+            serde_json::to_string_pretty(&defining)?.as_bytes(),
+        )?;
         None
     };
     let bar = if quiet {
@@ -227,27 +307,57 @@ pub fn optimize(
     let info = info.map_err(|e| anyhow::anyhow!("optimization: {e}"))?;
     let wall_time_s = t0.elapsed().as_secs_f64();
     let ev = crate::pipeline::evaluate(study, &settings, &info.x).context("final design")?;
+    // the largest p-k damping of each iterate (re-evaluated for iterates of an earlier session)
+    let mut peaks = std::mem::take(&mut problem.damping_peaks);
+    let mut peak_at = |x: &[f64]| -> Result<Option<f64>> {
+        let Some(m) = &spec.flutter else {
+            return Ok(None);
+        };
+        if let Some((_, g)) = peaks.iter().rev().find(|(px, _)| px.as_slice() == x) {
+            return Ok(Some(*g));
+        }
+        let e = crate::pipeline::evaluate(study, &settings, x)?;
+        let (_, _, seed) = e.flutter_damping(m)?;
+        let g = seed
+            .roots
+            .iter()
+            .map(|r| r.g)
+            .fold(f64::NEG_INFINITY, f64::max);
+        peaks.push((x.to_vec(), g));
+        Ok(Some(g))
+    };
     let history = info
         .history
         .iter()
-        .map(|it| HistoryRow {
-            iteration: it.iteration,
-            mass_kg: it.values.f * ev0.mass_kg,
-            rms_display: (it.values.ineq[0] + 1.0) * rms_limit * unit_scale,
-            area_m2: it
-                .values
-                .eq
-                .first()
-                .map_or(ev0.area_m2, |h| (h + 1.0) * ev0.area_m2),
-            flutter_damping: match (it.values.ineq.get(1), &spec.flutter) {
-                (Some(c), Some(m)) => Some(m.damping_max + c * DAMPING_SCALE),
-                _ => None,
-            },
-            violation: it.violation,
-            kkt: it.kkt,
-            evaluations: it.evaluations,
+        .map(|it| -> Result<HistoryRow> {
+            Ok(HistoryRow {
+                iteration: it.iteration,
+                mass_kg: it.values.f * ev0.mass_kg,
+                rms_display: (it.values.ineq[0] + 1.0) * rms_limit * unit_scale,
+                area_m2: it
+                    .values
+                    .eq
+                    .first()
+                    .map_or(ev0.area_m2, |h| (h + 1.0) * ev0.area_m2),
+                flutter_damping: match (it.values.ineq.get(1), &spec.flutter) {
+                    (Some(c), Some(m)) => Some(m.damping_max + c * DAMPING_SCALE),
+                    _ => None,
+                },
+                flutter_damping_peak: peak_at(&it.x)?,
+                violation: it.violation,
+                kkt: it.kkt,
+                evaluations: it.evaluations,
+            })
         })
-        .collect();
+        .collect::<Result<Vec<_>>>()?;
+    // the flutter check reports; it does not fail a finished optimization
+    let flutter = match flutter_check(study, &ev0, &ev) {
+        Ok(f) => Some(f),
+        Err(e) => {
+            eprintln!("warning: the flutter check of the initial and final designs failed: {e:#}");
+            None
+        }
+    };
     if !quiet {
         println!(
         "{} after {} iterations ({} evaluations, {:.1} s): mass {:.4} → {:.4} kg ({:+.1} %), RMS {:.4} → {:.4} {unit}",
@@ -287,5 +397,70 @@ pub fn optimize(
         initial: snapshot(study, &ev0, output, unit_scale),
         final_: snapshot(study, &ev, output, unit_scale),
         history,
+        flutter,
+    })
+}
+
+/// Speeds of the flutter check: from a fifth of the flight speed up to this factor of it.
+const FLUTTER_CHECK_FACTOR: f64 = 2.0;
+
+/// Where the p-k sweep of a modal model with its GAF table crosses zero damping, from a fifth of
+/// the flight speed up to `v_max`.
+fn flutter_point(
+    modes: &crate::structure::Modes,
+    table: &gustkit_core::GafTable,
+    flight: &gustkit_core::FlightCondition,
+    v_max: f64,
+) -> Result<FlutterPoint> {
+    let v = flight.velocity;
+    let speeds: Vec<f64> = (0..=90)
+        .map(|i| v * 0.2 + (v_max - 0.2 * v) * i as f64 / 90.0)
+        .collect();
+    let r = crate::flutter::PkProblem::new(modes, table, flight.density)
+        .sweep(&speeds)
+        .map_err(|e| anyhow::anyhow!("flutter check: {e}"))?;
+    Ok(FlutterPoint {
+        speed_m_s: r.flutter_speed_m_s,
+        frequency_hz: r.flutter_frequency_hz,
+        mode: r.flutter_mode,
+    })
+}
+
+/// The flutter speeds of the initial and final designs, and of the final design with two more
+/// modes than the study retains (when the plate has them).
+fn flutter_check(
+    study: &Study,
+    ev0: &crate::pipeline::Evaluation,
+    ev: &crate::pipeline::Evaluation,
+) -> Result<FlutterCheck> {
+    let flight = &ev.aero.flight;
+    let v_max = FLUTTER_CHECK_FACTOR * flight.velocity;
+    let st = &study.spec.structure;
+    let dofs: usize = study
+        .mode_fields()
+        .iter()
+        .map(|f| ev.plate.n_dofs(*f))
+        .sum();
+    let more = (st.modes + 2).min(dofs);
+    let final_more_modes = if more > st.modes {
+        let wider =
+            crate::structure::modal::solve(&ev.plate, more, st.damping_ratio, &study.mode_fields())
+                .context("the final design with more modes")?;
+        let table = ev
+            .aero
+            .gafs(&ev.plate, &wider)
+            .map_err(|e| anyhow::anyhow!("the final design with more modes: aero: {e}"))?;
+        Some(flutter_point(&wider, &table, flight, v_max)?)
+    } else {
+        None
+    };
+    Ok(FlutterCheck {
+        flight_speed_m_s: flight.velocity,
+        searched_up_to_m_s: v_max,
+        initial: flutter_point(&ev0.modes, &ev0.table, &ev0.aero.flight, v_max)?,
+        final_: flutter_point(&ev.modes, &ev.table, flight, v_max)?,
+        modes: st.modes,
+        more_modes: final_more_modes.as_ref().map(|_| more),
+        final_more_modes,
     })
 }

@@ -1,0 +1,325 @@
+//! The first-hour bad-input cases of the reliability issue, by category, through the command line:
+//! each is refused at load with exit status 1 and one line `error: FILE: JSON.PATH: reason` that
+//! names the field and, for lengths, speaks the file's unit — never a panic (101), an abort (134)
+//! or a kill (137), never a backtrace (even with RUST_BACKTRACE=1), and nothing is written.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn flagship() -> serde_json::Value {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json");
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn scratch() -> PathBuf {
+    let d = std::env::temp_dir().join(format!("gustkit-bad-input-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Sets the value at a dotted path (object keys or array indices).
+fn set(v: &mut serde_json::Value, path: &str, value: serde_json::Value) {
+    let mut node = v;
+    let keys: Vec<&str> = path.split('.').collect();
+    for key in &keys[..keys.len() - 1] {
+        node = match key.parse::<usize>() {
+            Ok(i) => &mut node[i],
+            Err(_) => &mut node[*key],
+        };
+    }
+    let last = keys[keys.len() - 1];
+    match last.parse::<usize>() {
+        Ok(i) => node[i] = value,
+        Err(_) => node[last] = value,
+    }
+}
+
+/// Runs `gustkit <command> FILE` on the flagship edited at `path` and checks the refusal.
+fn refused(command: &str, path: &str, value: serde_json::Value, want_path: &str, want: &[&str]) {
+    let dir = scratch();
+    let mut v = flagship();
+    set(&mut v, path, value);
+    let name = format!("case_{}", want_path.replace(['.', '[', ']'], "_"));
+    v["name"] = name.clone().into();
+    let file = dir.join(format!("{name}.json"));
+    std::fs::write(&file, v.to_string()).unwrap();
+    let reports = dir.join("reports");
+    let o = Command::new(env!("CARGO_BIN_EXE_gustkit"))
+        .env("RUST_BACKTRACE", "1")
+        .args([command, file.to_str().unwrap(), "--reports"])
+        .arg(&reports)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{path}: {err}");
+    let line = err.trim();
+    assert_eq!(
+        line.lines().count(),
+        1,
+        "{path}: one line, no backtrace: {err}"
+    );
+    let head = format!("error: {}: {want_path}: ", file.display());
+    assert!(
+        line.starts_with(&head),
+        "{path}: want '{head}…', got {line}"
+    );
+    for w in want {
+        assert!(line.contains(w), "{path}: want '{w}' in {line}");
+    }
+    assert!(
+        !reports.join(&name).exists(),
+        "{path}: a refused study writes nothing"
+    );
+}
+
+/// Sizes that would exhaust the machine: refused before allocating, with the estimate.
+#[test]
+fn sizes_beyond_the_machine() {
+    refused(
+        "run",
+        "structure.mesh.refine",
+        50.into(),
+        "structure.mesh.refine",
+        &["251001 nodes", "GB", "limit of 12 GB"],
+    );
+    refused(
+        "run",
+        "aero.fidelity.dlm.n_chord",
+        100000.into(),
+        "aero.fidelity.dlm.n_chord",
+        &["1200000 boxes", "GB"],
+    );
+    refused(
+        "run",
+        "gust.points",
+        10_000_000.into(),
+        "gust.points",
+        &["at most 1000000"],
+    );
+    refused(
+        "flutter",
+        "flutter",
+        serde_json::json!({"velocity_min_m_s": 10.0, "velocity_max_m_s": 300.0, "points": 1_000_000}),
+        "flutter.points",
+        &["10000"],
+    );
+    refused(
+        "run",
+        "structure.modes",
+        100000.into(),
+        "structure.modes",
+        &["degrees of freedom"],
+    );
+}
+
+/// Garbage that used to be accepted: a 1e-6 in wing, Mach 0.999 with the DLM, a 1e308 grain
+/// angle, sweep bounds beyond the wing's own 80°; values in the file's unit (inches).
+#[test]
+fn garbage_is_refused_in_the_files_units() {
+    refused(
+        "modes",
+        "wing.span",
+        1e-6.into(),
+        "wing.span",
+        &["in (got 1.0000e-6 in)"],
+    );
+    refused(
+        "modes",
+        "wing.span",
+        (-30.0).into(),
+        "wing.span",
+        &["positive", "-30 in"],
+    );
+    refused(
+        "modes",
+        "wing.span",
+        1e308.into(),
+        "wing.span",
+        &["1.0000e308 in"],
+    );
+    refused(
+        "run",
+        "flight.mach",
+        0.999.into(),
+        "flight.mach",
+        &["0.97", "lfd"],
+    );
+    refused(
+        "modes",
+        "material.grain_angle_deg",
+        1e308.into(),
+        "material.grain_angle_deg",
+        &["-360 and 360"],
+    );
+    refused(
+        "run",
+        "optimization.sweep_c4_deg",
+        serde_json::json!([0.0, 89.0]),
+        "optimization.sweep_c4_deg[1]",
+        &["80 degrees", "89 deg"],
+    );
+    refused(
+        "run",
+        "flight.velocity_m_s",
+        1e300.into(),
+        "flight.velocity_m_s",
+        &["1.0000e300 m/s"],
+    );
+}
+
+/// Errors that used to mislead: a huge thickness (was "rigid-body mode"), the iteration limit
+/// (was reported against the tolerance), frequencies unsorted or too few (were caught late,
+/// without the path), repeated prefixes, a 3-component point ("trailing characters").
+#[test]
+fn errors_say_what_is_wrong() {
+    refused(
+        "modes",
+        "structure.thickness",
+        serde_json::json!(vec![1e308; 100]),
+        "structure.thickness[0]",
+        &["at most 0.5", "in (got 1.0000e308 in)"],
+    );
+    refused(
+        "run",
+        "optimization.max_iterations",
+        0.into(),
+        "optimization.max_iterations",
+        &["at least 1"],
+    );
+    refused(
+        "modes",
+        "aero.reduced_frequencies",
+        serde_json::json!([0.0, 0.5, 0.2, 1.0, 2.0]),
+        "aero.reduced_frequencies[2]",
+        &["increase", "0.2 after 0.5"],
+    );
+    refused(
+        "modes",
+        "aero.reduced_frequencies",
+        serde_json::json!([0.0, 1.0, 2.0]),
+        "aero.reduced_frequencies",
+        &["at least 4"],
+    );
+    refused(
+        "modes",
+        "structure.clamp",
+        serde_json::json!({"root_nodes": [50]}),
+        "structure.clamp",
+        &["root node index 50"],
+    );
+    refused(
+        "modes",
+        "gust.outputs.0.point",
+        serde_json::json!([0.5, 0.5, 0.5]),
+        "gust.outputs[0].point",
+        &["more entries than this field takes"],
+    );
+}
+
+/// A prefix is never repeated: the JSON path names the field once.
+#[test]
+fn no_repeated_prefixes() {
+    let dir = scratch();
+    for (path, value) in [
+        ("structure.clamp", serde_json::json!({"root_nodes": [50]})),
+        ("structure.thickness", serde_json::json!(vec![-0.1; 100])),
+    ] {
+        let mut v = flagship();
+        set(&mut v, path, value);
+        let file = dir.join("prefix.json");
+        std::fs::write(&file, v.to_string()).unwrap();
+        let o = Command::new(env!("CARGO_BIN_EXE_gustkit"))
+            .args(["modes", file.to_str().unwrap(), "--json"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        for twice in ["clamp: clamp:", "]: thickness"] {
+            assert!(!err.contains(twice), "{err}");
+        }
+    }
+}
+
+/// A UTF-8 byte-order mark (as Windows editors write) is accepted.
+#[test]
+fn byte_order_mark_is_accepted() {
+    let dir = scratch();
+    let mut v = flagship();
+    v.as_object_mut().unwrap().remove("optimization");
+    let file = dir.join("bom.json");
+    std::fs::write(&file, format!("\u{feff}{v}")).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_gustkit"))
+        .args(["modes", file.to_str().unwrap(), "--json", "--reports"])
+        .arg(dir.join("reports"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// Command-line values: a negative reduced frequency is a value (and refused as one), a zero
+/// repeat count is refused, several design variables follow one `--dv`, and an `--out` that is
+/// a folder is refused without leaving a temporary file in it.
+#[test]
+fn command_line_values() {
+    let dir = scratch();
+    let study = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json");
+    let g = || Command::new(env!("CARGO_BIN_EXE_gustkit"));
+    let o = g()
+        .args([
+            "aic",
+            study.to_str().unwrap(),
+            "--mach",
+            "0.5",
+            "--k",
+            "-0.5",
+            "--out",
+        ])
+        .arg(dir.join("aic.json"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("--k: k[0]") && err.contains("-0.5"), "{err}");
+    let o = g()
+        .args(["bench", study.to_str().unwrap(), "--repeat", "0"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let o = g()
+        .args([
+            "check-gradient",
+            study.to_str().unwrap(),
+            "--json",
+            "--dv",
+            "t[0]",
+            "t[55]",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let names: Vec<&str> = rows["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["dv"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["t[0]", "t[55]"]);
+    let out = dir.join("outdir");
+    std::fs::create_dir_all(&out).unwrap();
+    let o = g()
+        .args([
+            "aic",
+            study.to_str().unwrap(),
+            "--mach",
+            "0.5",
+            "--k",
+            "0.1",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("is a folder"));
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 0, "no stray file");
+}
