@@ -517,7 +517,21 @@ fn run_optimization_and_resume() {
     let o = run(&["--resume"]);
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("another problem"), "{err}");
+    assert!(
+        err.contains("the study changed") && err.contains("optimization.rms_max"),
+        "{err}"
+    );
+    assert!(!err.contains("resuming from"), "{err}");
+    // a description edit does not block resuming
+    let mut described = v.clone();
+    described["description"] = "another description".into();
+    std::fs::write(&file, described.to_string()).unwrap();
+    let o = run(&["--resume"]);
+    finished(&o, &results());
+    assert_eq!(
+        results()["final"]["design_variables"],
+        r["final"]["design_variables"]
+    );
     std::fs::write(&file, v.to_string()).unwrap();
     // a corrupted checkpoint
     std::fs::write(dir.join("opt_small/checkpoint.json"), "{not json").unwrap();

@@ -100,12 +100,16 @@ impl RunFolder {
 }
 
 impl Drop for RunFolder {
-    /// A run that did not commit removes its staging folder, unless it holds a checkpoint.
+    /// A run that did not commit removes its staging folder, unless it holds a checkpoint that
+    /// the finished run folder does not already have.
     fn drop(&mut self) {
         if self.committed {
             return;
         }
-        if self.stage.join(CHECKPOINT_FILES[0]).exists() {
+        let staged = std::fs::read(self.stage.join(CHECKPOINT_FILES[0])).ok();
+        let finished = std::fs::read(self.final_dir.join(CHECKPOINT_FILES[0])).ok();
+        // a checkpoint worth keeping: one this run wrote, not the finished run's copy
+        if staged.is_some() && staged != finished {
             eprintln!(
                 "the checkpoint of this run is kept in {}: `gustkit run --resume` continues it",
                 self.stage.display()

@@ -150,9 +150,10 @@ pub struct OptimizationResults {
     #[serde(rename = "final")]
     pub final_: DesignSnapshot,
     pub history: Vec<HistoryRow>,
-    /// Flutter speeds of the initial and final designs (absent in results before this field).
+    /// Flutter speeds of the initial and final designs (absent in results before this field;
+    /// not `flutter`, which is the study's own p-k sweep beside it at the top level).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub flutter: Option<FlutterCheck>,
+    pub flutter_check: Option<FlutterCheck>,
 }
 
 /// Where a design flutters: the p-k crossing, if any, below `searched_up_to_m_s`.

@@ -160,7 +160,7 @@ pub fn summary(r: &RunResults) -> String {
             f.area_m2,
             100.0 * (f.area_m2 / i.area_m2 - 1.0),
         );
-        if let Some(fc) = &o.flutter {
+        if let Some(fc) = &o.flutter_check {
             md += &flutter_check_text(fc, o.flutter_margin);
         }
         if let Some(refr) = &o.reference {

@@ -196,6 +196,10 @@ impl Figure for SweepPlot<'_> {
                 ys.iter().copied().fold(f64::MIN, f64::max),
             );
             let pad = 0.08 * (y1 - y0).max(1e-9 * y1.abs().max(1e-30));
+            // decimals enough to tell ticks a tenth of the range apart, no more
+            let digits = (-(0.1 * (y1 - y0 + 2.0 * pad)).log10())
+                .ceil()
+                .clamp(0.0, 8.0) as usize;
             let mut chart = ChartBuilder::on(panel)
                 .margin(10)
                 .x_label_area_size(35)
@@ -206,7 +210,7 @@ impl Figure for SweepPlot<'_> {
                 .configure_mesh()
                 .x_desc(r.parameters[0].as_str())
                 .y_desc(format!("{name} [{unit}]"))
-                .y_label_formatter(&|v| format!("{v:.4}"))
+                .y_label_formatter(&|v| format!("{v:.digits$}"))
                 .label_style(("sans-serif", 14))
                 .axis_desc_style(("sans-serif", 14))
                 .draw()
@@ -236,12 +240,30 @@ impl Figure for SweepPlot<'_> {
                     .draw_series(pts.iter().map(|p| Circle::new(*p, 4, color.filled())))
                     .map_err(err)?;
             }
-            if groups.len() > 1 {
+            // cases that failed (or lack this result) get a red cross on the lower edge
+            let failed: Vec<f64> = r
+                .cases
+                .iter()
+                .filter(|c| SweepResults::value(c, name).is_none())
+                .map(|c| c.values[0])
+                .collect();
+            if !failed.is_empty() {
+                chart
+                    .draw_series(
+                        failed
+                            .iter()
+                            .map(|x| Cross::new((*x, y0 - 0.5 * pad), 6, RED.stroke_width(2))),
+                    )
+                    .map_err(err)?
+                    .label("failed case")
+                    .legend(|(x, y)| Cross::new((x + 9, y), 5, RED.stroke_width(2)));
+            }
+            if groups.len() > 1 || !failed.is_empty() {
                 chart
                     .configure_series_labels()
                     .background_style(WHITE.mix(0.8))
                     .border_style(BLACK)
-                    .label_font(("sans-serif", 12))
+                    .label_font(("sans-serif", 14))
                     .draw()
                     .map_err(err)?;
             }

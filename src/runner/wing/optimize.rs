@@ -397,7 +397,7 @@ pub fn optimize(
         initial: snapshot(study, &ev0, output, unit_scale),
         final_: snapshot(study, &ev, output, unit_scale),
         history,
-        flutter,
+        flutter_check: flutter,
     })
 }
 
