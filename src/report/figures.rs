@@ -139,6 +139,7 @@ impl Figure for VgVf<'_> {
                     ("sans-serif", 20),
                 )
                 .margin(10)
+                .margin_right(30)
                 .x_label_area_size(35)
                 .y_label_area_size(60)
                 .build_cartesian_2d(vmin..vmax, ylo..yhi)
@@ -260,6 +261,7 @@ impl Figure for PsdPlot {
                     ("sans-serif", 18),
                 )
                 .margin(10)
+                .margin_right(30)
                 .x_label_area_size(35)
                 .y_label_area_size(70)
                 .build_cartesian_2d((w0..w1).log_scale(), (pmin..pmax * 2.0).log_scale())

@@ -202,6 +202,7 @@ impl Figure for SweepPlot<'_> {
                 .clamp(0.0, 8.0) as usize;
             let mut chart = ChartBuilder::on(panel)
                 .margin(10)
+                .margin_right(30)
                 .x_label_area_size(35)
                 .y_label_area_size(75)
                 .build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))
