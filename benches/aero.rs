@@ -7,14 +7,15 @@ fn main() -> anyhow::Result<()> {
     let study = gustkit::study::Study::load(&file)?;
     let a = gustkit::runner::bench::bench_aero(&study, 3)?;
     println!(
-        "aero/agard445 ({} boxes, {} k, {} modes): influence matrices {:.1} ms (all k), LU {:.1} ms (1 thread), GAFs {:.1} ms, reverse mode {:.1} ms",
+        "aero/agard445 ({} boxes, {} k, {} modes, {} threads):",
         a.n_boxes,
         a.n_k,
         a.n_modes,
-        1e3 * a.assembly_s,
-        1e3 * a.factorization_s,
-        1e3 * a.gafs_s,
-        1e3 * a.gafs_vjp_s
+        rayon::current_num_threads()
     );
+    println!("{}", a.assembly.line("influence matrices (all k)"));
+    println!("{}", a.factorization.line("LU (all k, 1 thread)"));
+    println!("{}", a.gafs.line("GAFs"));
+    println!("{}", a.gafs_vjp.line("reverse mode"));
     Ok(())
 }

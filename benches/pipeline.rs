@@ -5,11 +5,12 @@ fn main() -> anyhow::Result<()> {
     let file =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm_analysis.json");
     let study = gustkit::study::Study::load(&file)?;
-    let (f, g) = gustkit::runner::bench::bench_pipeline(&study)?;
+    let p = gustkit::runner::bench::bench_pipeline(&study, 3)?;
     println!(
-        "pipeline/agard445: function {:.1} ms, gradient {:.1} ms",
-        1e3 * f,
-        1e3 * g
+        "pipeline/agard445 ({} threads):",
+        rayon::current_num_threads()
     );
+    println!("{}", p.function.line("function"));
+    println!("{}", p.gradient.line("gradient"));
     Ok(())
 }

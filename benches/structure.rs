@@ -7,13 +7,14 @@ fn main() -> anyhow::Result<()> {
     let study = gustkit::study::Study::load(&file)?;
     let t = gustkit::runner::bench::bench_structure(&study, 50)?;
     println!(
-        "structure/agard445 ({} dv, {} modes): assembly {:.2} ms, modes {:.2} ms, sensitivities {:.2} ms, total {:.2} ms",
+        "structure/agard445 ({} dv, {} modes, {} threads):",
         t.n_dv,
         t.n_modes,
-        1e3 * t.assembly_s,
-        1e3 * t.modes_s,
-        1e3 * t.sensitivities_s,
-        1e3 * t.total_s
+        rayon::current_num_threads()
     );
+    println!("{}", t.assembly.line("assembly"));
+    println!("{}", t.modes.line("modes"));
+    println!("{}", t.sensitivities.line("sensitivities"));
+    println!("{}", t.total.line("total"));
     Ok(())
 }

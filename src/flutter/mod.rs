@@ -18,6 +18,7 @@ use crate::gust::interp::SplineWeights;
 use faer::Mat;
 use gustkit_core::GafTable;
 use num_complex::Complex64;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Why a flutter analysis failed.
@@ -344,10 +345,14 @@ impl PkProblem<'_> {
             .collect();
         let mut flutter: Option<(f64, f64, usize)> = None;
         for (iv, &v) in velocities.iter().enumerate() {
-            // every mode starts from the previous speed's roots of all modes
+            // every mode starts from the previous speed's roots of all modes, so the modes are
+            // independent at one speed: tracked in parallel (results in mode order)
             let mut p_now = p_prev.clone();
-            for m in 0..n {
-                let r = self.track(m, v, &p_prev)?;
+            let tracked: Vec<Root> = (0..n)
+                .into_par_iter()
+                .map(|m| self.track(m, v, &p_prev))
+                .collect::<Result<_, _>>()?;
+            for (m, r) in tracked.into_iter().enumerate() {
                 p_now[m] = r.p;
                 let c = &mut curves[m];
                 if iv > 0 && flutter.is_none() {

@@ -1,5 +1,6 @@
 //! `gustkit bench`: timings of the structural chain, the DLM and the gust pipeline of a study,
-//! and optionally of its whole optimization.
+//! and optionally of its whole optimization. Every timing is taken after a warm-up run and
+//! reported as the median, minimum and maximum of its repetitions, with the thread count in use.
 
 use crate::runner::wing::{analyze, optimize::optimize};
 use crate::structure::{mass_grad, modal, modes_vjp, ModalSeed, Sampler};
@@ -8,15 +9,68 @@ use anyhow::{Context, Result};
 use serde::Serialize;
 use std::time::Instant;
 
-/// Timings of the structural chain, seconds (medians).
+/// Warm-up runs before any timing (discarded: page faults, caches, the thread pool's start).
+pub const WARMUP: usize = 1;
+
+/// Wall times of the repetitions of one measurement, seconds.
+#[derive(Clone, Debug, Serialize)]
+pub struct Stats {
+    pub repetitions: usize,
+    pub median_s: f64,
+    pub min_s: f64,
+    pub max_s: f64,
+}
+
+impl Stats {
+    /// The statistics of `samples` (at least one).
+    pub fn of(mut samples: Vec<f64>) -> Self {
+        samples.sort_by(f64::total_cmp);
+        let n = samples.len();
+        Self {
+            repetitions: n,
+            median_s: if n % 2 == 1 {
+                samples[n / 2]
+            } else {
+                0.5 * (samples[n / 2 - 1] + samples[n / 2])
+            },
+            min_s: samples[0],
+            max_s: samples[n - 1],
+        }
+    }
+
+    /// One report line: `label  median ms (min … max, N reps)`.
+    pub fn line(&self, label: &str) -> String {
+        format!(
+            "  {label:<42}{:9.2} ms  (min {:.2}, max {:.2}, {} reps)",
+            1e3 * self.median_s,
+            1e3 * self.min_s,
+            1e3 * self.max_s,
+            self.repetitions
+        )
+    }
+}
+
+/// Runs `f` [`WARMUP`] times untimed, then `repeat` times timed; `f` returns the wall time of
+/// its part of interest (so setup it needs is not counted).
+pub fn measure(repeat: usize, mut f: impl FnMut() -> Result<f64>) -> Result<Stats> {
+    for _ in 0..WARMUP {
+        f()?;
+    }
+    let samples = (0..repeat.max(1))
+        .map(|_| f())
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Stats::of(samples))
+}
+
+/// Timings of the structural chain.
 #[derive(Debug, Serialize)]
 pub struct StructureTimings {
     /// Assembly of K and M alone (informational: the modal analysis includes it).
-    pub assembly_s: f64,
+    pub assembly: Stats,
     /// Assembly + Cholesky + complete eigen-decomposition.
-    pub modes_s: f64,
-    pub sensitivities_s: f64,
-    pub total_s: f64,
+    pub modes: Stats,
+    pub sensitivities: Stats,
+    pub total: Stats,
     pub n_dv: usize,
     pub n_modes: usize,
 }
@@ -24,14 +78,10 @@ pub struct StructureTimings {
 /// Times assembly + modal analysis + the gradients of every frequency, the tip deflection of every
 /// mode and the mass with respect to all design variables (one reverse sweep each).
 pub fn bench_structure(study: &Study, repeat: usize) -> Result<StructureTimings> {
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
     let (mut ta, mut tm, mut ts, mut tt) = (vec![], vec![], vec![], vec![]);
     let st = &study.spec.structure;
     let (mut n_dv, mut n_modes) = (0, 0);
-    for _ in 0..repeat.max(1) {
+    for rep in 0..WARMUP + repeat.max(1) {
         let t0 = Instant::now();
         let model = study.build_model()?;
         let t0b = Instant::now();
@@ -57,6 +107,9 @@ pub fn bench_structure(study: &Study, repeat: usize) -> Result<StructureTimings>
         n_dv = grads[0].len();
         n_modes = modes.len();
         std::hint::black_box(grads);
+        if rep < WARMUP {
+            continue;
+        }
         ta.push((t1 - t0).as_secs_f64());
         tm.push((t2 - t1).as_secs_f64());
         ts.push((t3 - t2).as_secs_f64());
@@ -64,10 +117,10 @@ pub fn bench_structure(study: &Study, repeat: usize) -> Result<StructureTimings>
         tt.push((t3 - t1).as_secs_f64() + (t0b - t0).as_secs_f64());
     }
     Ok(StructureTimings {
-        assembly_s: median(ta),
-        modes_s: median(tm),
-        sensitivities_s: median(ts),
-        total_s: median(tt),
+        assembly: Stats::of(ta),
+        modes: Stats::of(tm),
+        sensitivities: Stats::of(ts),
+        total: Stats::of(tt),
         n_dv,
         n_modes,
     })
@@ -77,55 +130,51 @@ pub fn bench_structure(study: &Study, repeat: usize) -> Result<StructureTimings>
 pub fn bench(study: &Study, repeat: usize, optimization: bool) -> Result<()> {
     let file = &study.file;
     let study = study.clone();
+    println!(
+        "{}: {} threads (RAYON_NUM_THREADS sets them), {WARMUP} warm-up run, {repeat} repetitions a line; wall times",
+        study.spec.name,
+        rayon::current_num_threads()
+    );
     let t = bench_structure(&study, repeat)?;
     println!(
-        "structure ({}; {} design variables, {} modes, median of {repeat}):",
-        study.spec.name, t.n_dv, t.n_modes
+        "structure ({} design variables, {} modes):",
+        t.n_dv, t.n_modes
     );
-    println!(
-        "  assembly of K, M alone        {:8.2} ms",
-        1e3 * t.assembly_s
-    );
-    println!("  modal analysis (+ assembly)   {:8.2} ms", 1e3 * t.modes_s);
-    println!(
-        "  sensitivities (2N+1 gradients){:8.2} ms",
-        1e3 * t.sensitivities_s
-    );
-    println!("  total (model, modes, grads)   {:8.2} ms", 1e3 * t.total_s);
-    if study.spec.aero.is_some() {
-        let a = bench_aero(&study, 3)?;
+    println!("{}", t.assembly.line("assembly of K, M alone"));
+    println!("{}", t.modes.line("modal analysis (+ assembly)"));
+    println!("{}", t.sensitivities.line("sensitivities (2N+1 gradients)"));
+    println!("{}", t.total.line("total (model, modes, gradients)"));
+    if matches!(
+        study.spec.aero.as_ref().map(|a| &a.fidelity),
+        Some(crate::study::FidelitySpec::Dlm(_))
+    ) {
+        let a = bench_aero(&study, repeat)?;
         println!(
             "aerodynamics (DLM, {} boxes, {} reduced frequencies, {} modes):",
             a.n_boxes, a.n_k, a.n_modes
         );
+        println!("{}", a.assembly.line("influence matrices (all k)"));
         println!(
-            "  influence matrices (all k)    {:8.1} ms",
-            1e3 * a.assembly_s
+            "{}",
+            a.factorization.line("LU factorizations (all k, 1 thread)")
         );
-        println!(
-            "  LU factorizations, 1 thread   {:8.1} ms",
-            1e3 * a.factorization_s
-        );
-        println!("  GAFs (all k, with matrices)   {:8.1} ms", 1e3 * a.gafs_s);
-        println!(
-            "  GAF reverse (matrices reused) {:8.1} ms",
-            1e3 * a.gafs_vjp_s
-        );
+        println!("{}", a.gafs.line("GAFs (all k, with matrices)"));
+        println!("{}", a.gafs_vjp.line("GAF reverse (matrices reused)"));
     }
     if study.spec.gust.is_some() {
-        let (f, g) = bench_pipeline(&study)?;
+        let p = bench_pipeline(&study, repeat)?;
         println!(
             "gust pipeline (all {} design variables):",
             study.initial_design()?.len()
         );
         println!(
-            "  function (modes, GAFs, stability, RMS)  {:8.1} ms",
-            1e3 * f
+            "{}",
+            p.function.line("function (modes, GAFs, stability, RMS)")
         );
-        println!(
-            "  gradient (one reverse sweep)            {:8.1} ms",
-            1e3 * g
-        );
+        if let Some(m) = &p.margin {
+            println!("{}", m.line("flutter margin (p-k roots up to the margin)"));
+        }
+        println!("{}", p.gradient.line("gradient (one reverse sweep)"));
     }
     if optimization {
         if study.spec.optimization.is_none() {
@@ -155,20 +204,20 @@ pub fn bench(study: &Study, repeat: usize, optimization: bool) -> Result<()> {
     Ok(())
 }
 
-/// Timings of the aerodynamic chain for a study, seconds.
+/// Timings of the aerodynamic chain for a study.
 #[derive(Debug, Serialize)]
 pub struct AeroTimings {
     pub n_boxes: usize,
     pub n_k: usize,
     pub n_modes: usize,
     /// Influence matrices at every k (one pass over the box pairs, rows in parallel).
-    pub assembly_s: f64,
+    pub assembly: Stats,
     /// LU factorizations at every k, one thread.
-    pub factorization_s: f64,
+    pub factorization: Stats,
     /// `Aerodynamics::gafs` as used (rayon over k): assembly, factorization, solves, GAFs.
-    pub gafs_s: f64,
+    pub gafs: Stats,
     /// `gafs_vjp` (reverse mode incl. geometry), rayon over k.
-    pub gafs_vjp_s: f64,
+    pub gafs_vjp: Stats,
 }
 
 /// Times the DLM of a study (see [`AeroTimings`]); medians of `repeat` runs for the parallel parts.
@@ -188,25 +237,28 @@ pub fn bench_aero(study: &Study, repeat: usize) -> Result<AeroTimings> {
         .map_err(|e| anyhow::anyhow!("{e}"))?;
     let f = aero.flight;
     let n = dlm.n_boxes();
-    let t0 = Instant::now();
     let kds: Vec<f64> = aero.k.iter().map(|k| k / f.b_ref).collect();
-    let mats: Vec<Mat<c64>> = dlm
-        .influence_matrices(&dlm.boxes, f.mach, &kds)
-        .iter()
-        .map(|d| Mat::from_fn(n, n, |i, j| d[i * n + j].value()))
-        .collect();
-    let t1 = Instant::now();
-    for m in &mats {
-        std::hint::black_box(m.partial_piv_lu());
-    }
-    let t2 = Instant::now();
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
+    let matrices = || -> Vec<Mat<c64>> {
+        dlm.influence_matrices(&dlm.boxes, f.mach, &kds)
+            .iter()
+            .map(|d| Mat::from_fn(n, n, |i, j| d[i * n + j].value()))
+            .collect()
     };
-    let mut tg = Vec::new();
-    let mut tv = Vec::new();
-    for _ in 0..repeat.max(1) {
+    let assembly = measure(repeat, || {
+        let t = Instant::now();
+        std::hint::black_box(matrices());
+        Ok(t.elapsed().as_secs_f64())
+    })?;
+    let mats = matrices();
+    let factorization = measure(repeat, || {
+        let t = Instant::now();
+        for m in &mats {
+            std::hint::black_box(m.partial_piv_lu());
+        }
+        Ok(t.elapsed().as_secs_f64())
+    })?;
+    let (mut tg, mut tv) = (Vec::new(), Vec::new());
+    for rep in 0..WARMUP + repeat.max(1) {
         // a fresh model each time: the GAFs build the influence matrices, the reverse mode then
         // reuses them as in the pipeline
         let aero = study.aero_model(&plate)?;
@@ -219,34 +271,75 @@ pub fn bench_aero(study: &Study, repeat: usize) -> Result<AeroTimings> {
             aero.gafs_vjp(&plate, &modes, &table)
                 .map_err(|e| anyhow::anyhow!("{e}"))?,
         );
-        tg.push((b - a).as_secs_f64());
-        tv.push(b.elapsed().as_secs_f64());
+        if rep >= WARMUP {
+            tg.push((b - a).as_secs_f64());
+            tv.push(b.elapsed().as_secs_f64());
+        }
     }
     Ok(AeroTimings {
         n_boxes: n,
         n_k: aero.k.len(),
         n_modes: modes.len(),
-        assembly_s: (t1 - t0).as_secs_f64(),
-        factorization_s: (t2 - t1).as_secs_f64(),
-        gafs_s: median(tg),
-        gafs_vjp_s: median(tv),
+        assembly,
+        factorization,
+        gafs: Stats::of(tg),
+        gafs_vjp: Stats::of(tv),
     })
 }
 
-/// Wall time of one function evaluation and one gradient of the gust pipeline at the initial
-/// design (the influence matrices are rebuilt, as when the planform changes), seconds.
-pub fn bench_pipeline(study: &Study) -> Result<(f64, f64)> {
+/// Timings of the gust pipeline at the initial design.
+#[derive(Debug, Serialize)]
+pub struct PipelineTimings {
+    /// One function evaluation: modes, GAFs (the influence matrices rebuilt, as when the planform
+    /// changes), the stability check and every RMS.
+    pub function: Stats,
+    /// The flutter-margin constraint's p-k roots, when the study's optimization has one.
+    pub margin: Option<Stats>,
+    /// One gradient of every output (one reverse sweep).
+    pub gradient: Stats,
+}
+
+/// Times one function evaluation, the flutter margin and one gradient of the gust pipeline.
+pub fn bench_pipeline(study: &Study, repeat: usize) -> Result<PipelineTimings> {
     let settings = study.gust_settings()?;
     let x = study.initial_design()?.to_vec();
-    let t0 = Instant::now();
+    let margin = study
+        .spec
+        .optimization
+        .as_ref()
+        .and_then(|o| o.flutter_margin.as_ref())
+        .map(|m| crate::flutter::margin::FlutterMargin {
+            speed_factor: m.speed_factor,
+            damping_max: m.damping_max,
+        });
+    let function = measure(repeat, || {
+        let t = Instant::now();
+        std::hint::black_box(crate::pipeline::evaluate(study, &settings, &x)?);
+        Ok(t.elapsed().as_secs_f64())
+    })?;
     let ev = crate::pipeline::evaluate(study, &settings, &x)?;
-    let t1 = Instant::now();
+    let margin = match &margin {
+        Some(m) => Some(measure(repeat, || {
+            let t = Instant::now();
+            std::hint::black_box(ev.flutter_damping(m)?);
+            Ok(t.elapsed().as_secs_f64())
+        })?),
+        None => None,
+    };
     let seeds = crate::pipeline::OutputSeeds {
         mass: 1.0,
         area: 1.0,
         rms: vec![1.0; ev.rms_m.len()],
         damping: None,
     };
-    std::hint::black_box(crate::pipeline::gradient(&ev, &seeds)?);
-    Ok(((t1 - t0).as_secs_f64(), t1.elapsed().as_secs_f64()))
+    let gradient = measure(repeat, || {
+        let t = Instant::now();
+        std::hint::black_box(crate::pipeline::gradient(&ev, &seeds)?);
+        Ok(t.elapsed().as_secs_f64())
+    })?;
+    Ok(PipelineTimings {
+        function,
+        margin,
+        gradient,
+    })
 }
