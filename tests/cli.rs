@@ -1059,3 +1059,56 @@ fn user_errors_print_without_backtrace() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("backtrace"));
 }
+
+/// Reproducibility: the small optimization run twice on two threads and once on one gives the
+/// same results.json bit for bit, apart from the wall times (no reduction order depends on
+/// rayon's scheduling or on the thread count).
+#[test]
+fn reruns_and_thread_counts_give_identical_results() {
+    let dir = scratch("determinism");
+    let opt = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(opt).unwrap()).unwrap();
+    v["name"] = "opt_det".into();
+    v["aero"]["fidelity"]["dlm"]["n_chord"] = 4.into();
+    v["aero"]["fidelity"]["dlm"]["n_span"] = 6.into();
+    v["gust"]["points"] = 400.into();
+    v["optimization"]["max_iterations"] = 12.into();
+    let file = dir.join("opt.json");
+    std::fs::write(&file, v.to_string()).unwrap();
+    fn strip(v: &mut serde_json::Value) {
+        match v {
+            serde_json::Value::Object(m) => {
+                m.remove("wall_time_s");
+                m.remove("run_time_s");
+                m.values_mut().for_each(strip);
+            }
+            serde_json::Value::Array(a) => a.iter_mut().for_each(strip),
+            _ => {}
+        }
+    }
+    let run = |threads: &str, reports: &str| -> serde_json::Value {
+        let o = gustkit()
+            .env("RAYON_NUM_THREADS", threads)
+            .args(["run", file.to_str().unwrap(), "--reports"])
+            .arg(dir.join(reports))
+            .output()
+            .unwrap();
+        assert!(
+            matches!(o.status.code(), Some(0) | Some(3)),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let mut r: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.join(reports).join("opt_det/results.json")).unwrap(),
+        )
+        .unwrap();
+        strip(&mut r);
+        r
+    };
+    let a = run("2", "a");
+    assert!(a["history"].as_array().unwrap().len() > 5);
+    assert_eq!(a, run("2", "b"), "a rerun differs");
+    assert_eq!(a, run("1", "c"), "one thread differs from two");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
