@@ -109,3 +109,73 @@ fn coarse_lfd_gafs_beside_the_dlm() {
         }
     }
 }
+
+/// The steady state is kept in the cache folder (the run folder) and reused: a second build of
+/// the same wing and flight condition reads it (the file is not written again), a corrupted or
+/// foreign file is ignored and the state solved again (to the same bits), and another Mach
+/// number gets its own file, which replaces the old one.
+#[test]
+fn steady_state_is_saved_and_reused() {
+    let dir = std::env::temp_dir().join(format!("gustkit-steady-cache-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut v = flagship();
+    for key in ["optimization", "gust"] {
+        v.as_object_mut().unwrap().remove(key);
+    }
+    v["aero"]["reduced_frequencies"] = serde_json::json!([0.0, 0.5]);
+    v["aero"]["fidelity"] = serde_json::json!({"lfd": {"mesh_sizes": {
+        "n_around": 16, "n_radial": 6, "n_span": 4, "n_outboard": 2, "first_spacing_chords": 0.02
+    }}});
+    let mut study = load(&v).unwrap();
+    study.cache_dir = Some(dir.clone());
+    let plate = study.build_model().unwrap();
+    let files = || -> Vec<std::path::PathBuf> {
+        let mut f: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
+        f.sort();
+        f
+    };
+    study.aero_model(&plate).unwrap();
+    let saved = files();
+    assert_eq!(saved.len(), 1, "{saved:?}");
+    let file = &saved[0];
+    assert!(file
+        .file_name()
+        .unwrap()
+        .to_string_lossy()
+        .starts_with("steady_lfd_"));
+    let state = std::fs::read(file).unwrap();
+    assert_eq!(state.len() % 40, 0, "5 f64 a cell");
+    // reused: the file is read, not written again (its modification time stays as set here)
+    let old = std::time::SystemTime::UNIX_EPOCH + std::time::Duration::from_secs(1_000_000);
+    std::fs::File::options()
+        .write(true)
+        .open(file)
+        .unwrap()
+        .set_modified(old)
+        .unwrap();
+    study.aero_model(&plate).unwrap();
+    assert_eq!(std::fs::metadata(file).unwrap().modified().unwrap(), old);
+    // a perturbed state is not converged: ignored, solved again, the same bits written
+    let mut bad = state.clone();
+    bad[100] ^= 0x40;
+    std::fs::write(file, &bad).unwrap();
+    study.aero_model(&plate).unwrap();
+    assert_eq!(std::fs::read(file).unwrap(), state);
+    // a truncated file likewise
+    std::fs::write(file, &state[..80]).unwrap();
+    study.aero_model(&plate).unwrap();
+    assert_eq!(std::fs::read(file).unwrap(), state);
+    // another flight condition: its own file, the old one removed
+    v["flight"]["mach"] = 0.45.into();
+    let mut other = load(&v).unwrap();
+    other.cache_dir = Some(dir.clone());
+    other.aero_model(&plate).unwrap();
+    let now = files();
+    assert_eq!(now.len(), 1, "{now:?}");
+    assert_ne!(&now[0], file);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

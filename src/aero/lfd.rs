@@ -16,7 +16,7 @@ use gustkit_cfd::steady::NewtonLinearSolver;
 use gustkit_cfd::steady::SteadyParams;
 use gustkit_cfd::wing_mesh::{WingMesh, WingMeshSpec};
 use serde::{Deserialize, Serialize};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Spatial order of the finite-volume scheme.
 #[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
@@ -370,6 +370,83 @@ impl LfdWingSpec {
     }
 }
 
+impl LfdWingSpec {
+    /// The file in `dir` that holds the steady state of this mesh, wing and flight condition:
+    /// named by a hash of everything the state depends on, so a changed input misses it.
+    pub fn steady_file(&self, wing: &WingContext, dir: &Path) -> PathBuf {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        format!(
+            "{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
+            self.mesh_spec(),
+            wing.planform.to_array().map(f64::to_bits),
+            wing.airfoil,
+            wing.flight.mach.to_bits(),
+            self.order,
+            self.limiter
+        )
+        .hash(&mut h);
+        dir.join(format!("{STEADY_PREFIX}{:016x}.bin", h.finish()))
+    }
+}
+
+/// A steady state read from `file` if it is one of this mesh (length), physical, and converged
+/// (‖R‖ within 1e-12 of the flux scale, well above round-off and far below any truncation
+/// error); anything else is ignored and the state solved again.
+fn converged_state(e: &Euler, file: &Path) -> Option<Vec<gustkit_cfd::residual::State<f64>>> {
+    let bytes = std::fs::read(file).ok()?;
+    let n = e.mesh.n_cells;
+    let nvar = gustkit_cfd::gas::NVAR;
+    if bytes.len() != 8 * nvar * n {
+        return None;
+    }
+    let vals: Vec<f64> = bytes
+        .chunks_exact(8)
+        .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")))
+        .collect();
+    let q: Vec<gustkit_cfd::residual::State<f64>> = vals
+        .chunks_exact(nvar)
+        .map(|c| std::array::from_fn(|k| c[k]))
+        .collect();
+    if q.iter().flatten().any(|v| !v.is_finite()) || q.iter().any(|s| !(s[0] > 0.0)) {
+        return None;
+    }
+    let r: f64 = e
+        .residual(&q)
+        .iter()
+        .flatten()
+        .map(|v| v * v)
+        .sum::<f64>()
+        .sqrt();
+    (r <= 1e-12 * e.flux_scale(&q)).then_some(q)
+}
+
+/// Writes a steady state to `file` atomically (little-endian f64, cell by cell), and removes the
+/// folder's other steady states (a run folder keeps the one of its latest wing).
+fn save_state(file: &Path, q: &[gustkit_cfd::residual::State<f64>]) -> std::io::Result<()> {
+    let bytes: Vec<u8> = q.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    let tmp = file.with_extension(format!("tmp{}", std::process::id()));
+    std::fs::write(&tmp, bytes)
+        .and_then(|()| std::fs::rename(&tmp, file))
+        .inspect_err(|_| {
+            let _ = std::fs::remove_file(&tmp);
+        })?;
+    if let Some(dir) = file.parent() {
+        for entry in std::fs::read_dir(dir)?.flatten() {
+            let path = entry.path();
+            let name = entry.file_name();
+            let name = name.to_string_lossy();
+            if path != file && name.starts_with(STEADY_PREFIX) && name.ends_with(".bin") {
+                let _ = std::fs::remove_file(path);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// File-name prefix of the cached steady states (`steady_lfd_<hash>.bin`).
+pub const STEADY_PREFIX: &str = "steady_lfd_";
+
 impl WingBuilder for LfdWingSpec {
     fn name(&self) -> &'static str {
         "lfd"
@@ -433,6 +510,8 @@ impl WingBuilder for LfdWingSpec {
 
     fn build(&self, wing: &WingContext) -> Result<WingFidelity, BuildError> {
         self.validate(wing)?;
+        // the steady state is reused from `wing.cache_dir` when the mesh, the section, the
+        // planform, the Mach number and the discretization are those it was solved for
         let fail = |reason: String| BuildError {
             path: String::new(),
             reason,
@@ -449,9 +528,20 @@ impl WingBuilder for LfdWingSpec {
             linear_solver: NewtonLinearSolver::BlockIlu,
             ..SteadyParams::default()
         };
-        let (q0, _) = e
-            .solve_steady(vec![e.q_inf; e.mesh.n_cells], &params)
-            .map_err(|err| fail(format!("steady state did not converge: {err}")))?;
+        let cache = wing.cache_dir.map(|d| self.steady_file(wing, d));
+        let q0 = match cache.as_deref().and_then(|f| converged_state(&e, f)) {
+            Some(q) => q,
+            None => {
+                let (q, _) = e
+                    .solve_steady(vec![e.q_inf; e.mesh.n_cells], &params)
+                    .map_err(|err| fail(format!("steady state did not converge: {err}")))?;
+                if let Some(f) = &cache {
+                    // a cache that cannot be written costs the next run a steady solve, no more
+                    let _ = save_state(f, &q);
+                }
+                q
+            }
+        };
         let mut op = LfdOperator::with_preconditioner(e, q0, self.preconditioner.preconditioner());
         op.params = self.params();
         let model = Lfd::new(

@@ -36,19 +36,22 @@ pub struct AeroModel {
 
 impl AeroModel {
     /// Builds the fidelity of `spec` on the plate's current planform and binds it to the plate
-    /// through the builder's surface binding.
+    /// through the builder's surface binding; `cache_dir` is where the fidelity may keep state
+    /// between runs.
     pub fn new(
         spec: &FidelitySpec,
         flight: FlightCondition,
         k: Vec<f64>,
         plate: &PlateModel,
         airfoil: &crate::wing::Airfoil,
+        cache_dir: Option<&std::path::Path>,
     ) -> Result<Self, BuildError> {
         let builder = spec.builder();
         let built = builder.build(&WingContext {
             planform: plate.planform(),
             airfoil,
             flight: &flight,
+            cache_dir,
         })?;
         Ok(Self::bind(builder.name(), built, flight, k, plate))
     }

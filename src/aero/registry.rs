@@ -76,6 +76,8 @@ pub struct WingContext<'a> {
     pub planform: &'a Planform,
     pub airfoil: &'a Airfoil,
     pub flight: &'a FlightCondition,
+    /// Where the builder may keep state between runs (the run folder), if anywhere.
+    pub cache_dir: Option<&'a std::path::Path>,
 }
 
 /// A fidelity's builder for wing studies.

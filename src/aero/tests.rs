@@ -28,6 +28,7 @@ fn dlm_binding_matches_its_surface() {
         planform: &planform,
         airfoil: &airfoil,
         flight: &flight,
+        cache_dir: None,
     };
     let built = aero.fidelity.builder().build(&ctx).unwrap();
     let pts = &built.model.surface().points;
@@ -78,6 +79,7 @@ fn model_without_reverse_mode_is_refused_by_name() {
         planform: plate.planform(),
         airfoil: &airfoil,
         flight: &flight,
+        cache_dir: None,
     };
     let mut built = aero.fidelity.builder().build(&ctx).unwrap();
     built.model = Box::new(ForwardOnly(built.model));

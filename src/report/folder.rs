@@ -11,6 +11,10 @@ use std::path::{Path, PathBuf};
 /// (`gustkit sweep` writes its cases and table into `sweep/`).
 const KEPT_FROM_OTHER_COMMANDS: &[&str] = &["sweep"];
 
+/// Files of a previous run that a new one may reuse, by name prefix (the LFD's steady states,
+/// `steady_lfd_<hash>.bin`: the reader checks that a state fits and is converged).
+const REUSABLE_PREFIXES: &[&str] = &["steady_lfd_"];
+
 /// Files that make a staging folder worth keeping after a failure: an optimization's checkpoint.
 const CHECKPOINT_FILES: &[&str] = &["checkpoint.json", "checkpoint_study.json"];
 
@@ -38,6 +42,18 @@ impl RunFolder {
         }
         std::fs::create_dir_all(&stage)
             .with_context(|| format!("cannot create the run folder {}", stage.display()))?;
+        // state a run may reuse (the LFD's steady solution) comes along from the previous run
+        if let Ok(entries) = std::fs::read_dir(final_dir) {
+            for entry in entries.flatten() {
+                let name = entry.file_name();
+                let reusable = REUSABLE_PREFIXES
+                    .iter()
+                    .any(|p| name.to_string_lossy().starts_with(p));
+                if reusable && !stage.join(&name).exists() {
+                    let _ = std::fs::copy(entry.path(), stage.join(&name));
+                }
+            }
+        }
         if resume && !stage.join(CHECKPOINT_FILES[0]).exists() {
             for f in CHECKPOINT_FILES {
                 let from = final_dir.join(f);

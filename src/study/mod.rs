@@ -102,6 +102,9 @@ fn without_field(msg: &str) -> String {
 pub struct Study {
     pub file: PathBuf,
     pub spec: StudyFile,
+    /// Where a fidelity may keep and reuse expensive state between runs (the LFD's steady
+    /// solution): the run folder, set by the runner; none for a study used as a library.
+    pub cache_dir: Option<PathBuf>,
 }
 
 impl Study {
@@ -131,6 +134,7 @@ impl Study {
         let study = Self {
             file: file.to_path_buf(),
             spec,
+            cache_dir: None,
         };
         study.validate()?;
         Ok(study)
@@ -204,6 +208,7 @@ impl Study {
                     planform: &self.planform()?,
                     airfoil: &self.airfoil()?,
                     flight: &flight,
+                    cache_dir: None,
                 })
                 .map_err(|e| self.fidelity_err(&e))?;
         }
@@ -262,6 +267,7 @@ impl Study {
             aero.reduced_frequencies.clone(),
             plate,
             &self.airfoil()?,
+            self.cache_dir.as_deref(),
         )
         .map_err(|e| self.fidelity_err(&e))
     }

@@ -192,8 +192,9 @@ impl Euler {
             .map_err(|e| format!("{e:?}"))
     }
 
-    /// ‖Σ_faces |F|‖ over the cells: the size of the fluxes whose sum is the residual.
-    fn flux_scale(&self, q: &[State<f64>]) -> f64 {
+    /// ‖Σ_faces |F|‖ over the cells: the size of the fluxes whose sum is the residual (its
+    /// round-off level is about 1e-15 of this).
+    pub fn flux_scale(&self, q: &[State<f64>]) -> f64 {
         let (_, fluxes) = self.residual_and_fluxes(q, Order::First);
         let mut per_cell = vec![0.0; self.mesh.n_cells];
         for (f, fl) in self.mesh.faces.iter().zip(&fluxes) {

@@ -8,7 +8,14 @@ use std::path::Path;
 
 /// `gustkit flutter`: p-k sweep of a study at its flight Mach number and density.
 pub fn flutter(study: &Study, json: bool, reports: &Path) -> Result<()> {
-    let (doc, r, velocities) = flutter_analysis(study, &study.report_dir(reports))?;
+    let dir = study.report_dir(reports);
+    std::fs::create_dir_all(&dir)
+        .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
+    // the report folder keeps the LFD's steady solution for the next command
+    let mut study = study.clone();
+    study.cache_dir = Some(dir.clone());
+    let study = &study;
+    let (doc, r, velocities) = flutter_analysis(study, &dir)?;
     if json {
         println!("{}", serde_json::to_string_pretty(&doc)?);
         return Ok(());

@@ -117,6 +117,9 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
     // fail early, before any long computation, when the run folder cannot be written
     let folder = crate::report::folder::RunFolder::begin(&final_dir, resume)?;
     let dir = folder.path().to_path_buf();
+    // fidelities keep reusable state (the LFD's steady solution) in the run folder
+    let mut study = study;
+    study.cache_dir = Some(dir.clone());
     let vtk = report::vtk::plate_modes(
         &model,
         &modes,
