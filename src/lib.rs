@@ -5,6 +5,7 @@
 //! layout.
 
 pub mod aero;
+pub mod atomic;
 pub mod cli;
 pub mod flutter;
 pub mod gust;

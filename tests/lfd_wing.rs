@@ -139,6 +139,11 @@ fn steady_state_is_saved_and_reused() {
         f
     };
     study.aero_model(&plate).unwrap();
+    // the state and its field for ParaView
+    let vtk = dir.join("steady_lfd_flow.vtk");
+    let text = std::fs::read_to_string(&vtk).unwrap();
+    assert!(text.starts_with("# vtk DataFile") && text.contains("SCALARS cp"));
+    std::fs::remove_file(&vtk).unwrap();
     let saved = files();
     assert_eq!(saved.len(), 1, "{saved:?}");
     let file = &saved[0];
@@ -174,6 +179,7 @@ fn steady_state_is_saved_and_reused() {
     let mut other = load(&v).unwrap();
     other.cache_dir = Some(dir.clone());
     other.aero_model(&plate).unwrap();
+    std::fs::remove_file(&vtk).unwrap();
     let now = files();
     assert_eq!(now.len(), 1, "{now:?}");
     assert_ne!(&now[0], file);

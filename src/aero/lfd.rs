@@ -425,12 +425,7 @@ fn converged_state(e: &Euler, file: &Path) -> Option<Vec<gustkit_cfd::residual::
 /// folder's other steady states (a run folder keeps the one of its latest wing).
 fn save_state(file: &Path, q: &[gustkit_cfd::residual::State<f64>]) -> std::io::Result<()> {
     let bytes: Vec<u8> = q.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
-    let tmp = file.with_extension(format!("tmp{}", std::process::id()));
-    std::fs::write(&tmp, bytes)
-        .and_then(|()| std::fs::rename(&tmp, file))
-        .inspect_err(|_| {
-            let _ = std::fs::remove_file(&tmp);
-        })?;
+    crate::atomic::write(file, &bytes)?;
     if let Some(dir) = file.parent() {
         for entry in std::fs::read_dir(dir)?.flatten() {
             let path = entry.path();
@@ -446,6 +441,9 @@ fn save_state(file: &Path, q: &[gustkit_cfd::residual::State<f64>]) -> std::io::
 
 /// File-name prefix of the cached steady states (`steady_lfd_<hash>.bin`).
 pub const STEADY_PREFIX: &str = "steady_lfd_";
+
+/// The VTK file of the latest steady state beside it (its prefix carries it to the next run).
+pub const STEADY_VTK: &str = "steady_lfd_flow.vtk";
 
 impl WingBuilder for LfdWingSpec {
     fn name(&self) -> &'static str {
@@ -538,6 +536,17 @@ impl WingBuilder for LfdWingSpec {
                 if let Some(f) = &cache {
                     // a cache that cannot be written costs the next run a steady solve, no more
                     let _ = save_state(f, &q);
+                    // and the field for ParaView beside it (ρ, p, C_p, Mach, velocity per cell)
+                    let vtk = gustkit_cfd::vtk::flow_vtk(
+                        &mesh.mesh,
+                        &q,
+                        wing.flight.mach,
+                        &format!(
+                            "gustkit: steady Euler about the wing at M = {}",
+                            wing.flight.mach
+                        ),
+                    );
+                    let _ = crate::atomic::write(&f.with_file_name(STEADY_VTK), vtk.as_bytes());
                 }
                 q
             }
