@@ -126,20 +126,30 @@ fn k_method_flutter(s: &AirfoilShape) -> (f64, f64) {
     panic!("no flutter found by the k-method");
 }
 
+/// The section's GAF table at 41 reduced frequencies on [0, 2] and its natural frequencies.
+fn section_table(s: &AirfoilShape) -> (GafTable, [f64; 2]) {
+    let ks: Vec<f64> = (0..=40).map(|i| 0.05 * i as f64).collect();
+    table(s, &ks)
+}
+
+/// The section's p-k problem: no structural damping, ρ = 1.
+fn section_problem(t: &GafTable, wn: [f64; 2]) -> PkProblem<'_> {
+    PkProblem {
+        omega_n: wn.to_vec(),
+        damping_ratio: 0.0,
+        table: t,
+        density: 1.0,
+    }
+}
+
 /// The p-k flutter speed and frequency equal the k-method's at the neutral point (both methods are
 /// exact for harmonic motion there) to the accuracy of the GAF spline (41 frequencies on [0, 2]):
 /// 1e-4. Hodges & Pierce quote U_F/(b ω_α) ≈ 2.17 for this section.
 #[test]
 fn typical_section_flutter_matches_k_method() {
     let s = section();
-    let ks: Vec<f64> = (0..=40).map(|i| 0.05 * i as f64).collect();
-    let (t, wn) = table(&s, &ks);
-    let pk = PkProblem {
-        omega_n: wn.to_vec(),
-        damping_ratio: 0.0,
-        table: &t,
-        density: 1.0,
-    };
+    let (t, wn) = section_table(&s);
+    let pk = section_problem(&t, wn);
     let v: Vec<f64> = (1..=60).map(|i| 0.05 * i as f64).collect();
     let r = pk.sweep(&v).unwrap();
     let (vf, wf) = k_method_flutter(&s);
@@ -168,14 +178,8 @@ fn typical_section_flutter_matches_k_method() {
 #[test]
 fn branches_never_share_a_root() {
     let s = section();
-    let ks: Vec<f64> = (0..=40).map(|i| 0.05 * i as f64).collect();
-    let (t, wn) = table(&s, &ks);
-    let pk = PkProblem {
-        omega_n: wn.to_vec(),
-        damping_ratio: 0.0,
-        table: &t,
-        density: 1.0,
-    };
+    let (t, wn) = section_table(&s);
+    let pk = section_problem(&t, wn);
     let v: Vec<f64> = (1..=80).map(|i| 0.05 * i as f64).collect();
     let r = pk.sweep(&v).unwrap();
     for iv in 0..v.len() {
