@@ -107,6 +107,16 @@ pub struct DampingSeed {
     pub g_bar: Vec<f64>,
 }
 
+impl DampingSeed {
+    /// The largest damping of the roots: what the KS aggregate bounds from above.
+    pub fn peak(&self) -> f64 {
+        self.roots
+            .iter()
+            .map(|r| r.g)
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+}
+
 /// Evaluates a design of the study.
 pub fn evaluate(study: &Study, settings: &GustSettings, x: &[f64]) -> Result<Evaluation> {
     let plate = study

@@ -71,12 +71,7 @@ impl Problem for DesignProblem<'_> {
         if let Some(m) = &self.spec.flutter {
             let (ks, weights, seed) = ev.flutter_damping(m).map_err(|e| format!("{e:#}"))?;
             ineq.push((ks - m.damping_max) / DAMPING_SCALE);
-            let peak = seed
-                .roots
-                .iter()
-                .map(|r| r.g)
-                .fold(f64::NEG_INFINITY, f64::max);
-            self.damping_peaks.push((x.to_vec(), peak));
+            self.damping_peaks.push((x.to_vec(), seed.peak()));
             flutter = Some((weights, seed));
         }
         let v = Values {

@@ -13,7 +13,7 @@ const KEPT_FROM_OTHER_COMMANDS: &[&str] = &["sweep"];
 
 /// Files of a previous run that a new one may reuse, by name prefix (the LFD's steady states,
 /// `steady_lfd_<hash>.bin`: the reader checks that a state fits and is converged).
-const REUSABLE_PREFIXES: &[&str] = &["steady_lfd_"];
+const REUSABLE_PREFIXES: &[&str] = &[crate::aero::lfd::STEADY_PREFIX];
 
 /// Files that make a staging folder worth keeping after a failure: an optimization's checkpoint.
 const CHECKPOINT_FILES: &[&str] = &["checkpoint.json", "checkpoint_study.json"];

@@ -48,9 +48,15 @@ pub fn check_bytes(what: &str, bytes: f64) -> Result<(), String> {
         return Ok(());
     }
     Err(format!(
-        "{what} needs about {} of memory, above the limit of {limit_gb} GB (this machine has 24 GB shared with other jobs; {MEMORY_LIMIT_ENV} sets the limit): make it smaller",
-        gb(bytes / 1e9)
+        "{what} needs about {} of memory, {}",
+        gb(bytes / 1e9),
+        over_limit(limit_gb)
     ))
+}
+
+/// The end of every refusal: the limit, where it comes from, what to do.
+fn over_limit(limit_gb: f64) -> String {
+    format!("above the limit of {limit_gb} GB (this machine has 24 GB shared with other jobs; {MEMORY_LIMIT_ENV} sets the limit): make it smaller")
 }
 
 /// One large allocation of a run: what it is, the field that sizes it, and its bytes.
@@ -103,10 +109,11 @@ pub fn check(
     Err(study.err(
         &largest.path,
         format!(
-            "{} needs about {} of memory; {context}{copies_note} would take about {}, above the limit of {limit_gb} GB (this machine has 24 GB shared with other jobs; {MEMORY_LIMIT_ENV} sets the limit): make it smaller",
+            "{} needs about {} of memory; {context}{copies_note} would take about {}, {}",
             largest.what,
             gb(largest.bytes / 1e9),
-            gb(total_gb)
+            gb(total_gb),
+            over_limit(limit_gb)
         ),
     ))
 }

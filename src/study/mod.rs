@@ -182,8 +182,7 @@ impl Study {
         let footprints = self.memory_footprints(self.spec.optimization.is_some());
         limits::check(self, &footprints[..1], 1, "the modal analysis")?;
         let plate = self.build_model()?;
-        let fields = self.mode_fields();
-        let dofs: usize = fields.iter().map(|f| plate.n_dofs(*f)).sum();
+        let dofs = self.retained_dofs(&plate);
         if st.modes > dofs {
             return Err(self.err(
                 "structure.modes",
@@ -290,15 +289,6 @@ impl Study {
             return Err(self.err(
                 "optimization.rms_max",
                 format!("must be positive (got {})", o.rms_max),
-            ));
-        }
-        if o.max_iterations == 0 {
-            return Err(self.err("optimization.max_iterations", "must be at least 1"));
-        }
-        if !(o.tolerance > 0.0) {
-            return Err(self.err(
-                "optimization.tolerance",
-                format!("must be positive (got {})", o.tolerance),
             ));
         }
         if let Some(m) = &o.flutter_margin {
@@ -717,6 +707,11 @@ impl Study {
             };
             self.err(&path, reason)
         })
+    }
+
+    /// Degrees of freedom of the plate in the retained fields: the most modes it has.
+    pub fn retained_dofs(&self, plate: &PlateModel) -> usize {
+        self.mode_fields().iter().map(|f| plate.n_dofs(*f)).sum()
     }
 
     /// Plate fields whose modes are retained.

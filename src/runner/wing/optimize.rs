@@ -317,12 +317,7 @@ pub fn optimize(
             return Ok(Some(*g));
         }
         let e = crate::pipeline::evaluate(study, &settings, x)?;
-        let (_, _, seed) = e.flutter_damping(m)?;
-        let g = seed
-            .roots
-            .iter()
-            .map(|r| r.g)
-            .fold(f64::NEG_INFINITY, f64::max);
+        let g = e.flutter_damping(m)?.2.peak();
         peaks.push((x.to_vec(), g));
         Ok(Some(g))
     };
@@ -436,12 +431,7 @@ fn flutter_check(
     let flight = &ev.aero.flight;
     let v_max = FLUTTER_CHECK_FACTOR * flight.velocity;
     let st = &study.spec.structure;
-    let dofs: usize = study
-        .mode_fields()
-        .iter()
-        .map(|f| ev.plate.n_dofs(*f))
-        .sum();
-    let more = (st.modes + 2).min(dofs);
+    let more = (st.modes + 2).min(study.retained_dofs(&ev.plate));
     let final_more_modes = if more > st.modes {
         let wider =
             crate::structure::modal::solve(&ev.plate, more, st.damping_ratio, &study.mode_fields())
