@@ -83,7 +83,10 @@ impl WingBuilder for DlmSpec {
     }
 
     fn capabilities(&self) -> Capabilities {
-        Capabilities { reverse: true }
+        Capabilities {
+            reverse: true,
+            reverse_planform: true,
+        }
     }
 
     fn validate(&self, wing: &WingContext) -> Result<(), BuildError> {

@@ -451,8 +451,12 @@ impl WingBuilder for LfdWingSpec {
     }
 
     fn capabilities(&self) -> Capabilities {
-        // the LFD adjoint is not built yet
-        Capabilities { reverse: false }
+        // the LFD adjoint covers the mode shapes; the planform's (mesh motion, q₀ and the LFD
+        // operator's second derivatives) is not built yet
+        Capabilities {
+            reverse: true,
+            reverse_planform: false,
+        }
     }
 
     fn validate(&self, wing: &WingContext) -> Result<(), BuildError> {

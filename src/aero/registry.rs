@@ -13,8 +13,11 @@ use serde::{Deserialize, Serialize};
 /// What a fidelity can do.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Capabilities {
-    /// Reverse mode of the GAFs (adjoint gradients, optimization, check-gradient).
+    /// Reverse mode of the GAFs with respect to the mode shapes (adjoint gradients of the
+    /// thickness variables, which act only through the modes).
     pub reverse: bool,
+    /// The reverse mode also covers the planform variables (they move the model's geometry).
+    pub reverse_planform: bool,
 }
 
 impl Capabilities {
@@ -26,6 +29,19 @@ impl Capabilities {
         } else {
             Err(format!(
                 "{what} needs adjoint gradients, and the {name} fidelity has no reverse mode"
+            ))
+        }
+    }
+
+    /// Refuses a use that needs the gradients of the planform variables from a fidelity whose
+    /// reverse mode covers the mode shapes only.
+    pub fn require_planform_reverse(self, name: &str, what: &str) -> Result<(), String> {
+        self.require_reverse(name, what)?;
+        if self.reverse_planform {
+            Ok(())
+        } else {
+            Err(format!(
+                "{what} needs the gradients of the planform variables (span, sweep_c4, root_chord, tip_chord), and the {name} fidelity's reverse mode covers the thickness variables only (the planform moves its mesh, whose linearization is not implemented yet); gustkit check-gradient --dv t[i] checks the thickness gradients"
             ))
         }
     }
@@ -127,8 +143,14 @@ impl SectionFidelitySpec {
     /// theory has one.
     pub fn capabilities(&self) -> Capabilities {
         match self {
-            SectionFidelitySpec::Lfd(_) => Capabilities { reverse: false },
-            SectionFidelitySpec::Strip(_) => Capabilities { reverse: true },
+            SectionFidelitySpec::Lfd(_) => Capabilities {
+                reverse: true,
+                reverse_planform: true,
+            },
+            SectionFidelitySpec::Strip(_) => Capabilities {
+                reverse: true,
+                reverse_planform: true,
+            },
         }
     }
 

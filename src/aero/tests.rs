@@ -104,8 +104,10 @@ fn model_without_reverse_mode_is_refused_by_name() {
     assert!(study.aero_model(&plate).unwrap().has_reverse());
 }
 
-/// Capabilities come from the spec alone: the DLM and strip theory have a reverse mode, the
-/// section LFD not yet; a use that needs gradients is refused with the fidelity's name.
+/// Capabilities come from the spec alone: the DLM, strip theory and the section LFD have a
+/// reverse mode (the section has no planform); a use that needs gradients of a fidelity without
+/// one, or the planform's of one whose reverse mode covers the mode shapes only, is refused with
+/// the fidelity's name.
 #[test]
 fn capabilities_are_known_before_building() {
     let dlm = DlmSpec {
@@ -126,11 +128,26 @@ fn capabilities_are_known_before_building() {
         },
         order: crate::aero::lfd::OrderSpec::Second,
     });
-    let caps = lfd.capabilities();
-    assert!(!caps.reverse);
-    let e = caps.require_reverse("lfd", "optimization").unwrap_err();
+    assert!(lfd.capabilities().require_reverse("lfd", "x").is_ok());
+    let none = Capabilities {
+        reverse: false,
+        reverse_planform: false,
+    };
+    let e = none.require_reverse("fake", "optimization").unwrap_err();
     assert!(
-        e.contains("optimization") && e.contains("lfd fidelity has no reverse mode"),
+        e.contains("optimization") && e.contains("fake fidelity has no reverse mode"),
+        "{e}"
+    );
+    let shapes_only = Capabilities {
+        reverse: true,
+        reverse_planform: false,
+    };
+    assert!(shapes_only.require_reverse("lfd", "x").is_ok());
+    let e = shapes_only
+        .require_planform_reverse("lfd", "optimization")
+        .unwrap_err();
+    assert!(
+        e.contains("optimization") && e.contains("thickness variables only"),
         "{e}"
     );
     let strip = SectionFidelitySpec::Strip(crate::aero::strip::StripSpec::default());

@@ -219,13 +219,14 @@ impl Study {
         }
         if self.spec.optimization.is_some() {
             self.design_bounds()?;
-            self.require_reverse_mode("optimization")?;
+            self.require_reverse_mode("optimization", true)?;
         }
         Ok(())
     }
 
-    /// Refuses a study whose fidelity has no reverse mode where `what` needs gradients.
-    pub fn require_reverse_mode(&self, what: &str) -> Result<(), StudyError> {
+    /// Refuses a study whose fidelity has no reverse mode where `what` needs gradients (those of
+    /// the planform variables too when `planform`).
+    pub fn require_reverse_mode(&self, what: &str, planform: bool) -> Result<(), StudyError> {
         let aero = self.spec.aero.as_ref().ok_or_else(|| {
             self.err(
                 "aero",
@@ -233,10 +234,13 @@ impl Study {
             )
         })?;
         let builder = aero.fidelity.builder();
-        builder
-            .capabilities()
-            .require_reverse(builder.name(), what)
-            .map_err(|reason| self.err(&format!("aero.fidelity.{}", builder.name()), reason))
+        let caps = builder.capabilities();
+        if planform {
+            caps.require_planform_reverse(builder.name(), what)
+        } else {
+            caps.require_reverse(builder.name(), what)
+        }
+        .map_err(|reason| self.err(&format!("aero.fidelity.{}", builder.name()), reason))
     }
 
     /// A fidelity builder's error, with the JSON path of the field in this study.

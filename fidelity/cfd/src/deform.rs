@@ -85,6 +85,37 @@ impl Deformation {
             })
             .collect()
     }
+
+    /// The transpose of [`Deformation::apply`]: for a seed on every mesh node's displacement, the
+    /// seed on the wall nodes' displacements (the map is real, so complex seeds go through as
+    /// they are).
+    pub fn apply_transpose<T: Field>(&self, seed: &[[T; 3]]) -> Vec<[T; 3]> {
+        let mut wall = vec![[T::zero(); 3]; self.wall_nodes.len()];
+        for (n, p) in self.nodes.iter().enumerate() {
+            if let Some(i) = self.on_wall[n] {
+                for k in 0..3 {
+                    wall[i][k] = wall[i][k] + seed[n][k];
+                }
+                continue;
+            }
+            if self.blend[n] == 0.0 {
+                continue;
+            }
+            let total: f64 = self
+                .wall_nodes
+                .iter()
+                .map(|&w| dist(p, &self.nodes[w]).powi(-POWER))
+                .sum();
+            let scale = self.blend[n] / total;
+            for (i, &w) in self.wall_nodes.iter().enumerate() {
+                let weight = dist(p, &self.nodes[w]).powi(-POWER) * scale;
+                for k in 0..3 {
+                    wall[i][k] = wall[i][k] + seed[n][k] * weight;
+                }
+            }
+        }
+        wall
+    }
 }
 
 fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {

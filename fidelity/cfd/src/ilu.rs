@@ -155,6 +155,39 @@ impl<T: Field> BlockIlu<T> {
         }
         x
     }
+
+    /// x = (LU)⁻ᵀ b (transposed, not conjugated): Uᵀ y = b forward, then Lᵀ x = y backward, both
+    /// column by column over the stored rows.
+    pub fn apply_transpose(&self, b: &[T]) -> Vec<T> {
+        let n = self.rows.len();
+        let mut r = b.to_vec();
+        for i in 0..n {
+            let d = &self.inv_diag[i];
+            let y: [T; NVAR] = std::array::from_fn(|a| {
+                (0..NVAR).fold(T::zero(), |s, c| s + d[c][a] * r[i * NVAR + c])
+            });
+            for a in 0..NVAR {
+                r[i * NVAR + a] = y[a];
+            }
+            for (j, u) in &self.rows[i][self.diag[i] + 1..] {
+                for c in 0..NVAR {
+                    let s = (0..NVAR).fold(T::zero(), |s, a| s + u[a][c] * y[a]);
+                    r[j * NVAR + c] = r[j * NVAR + c] - s;
+                }
+            }
+        }
+        for i in (0..n).rev() {
+            let x: [T; NVAR] = std::array::from_fn(|a| r[i * NVAR + a]);
+            for p in 0..self.diag[i] {
+                let (k, l) = &self.rows[i][p];
+                for c in 0..NVAR {
+                    let s = (0..NVAR).fold(T::zero(), |s, a| s + l[a][c] * x[a]);
+                    r[k * NVAR + c] = r[k * NVAR + c] - s;
+                }
+            }
+        }
+        r
+    }
 }
 
 #[cfg(test)]
@@ -206,5 +239,58 @@ mod tests {
             .map(|(p, q)| (p - q).norm())
             .fold(0.0, f64::max);
         assert!(err < 1e-12, "{err:e}");
+    }
+
+    /// The transposed application is the transpose of the application: yᵀ (M⁻¹ x) = (M⁻ᵀ y)ᵀ x
+    /// to round-off, on a block pattern with fill dropped (a 2-D five-point stencil).
+    #[test]
+    fn transpose_is_the_adjoint_of_apply() {
+        let (nx, ny) = (6, 5);
+        let n = nx * ny;
+        let r = gustkit_testkit::rand_vec(5 * n * NVAR * NVAR, 11);
+        let mut blocks: Blocks = Vec::new();
+        let mut next = 0;
+        for j in 0..ny {
+            for i in 0..nx {
+                let row = j * nx + i;
+                let mut add = |col: usize, diag: f64| {
+                    let o = next;
+                    next += 1;
+                    blocks.push((
+                        row,
+                        col,
+                        std::array::from_fn(|a| {
+                            std::array::from_fn(|c| {
+                                r[(o * NVAR + a) * NVAR + c] + if a == c { diag } else { 0.0 }
+                            })
+                        }),
+                    ));
+                };
+                add(row, 8.0);
+                if i > 0 {
+                    add(row - 1, 0.0);
+                }
+                if i + 1 < nx {
+                    add(row + 1, 0.0);
+                }
+                if j > 0 {
+                    add(row - nx, 0.0);
+                }
+                if j + 1 < ny {
+                    add(row + nx, 0.0);
+                }
+            }
+        }
+        let ilu = BlockIlu::new(n, &blocks, &|_| C64::new(0.5, 2.0)).unwrap();
+        let x: Vec<C64> = (0..n * NVAR)
+            .map(|i| C64::new((i as f64 * 0.7).sin(), (i as f64 * 0.3).cos()))
+            .collect();
+        let y: Vec<C64> = (0..n * NVAR)
+            .map(|i| C64::new((i as f64 * 1.1).cos(), (i as f64 * 0.9).sin()))
+            .collect();
+        let dot = |a: &[C64], b: &[C64]| a.iter().zip(b).map(|(p, q)| p * q).sum::<C64>();
+        let lhs = dot(&y, &ilu.apply(&x));
+        let rhs = dot(&ilu.apply_transpose(&y), &x);
+        assert!((lhs - rhs).norm() < 1e-13 * lhs.norm(), "{lhs} vs {rhs}");
     }
 }

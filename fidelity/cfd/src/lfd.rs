@@ -211,15 +211,7 @@ impl LfdOperator {
     /// right-hand sides in parallel).
     pub fn solve(&self, f: &Factored, rhs: &[Field]) -> Result<Vec<(Field, GmresInfo)>, LfdError> {
         self.params.validate().map_err(LfdError::Input)?;
-        let prec = |v: &[C64]| -> Vec<C64> {
-            match &f.factors {
-                Factors::Lu(lu) => {
-                    let m = lu.solve(Mat::<C64>::from_fn(v.len(), 1, |i, _| v[i]));
-                    (0..v.len()).map(|i| m[(i, 0)]).collect()
-                }
-                Factors::Ilu(ilu) => ilu.apply(v),
-            }
-        };
+        let prec = |v: &[C64]| self.precondition(f, v);
         let op = |v: &[C64]| self.apply(f.s, v);
         rhs.par_iter()
             .enumerate()
@@ -433,6 +425,42 @@ impl LfdOperator {
             observe(step, t, &q);
         }
         Ok(())
+    }
+
+    /// Whether the preconditioner's blocks are the exact Jacobian of the scheme (then they also
+    /// give the adjoint's transposed products).
+    pub(crate) fn blocks_are_exact(&self) -> bool {
+        matches!(
+            self.preconditioner,
+            Preconditioner::Exact | Preconditioner::BlockIlu
+        )
+    }
+
+    /// The Jacobian blocks at q₀ of the preconditioner's matrix.
+    pub(crate) fn blocks(&self) -> &Blocks {
+        &self.blocks
+    }
+
+    /// The preconditioner applied to v: M⁻¹ v.
+    pub(crate) fn precondition(&self, f: &Factored, v: &[C64]) -> Field {
+        match &f.factors {
+            Factors::Lu(lu) => {
+                let m = lu.solve(Mat::<C64>::from_fn(v.len(), 1, |i, _| v[i]));
+                (0..v.len()).map(|i| m[(i, 0)]).collect()
+            }
+            Factors::Ilu(ilu) => ilu.apply(v),
+        }
+    }
+
+    /// The transposed preconditioner applied to v: M⁻ᵀ v (not conjugated), for the adjoint.
+    pub(crate) fn precondition_transpose(&self, f: &Factored, v: &[C64]) -> Field {
+        match &f.factors {
+            Factors::Lu(lu) => {
+                let m = lu.solve_transpose(Mat::<C64>::from_fn(v.len(), 1, |i, _| v[i]));
+                (0..v.len()).map(|i| m[(i, 0)]).collect()
+            }
+            Factors::Ilu(ilu) => ilu.apply_transpose(v),
+        }
     }
 
     /// The preconditioner factored for a given shift s (the frequency only labels errors).

@@ -10,8 +10,10 @@
 //! Jacobian by colouring ([`jacobian`]), GMRES over real and complex fields ([`krylov`]), the
 //! steady Newton solver ([`steady`]), the BDF2 time domain on moving meshes ([`unsteady`]), the
 //! LFD equations for gusts and mode motion ([`lfd`]), mesh deformation for mode shapes
-//! ([`deform`]) and the `Aerodynamics` implementation ([`gafs`]).
+//! ([`deform`]), the `Aerodynamics` implementation ([`gafs`]) and the transposed linearizations of
+//! its reverse mode, recorded on an operation tape ([`adjoint`]).
 
+pub mod adjoint;
 pub mod airfoil;
 pub mod deform;
 pub mod flux;

@@ -4,6 +4,7 @@
 pub mod aero;
 pub mod scalar;
 pub mod strip;
+pub mod tape;
 pub mod theory;
 
 pub use aero::{

@@ -6,6 +6,15 @@ use anyhow::Result;
 use serde::Serialize;
 use std::time::Instant;
 
+/// A scratch folder removed when dropped.
+struct ScratchDir(std::path::PathBuf);
+
+impl Drop for ScratchDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
 /// One row of `gustkit check-gradient`.
 #[derive(Serialize)]
 pub struct GradientRow {
@@ -20,8 +29,21 @@ pub struct GradientRow {
 /// `gustkit check-gradient`: the adjoint gradient of the first gust output's RMS against central
 /// finite differences at relative steps 1e-2 … 1e-8 (paper Table 4), in SI units.
 pub fn check_gradient(study: &Study, dvs: &[String], json: bool) -> Result<()> {
-    study.require_reverse_mode("check-gradient")?;
-    let study = study.clone();
+    let planform = dvs.iter().any(|d| !d.starts_with("t["));
+    study.require_reverse_mode(&format!("check-gradient --dv {}", dvs.join(" ")), planform)?;
+    let mut study = study.clone();
+    // a fidelity that keeps state between builds (the LFD's steady solution) keeps it here for
+    // the finite differences, which do not move it (thickness steps) or restart from it
+    let _scratch = match study.cache_dir {
+        Some(_) => None,
+        None => {
+            let dir =
+                std::env::temp_dir().join(format!("gustkit-check-gradient-{}", std::process::id()));
+            std::fs::create_dir_all(&dir)?;
+            study.cache_dir = Some(dir.clone());
+            Some(ScratchDir(dir))
+        }
+    };
     let settings = study.gust_settings()?;
     let x0 = study.initial_design()?.to_vec();
     let design = study.initial_design()?;
