@@ -2,6 +2,7 @@
 //! conventions, and a small forward-mode AD scalar. No solver code lives here.
 
 pub mod aero;
+pub mod hyperdual;
 pub mod scalar;
 pub mod strip;
 pub mod tape;

@@ -179,9 +179,7 @@ impl WingMesh {
         let mut stations: Vec<f64> = (0..=spec.n_span)
             .map(|s| (0.5 * std::f64::consts::PI * s as f64 / spec.n_span as f64).sin())
             .collect();
-        let last = p[0] * (1.0 - stations[spec.n_span - 1]);
-        let far = spec.far_field_chords * p[2];
-        let outboard = geometric_distribution((last / far).min(0.5), spec.n_outboard);
+        let outboard = outboard_stations(p, &stations, spec);
         stations.extend(outboard.iter().skip(1));
         let radial = geometric_distribution(
             spec.first_spacing_chords / spec.far_field_chords,
@@ -208,6 +206,8 @@ impl WingMesh {
 
     /// Every node's position for the planform `p` (any scalar: dual numbers give dx/dp).
     pub fn nodes_at<S: Scalar>(&self, p: [S; N_PLANFORM]) -> Vec<[S; 3]> {
+        // the outboard planes follow the planform (their first spacing matches the tip's)
+        let outboard = outboard_stations(p, &self.stations, &self.spec);
         let [span, sweep, cr, ct] = p;
         let tan_le = sweep.tan() + (cr - ct) / (span * 4.0);
         let far = cr * self.spec.far_field_chords;
@@ -229,7 +229,12 @@ impl WingMesh {
                     let closure = if self.collapsed(s) { 0.0 } else { closure };
                     (z, z * tan_le, cr + (ct - cr) * eta, closure)
                 } else {
-                    (span + far * self.stations[s], span * tan_le, ct, 0.0)
+                    (
+                        span + far * outboard[s - self.spec.n_span],
+                        span * tan_le,
+                        ct,
+                        0.0,
+                    )
                 };
                 let sign = if 2 * i < n { 1.0 } else { -1.0 };
                 let bx = x_le + chord * self.x_c[i];
@@ -259,6 +264,58 @@ impl WingMesh {
     pub fn quality(&self) -> MeshQuality {
         quality(&self.mesh)
     }
+}
+
+/// The outboard planes' stations (fractions of the far-field distance, from 0 at the tip) for
+/// the planform `p`: a geometric distribution whose first step, as a length, equals the last
+/// spanwise step on the wing; `wing` holds the wing's η stations. Any scalar, so that node
+/// positions are differentiable in the planform.
+fn outboard_stations<S: Scalar>(p: [S; N_PLANFORM], wing: &[f64], spec: &WingMeshSpec) -> Vec<S> {
+    let last = p[0] * (1.0 - wing[spec.n_span - 1]);
+    let far = p[2] * spec.far_field_chords;
+    let first = last / far;
+    let first = if first.re() > 0.5 { S::cst(0.5) } else { first };
+    geometric_distribution_at(first, spec.n_outboard)
+}
+
+/// [`geometric_distribution`] in any scalar: the growth ratio g of first · Σ_{k<n} g^k = 1 found
+/// in f64 (within [1e-6, 10], as the f64 version), then one Newton step in S (exact first
+/// derivatives by the implicit function theorem; none when g sits at the bound).
+pub fn geometric_distribution_at<S: Scalar>(first: S, n: usize) -> Vec<S> {
+    let g0 = ratio_of(first.re(), n);
+    let powers: Vec<f64> = (0..n).map(|k| g0.powi(k as i32)).collect();
+    let residual = first * powers.iter().sum::<f64>() - 1.0;
+    let slope = first.re() * (1..n).map(|k| k as f64 * powers[k - 1]).sum::<f64>();
+    // a ratio held at the bisection's bound (very few, very stretched steps) does not move
+    let g = if residual.re().abs() < 1e-10 && slope != 0.0 {
+        S::cst(g0) - residual / slope
+    } else {
+        S::cst(g0)
+    };
+    let mut s = vec![S::zero()];
+    let mut step = first;
+    for _ in 0..n {
+        let last = *s.last().expect("starts with 0");
+        s.push(last + step);
+        step *= g;
+    }
+    let top = *s.last().expect("n > 0");
+    s.into_iter().map(|v| v / top).collect()
+}
+
+/// The growth ratio g with first · (g^n − 1)/(g − 1) = 1, by bisection.
+fn ratio_of(first: f64, n: usize) -> f64 {
+    let sum = |g: f64| (0..n).map(|k| g.powi(k as i32)).sum::<f64>() * first;
+    let (mut lo, mut hi) = (1e-6, 10.0);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if sum(mid) > 1.0 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    0.5 * (lo + hi)
 }
 
 /// Quality figures of any mesh with cell node lists.

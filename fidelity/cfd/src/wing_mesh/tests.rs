@@ -165,8 +165,9 @@ fn moving_mesh_preserves_uniform_flow() {
 }
 
 /// The nodes are one smooth function of the planform: the dual-number derivative of every node
-/// with respect to each planform variable equals the central difference (step 1e-6 relative) to
-/// 1e-7 of the largest node derivative; the topology does not depend on the planform.
+/// with respect to each planform variable equals the central difference (step 1e-6 relative) of
+/// meshes generated afresh at the moved planforms (the outboard planes' distribution included)
+/// to 1e-7 of the largest node derivative; the topology does not depend on the planform.
 #[test]
 fn planform_derivatives_are_exact() {
     let p = agard();
@@ -179,7 +180,10 @@ fn planform_derivatives_are_exact() {
         let mut b = p;
         a[k] += h;
         b[k] -= h;
-        let (xa, xb) = (w.nodes_at(a), w.nodes_at(b));
+        let (xa, xb) = (
+            WingMesh::new(a, &section, &small()).mesh.nodes,
+            WingMesh::new(b, &section, &small()).mesh.nodes,
+        );
         let mut scale: f64 = 0.0;
         let mut worst: f64 = 0.0;
         for n in 0..xd.len() {
@@ -369,4 +373,29 @@ fn gust_lfd_matches_small_amplitude_time_domain_on_the_wing() {
     let digits = -((c - lift_hat).norm() / lift_hat.norm()).log10();
     eprintln!("wing gust LFD vs time domain: {digits:.2} digits ({c} vs {lift_hat})");
     assert!(digits >= 6.0, "{digits:.1} digits: {c} vs {lift_hat}");
+}
+
+
+/// The generic geometric distribution: the f64 values of the mesh module's, and dual-number
+/// derivatives with respect to the first step equal to central differences (step 1e-7) to 1e-7,
+/// for a ratio found by the bisection (0.05, 8 steps) and one held at its bound (0.0069, 3).
+#[test]
+fn geometric_distribution_derivatives() {
+    for (first, n) in [(0.05, 8), (0.0069, 3)] {
+        let plain = crate::mesh::geometric_distribution(first, n);
+        let here = geometric_distribution_at(first, n);
+        for (a, b) in plain.iter().zip(&here) {
+            assert!((a - b).abs() < 1e-12, "{a} vs {b}");
+        }
+        let d = geometric_distribution_at(Dual::<1>::var(first, 0), n);
+        let h = 1e-7;
+        let (a, b) = (
+            geometric_distribution_at(first + h, n),
+            geometric_distribution_at(first - h, n),
+        );
+        for i in 0..=n {
+            let fd = (a[i] - b[i]) / (2.0 * h);
+            assert!((d[i].d[0] - fd).abs() < 1e-7 * fd.abs().max(1.0), "{first} {i}: {} vs {fd}", d[i].d[0]);
+        }
+    }
 }
