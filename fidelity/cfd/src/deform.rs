@@ -17,6 +17,8 @@ pub struct Deformation {
     /// Per mesh node: the blending factor (1 at the wall, 0 beyond `radius`).
     blend: Vec<f64>,
     nodes: Vec<[f64; 3]>,
+    /// The blending radius (mesh units).
+    pub radius: f64,
 }
 
 /// Inverse-distance exponent.
@@ -56,7 +58,59 @@ impl Deformation {
             on_wall,
             blend,
             nodes: mesh.nodes.clone(),
+            radius,
         }
+    }
+
+    /// [`Deformation::apply`] with the mesh nodes at `nodes` and the blending radius `radius`, in
+    /// any scalar: with dual numbers, the derivative of the spread displacements as the mesh (and
+    /// the radius, which follows the root chord) moves with the planform. The topology (which
+    /// nodes are wall nodes) stays.
+    pub fn apply_at<S: gustkit_core::scalar::Scalar>(
+        &self,
+        nodes: &[[S; 3]],
+        radius: S,
+        wall: &[[f64; 3]],
+    ) -> Vec<[S; 3]> {
+        let dist = |a: &[S; 3], b: &[S; 3]| {
+            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+        };
+        nodes
+            .iter()
+            .enumerate()
+            .map(|(n, p)| {
+                if let Some(i) = self.on_wall[n] {
+                    return wall[i].map(S::cst);
+                }
+                if self.blend[n] == 0.0 {
+                    return [S::zero(); 3];
+                }
+                let mut nearest = S::cst(f64::MAX);
+                let mut sum = [S::zero(); 3];
+                let mut total = S::zero();
+                for (i, &w) in self.wall_nodes.iter().enumerate() {
+                    let d = dist(p, &nodes[w]);
+                    if d.re() < nearest.re() {
+                        nearest = d;
+                    }
+                    let weight = d.powi(-POWER);
+                    total += weight;
+                    for k in 0..3 {
+                        sum[k] += weight * wall[i][k];
+                    }
+                }
+                let t = (nearest - radius * 0.1) / (radius * 0.9);
+                let blend = if t.re() <= 0.0 {
+                    S::one()
+                } else if t.re() >= 1.0 {
+                    S::zero()
+                } else {
+                    S::one() - t * t * (S::cst(3.0) - t * 2.0)
+                };
+                let scale = blend / total;
+                sum.map(|v| v * scale)
+            })
+            .collect()
     }
 
     /// The displacement of every mesh node for displacements `wall` of the wall nodes.

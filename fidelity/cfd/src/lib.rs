@@ -24,6 +24,7 @@ pub mod jacobian;
 pub mod krylov;
 pub mod lfd;
 pub mod mesh;
+pub mod mesh_sensitivity;
 pub mod readers;
 pub mod reconstruct;
 pub mod residual;

@@ -219,6 +219,52 @@ impl Euler {
             .collect()
     }
 
+    /// [`Euler::harmonic_gust_fluxes`] with the nodes at `nodes`, in any scalar (real and
+    /// imaginary parts): with dual numbers, their derivative as the mesh moves.
+    pub fn harmonic_gust_fluxes_at<S: Scalar>(
+        &self,
+        nodes: &[[S; 3]],
+        omega: f64,
+        convection: f64,
+        x0: f64,
+    ) -> Vec<[S; 2]> {
+        let kappa = omega / convection;
+        // ŵ(x) = e^{−iκ(x − x0)} as (re, im)
+        let w_hat = |x: S| {
+            let (s, c) = ((x - x0) * (-kappa)).sin_cos();
+            [c, s]
+        };
+        self.mesh
+            .faces
+            .iter()
+            .map(|f| {
+                let pts: Vec<[S; 3]> = f.nodes.iter().map(|&n| nodes[n]).collect();
+                let (mut xa, mut xb) = (pts[0][0], pts[0][0]);
+                for p in &pts[1..] {
+                    if p[0].re() < xa.re() {
+                        xa = p[0];
+                    }
+                    if p[0].re() > xb.re() {
+                        xb = p[0];
+                    }
+                }
+                if xb.re() - xa.re() <= 0.0 {
+                    return [S::zero(); 2];
+                }
+                let area_y = crate::mesh::face_area(&pts)[1];
+                let mean = if kappa * (xb.re() - xa.re()) < 1e-12 {
+                    w_hat((xa + xb) * 0.5)
+                } else {
+                    // (ŵ(xb) − ŵ(xa)) / (−iκ (xb − xa)) = i (ŵ(xb) − ŵ(xa)) / (κ (xb − xa))
+                    let (a, b) = (w_hat(xa), w_hat(xb));
+                    let d = (xb - xa) * kappa;
+                    [-(b[1] - a[1]) / d, (b[0] - a[0]) / d]
+                };
+                [-mean[0] * area_y, -mean[1] * area_y]
+            })
+            .collect()
+    }
+
     /// The flux through face `f` out of its left cell, for the left state `ql` and, for interior
     /// faces, the right state `qr`.
     pub fn face_flux<S: Scalar>(&self, f: usize, ql: &State<S>, qr: Option<&State<S>>) -> State<S> {

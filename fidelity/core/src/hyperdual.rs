@@ -242,7 +242,8 @@ mod tests {
     fn mixed_second_derivatives() {
         let x0 = [0.7, -1.3];
         let (e, d) = ([0.4, -0.9], [1.1, 0.3]);
-        let hd: [HyperDual<1>; 2] = std::array::from_fn(|i| HyperDual::new(x0[i], [e[i]], d[i], [0.0]));
+        let hd: [HyperDual<1>; 2] =
+            std::array::from_fn(|i| HyperDual::new(x0[i], [e[i]], d[i], [0.0]));
         let y = kernel(&hd);
         let dual_at = |t: f64, dir: [f64; 2]| {
             let x: [Dual<1>; 2] = std::array::from_fn(|i| Dual::new(x0[i] + t * d[i], [dir[i]]));
@@ -252,6 +253,10 @@ mod tests {
         assert!((y.b - dual_at(0.0, d)).abs() < 1e-13);
         let h = 1e-5;
         let fd = (dual_at(h, e) - dual_at(-h, e)) / (2.0 * h);
-        assert!((y.ab[0] - fd).abs() < 1e-8 * fd.abs().max(1.0), "{} vs {fd}", y.ab[0]);
+        assert!(
+            (y.ab[0] - fd).abs() < 1e-8 * fd.abs().max(1.0),
+            "{} vs {fd}",
+            y.ab[0]
+        );
     }
 }

@@ -375,7 +375,6 @@ fn gust_lfd_matches_small_amplitude_time_domain_on_the_wing() {
     assert!(digits >= 6.0, "{digits:.1} digits: {c} vs {lift_hat}");
 }
 
-
 /// The generic geometric distribution: the f64 values of the mesh module's, and dual-number
 /// derivatives with respect to the first step equal to central differences (step 1e-7) to 1e-7,
 /// for a ratio found by the bisection (0.05, 8 steps) and one held at its bound (0.0069, 3).
@@ -395,7 +394,11 @@ fn geometric_distribution_derivatives() {
         );
         for i in 0..=n {
             let fd = (a[i] - b[i]) / (2.0 * h);
-            assert!((d[i].d[0] - fd).abs() < 1e-7 * fd.abs().max(1.0), "{first} {i}: {} vs {fd}", d[i].d[0]);
+            assert!(
+                (d[i].d[0] - fd).abs() < 1e-7 * fd.abs().max(1.0),
+                "{first} {i}: {} vs {fd}",
+                d[i].d[0]
+            );
         }
     }
 }

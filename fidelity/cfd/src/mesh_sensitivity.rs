@@ -1,0 +1,309 @@
+//! Derivatives of the LFD along a motion of the mesh (the planform variables move the built-in
+//! wing mesh): the steady tangent and the second-derivative terms of paper Eq. 19.
+//!
+//! For a mesh tangent δX (and the deformation radius's rate δr) the GAFs change through
+//! - the steady state: δq₀ = −(∂R/∂q)⁻¹ ∂R/∂X δX (one steady tangent solve a direction, with the
+//!   LFD machinery at ω = 0);
+//! - the LFD operator and right-hand sides at the fixed solution q̂: t = δ(A q̂ + b), the mixed
+//!   second derivatives of the residual, cell volumes and swept volumes, all in one evaluation
+//!   over hyper-dual numbers (ε: the real and imaginary parts of the LFD perturbation, δ: the
+//!   mesh direction, with δq₀ and the tangent δx̂ of the spread mode shape);
+//! - the linearized wall forces at fixed q̂: the same evaluation's ∂f̂.
+//!
+//! With the adjoint solutions λ of the mode-shape reverse mode (and one more for the gust column)
+//! the seeded GAFs' derivative is Σ_k Σ_columns Re(uᵀ ∂f̂ − λᵀ t): no LFD solve per direction.
+
+use crate::gas::NVAR;
+use crate::lfd::{Field, LfdError, LfdOperator, Symbol};
+use crate::residual::State;
+use gustkit_core::hyperdual::HyperDual;
+use gustkit_core::scalar::{Dual, Scalar};
+use num_complex::Complex64 as C64;
+
+/// A direction of mesh motion: the nodes' rates (mesh units per unit of the parameter) and the
+/// deformation radius's rate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshTangent {
+    /// The parameter's name (e.g. "span").
+    pub name: String,
+    pub nodes: Vec<[f64; 3]>,
+    pub radius: f64,
+}
+
+type Hd = HyperDual<2>;
+
+fn hd(v: f64, a: C64, b: f64, ab: C64) -> Hd {
+    HyperDual::new(v, [a.re, a.im], b, [ab.re, ab.im])
+}
+
+fn a_part(x: Hd) -> C64 {
+    C64::new(x.a[0], x.a[1])
+}
+
+fn ab_part(x: Hd) -> C64 {
+    C64::new(x.ab[0], x.ab[1])
+}
+
+/// What drives an LFD column: a mode motion (node displacements x̂ and their tangent δx̂) or the
+/// gust (face volume fluxes ĝ, already scaled, and their tangent δĝ).
+pub enum Column<'a> {
+    Motion {
+        x_hat: &'a [[C64; 3]],
+        dx_hat: &'a [[C64; 3]],
+    },
+    Gust {
+        g: &'a [C64],
+        dg: &'a [C64],
+    },
+}
+
+impl LfdOperator {
+    /// The steady tangent δq₀ = −(∂R/∂q)⁻¹ ∂R/∂X δX of a mesh motion δX (flattened like a
+    /// field), by GMRES with the ω = 0 preconditioner.
+    pub fn steady_tangent(&self, d_nodes: &[[f64; 3]]) -> Result<Vec<f64>, LfdError> {
+        let e = &self.euler;
+        let nodes: Vec<[Dual<1>; 3]> = e
+            .mesh
+            .nodes
+            .iter()
+            .zip(d_nodes)
+            .map(|(p, d)| std::array::from_fn(|k| Dual::new(p[k], [d[k]])))
+            .collect();
+        let vg = e.face_vg.iter().map(|v| Dual::cst(*v)).collect();
+        let geom = e.geometry_at(&nodes, vg, e.order);
+        let q: Vec<State<Dual<1>>> = self.q0.iter().map(|s| s.map(Dual::cst)).collect();
+        let b: Field = e
+            .residual_in(&q, &geom)
+            .0
+            .iter()
+            .flatten()
+            .map(|r| C64::new(r.d[0], 0.0))
+            .collect();
+        let f = self.factor(0.0, Symbol::Exact)?;
+        let (x, _) = self.solve(&f, &[b])?.pop().expect("one right-hand side");
+        Ok(x.iter().map(|z| z.re).collect())
+    }
+
+    /// The tangent δX · ∂/∂X at fixed LFD solution q̂ of one column: t = δ(A q̂ + b) per cell
+    /// state and ∂f̂ per wall face (in the order of [`LfdOperator::wall_face_forces`]), for the
+    /// mesh tangent `d_nodes` and the steady tangent `dq0`, at s.
+    pub fn column_tangent(
+        &self,
+        s: C64,
+        q_hat: &[C64],
+        column: &Column,
+        d_nodes: &[[f64; 3]],
+        dq0: &[f64],
+    ) -> (Field, Vec<[C64; 3]>) {
+        let e = &self.euler;
+        let mesh = &e.mesh;
+        let zero = C64::new(0.0, 0.0);
+        let order = e.order;
+        let node = |n: usize, with_motion: bool| -> [Hd; 3] {
+            std::array::from_fn(|k| match (column, with_motion) {
+                (Column::Motion { x_hat, dx_hat }, true) => {
+                    hd(mesh.nodes[n][k], x_hat[n][k], d_nodes[n][k], dx_hat[n][k])
+                }
+                _ => hd(mesh.nodes[n][k], zero, d_nodes[n][k], zero),
+            })
+        };
+        let nodes: Vec<[Hd; 3]> = (0..mesh.nodes.len()).map(|n| node(n, true)).collect();
+        let q: Vec<State<Hd>> = self
+            .q0
+            .iter()
+            .enumerate()
+            .map(|(c, qc)| {
+                std::array::from_fn(|k| hd(qc[k], q_hat[c * NVAR + k], dq0[c * NVAR + k], zero))
+            })
+            .collect();
+        let vg: Vec<Hd> = match column {
+            Column::Motion { .. } => mesh
+                .faces
+                .iter()
+                .enumerate()
+                .map(|(fi, f)| {
+                    // the swept volume from X to X + ε x̂, both moving with δ: its ε part is
+                    // L_X(x̂), its εδ part the derivative of that linearization
+                    let a: Vec<[Hd; 3]> = f.nodes.iter().map(|&n| node(n, false)).collect();
+                    let b: Vec<[Hd; 3]> = f.nodes.iter().map(|&n| nodes[n]).collect();
+                    let l = crate::mesh::swept_volume(&a, &b);
+                    hd(e.face_vg[fi], s * a_part(l), 0.0, s * ab_part(l))
+                })
+                .collect(),
+            Column::Gust { g, dg } => (0..mesh.faces.len())
+                .map(|fi| hd(e.face_vg[fi], g[fi], 0.0, dg[fi]))
+                .collect(),
+        };
+        let geom = e.geometry_at(&nodes, vg, order);
+        let r = e.residual_in(&q, &geom).0;
+        let v = mesh.volumes_at(&nodes);
+        let mut t = vec![zero; self.n()];
+        for c in 0..mesh.n_cells {
+            for k in 0..NVAR {
+                t[c * NVAR + k] = ab_part(r[c][k]) + s * ab_part(v[c] * q[c][k]);
+            }
+        }
+        let geom_f = e.geometry_at(&nodes, vec![Hd::cst(0.0); mesh.faces.len()], order);
+        let forces = e
+            .wall_face_forces(&q, &geom_f)
+            .into_iter()
+            .map(|(_, f)| f.map(ab_part))
+            .collect();
+        (t, forces)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::airfoil::AirfoilShape;
+    use crate::residual::{free_stream, Euler};
+    use crate::steady::SteadyParams;
+
+    /// The hyper-dual tangents of a motion column (A q̂ + B x̂ and the linearized forces) and of
+    /// the gust column (A q̂ + b_gust, with the generic gust fluxes' values equal to the plain
+    /// ones) equal central differences (step 1e-6) of the forward pieces on the moved mesh with
+    /// the moved steady state q₀ + h δq₀ and motion x̂ + h δx̂, to 1e-6 of their largest entry.
+    #[test]
+    fn column_tangents_match_differences_of_the_forward_pieces() {
+        let mesh = AirfoilShape::naca64a010().o_mesh(24, 8, 20.0, 0.004 / 20.0, 1.0);
+        let e = Euler::new(mesh, free_stream(0.5, 0.03));
+        let (q0, _) = e
+            .solve_steady(vec![e.q_inf; e.mesh.n_cells], &SteadyParams::default())
+            .unwrap();
+        let lfd = LfdOperator::new(e.clone(), q0.clone());
+        let nn = e.mesh.nodes.len();
+        // a smooth in-plane motion of the mesh and an arbitrary steady perturbation
+        let d_nodes: Vec<[f64; 3]> = e
+            .mesh
+            .nodes
+            .iter()
+            .map(|p| [0.1 * p[0] * p[0].cos(), 0.05 * p[0] * p[1] + 0.02, 0.0])
+            .collect();
+        let r = gustkit_testkit::rand_vec(lfd.n() + 6 * nn + 2 * lfd.n(), 9);
+        let dq0: Vec<f64> = (0..lfd.n()).map(|i| 1e-2 * r[i]).collect();
+        let q_hat: Field = (0..lfd.n())
+            .map(|i| C64::new(r[lfd.n() + 6 * nn + 2 * i], r[lfd.n() + 6 * nn + 2 * i + 1]))
+            .collect();
+        let motion = |seed: usize| -> Vec<[C64; 3]> {
+            (0..nn)
+                .map(|n| {
+                    let p = e.mesh.nodes[n];
+                    let on = if p[0].hypot(p[1]) < 8.0 { 1.0 } else { 0.0 };
+                    let i = lfd.n() + seed * 3 * nn + 3 * n;
+                    [
+                        C64::new(r[i], r[i + 1]) * on,
+                        C64::new(r[i + 2], -r[i]) * on,
+                        C64::new(0.0, 0.0),
+                    ]
+                })
+                .collect()
+        };
+        let (x_hat, dx_hat) = (motion(0), motion(1));
+        let s = C64::new(0.0, 0.7);
+        let (t, df) = lfd.column_tangent(
+            s,
+            &q_hat,
+            &Column::Motion {
+                x_hat: &x_hat,
+                dx_hat: &dx_hat,
+            },
+            &d_nodes,
+            &dq0,
+        );
+        // the forward pieces at mesh X + h δX, state q₀ + h δq₀, motion x̂ + h δx̂
+        let at = |h: f64| {
+            let mut m = e.mesh.clone();
+            for (p, d) in m.nodes.iter_mut().zip(&d_nodes) {
+                for k in 0..3 {
+                    p[k] += h * d[k];
+                }
+            }
+            let mut eh = Euler::new(m, e.q_inf);
+            eh.order = e.order;
+            let qh: Vec<State<f64>> = q0
+                .iter()
+                .enumerate()
+                .map(|(c, s)| std::array::from_fn(|k| s[k] + h * dq0[c * NVAR + k]))
+                .collect();
+            let op = LfdOperator::new(eh, qh);
+            let xh: Vec<[C64; 3]> = x_hat
+                .iter()
+                .zip(&dx_hat)
+                .map(|(a, b)| std::array::from_fn(|k| a[k] + b[k] * h))
+                .collect();
+            let aq = op.apply(s, &q_hat);
+            let b = op.motion_rhs(s, &xh);
+            let f = op.wall_face_forces(&q_hat, Some(&xh));
+            (aq.iter().zip(&b).map(|(a, b)| a + b).collect::<Vec<_>>(), f)
+        };
+        let h = 1e-6;
+        let ((tp, fp), (tm, fm)) = (at(h), at(-h));
+        let scale = t.iter().fold(0.0f64, |a, v| a.max(v.norm()));
+        for i in 0..t.len() {
+            let fd = (tp[i] - tm[i]) / (2.0 * h);
+            assert!(
+                (fd - t[i]).norm() < 1e-6 * scale,
+                "t[{i}]: {} vs {fd}",
+                t[i]
+            );
+        }
+        let fscale = df.iter().flatten().fold(0.0f64, |a, v| a.max(v.norm()));
+        for (w, d) in df.iter().enumerate() {
+            for k in 0..3 {
+                let fd = (fp[w].1[k] - fm[w].1[k]) / (2.0 * h);
+                assert!(
+                    (fd - d[k]).norm() < 1e-6 * fscale,
+                    "force {w}.{k}: {} vs {fd}",
+                    d[k]
+                );
+            }
+        }
+        // the gust column: ĝ and δĝ from the generic fluxes on the moving mesh
+        let nodes_d: Vec<[Dual<1>; 3]> = e
+            .mesh
+            .nodes
+            .iter()
+            .zip(&d_nodes)
+            .map(|(p, d)| std::array::from_fn(|k| Dual::new(p[k], [d[k]])))
+            .collect();
+        let gd = e.harmonic_gust_fluxes_at(&nodes_d, 0.7, 0.5, 0.1);
+        let g: Vec<C64> = gd.iter().map(|v| C64::new(v[0].v, v[1].v)).collect();
+        let dg: Vec<C64> = gd.iter().map(|v| C64::new(v[0].d[0], v[1].d[0])).collect();
+        let plain = e.harmonic_gust_fluxes(0.7, 0.5, 0.1);
+        for (a, b) in g.iter().zip(&plain) {
+            assert!((a - b).norm() < 1e-14, "{a} vs {b}");
+        }
+        let (t, _) =
+            lfd.column_tangent(s, &q_hat, &Column::Gust { g: &g, dg: &dg }, &d_nodes, &dq0);
+        let at = |h: f64| {
+            let mut m = e.mesh.clone();
+            for (p, d) in m.nodes.iter_mut().zip(&d_nodes) {
+                for k in 0..3 {
+                    p[k] += h * d[k];
+                }
+            }
+            let eh = Euler::new(m, e.q_inf);
+            let qh: Vec<State<f64>> = q0
+                .iter()
+                .enumerate()
+                .map(|(c, s)| std::array::from_fn(|k| s[k] + h * dq0[c * NVAR + k]))
+                .collect();
+            let op = LfdOperator::new(eh, qh);
+            let gh = op.euler.harmonic_gust_fluxes(0.7, 0.5, 0.1);
+            let aq = op.apply(s, &q_hat);
+            let b = op.volume_flux_rhs(&gh);
+            aq.iter().zip(&b).map(|(a, b)| a + b).collect::<Vec<_>>()
+        };
+        let (tp, tm) = (at(h), at(-h));
+        let scale = t.iter().fold(0.0f64, |a, v| a.max(v.norm()));
+        for i in 0..t.len() {
+            let fd = (tp[i] - tm[i]) / (2.0 * h);
+            assert!(
+                (fd - t[i]).norm() < 1e-6 * scale,
+                "gust t[{i}]: {} vs {fd}",
+                t[i]
+            );
+        }
+    }
+}
