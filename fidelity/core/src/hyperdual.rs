@@ -81,7 +81,9 @@ impl<const N: usize> Mul for HyperDual<N> {
 impl<const N: usize> Div for HyperDual<N> {
     type Output = Self;
     #[inline]
+    #[allow(clippy::suspicious_arithmetic_impl)]
     fn div(self, o: Self) -> Self {
+        // x / y = x · (1/y), the reciprocal with its own second derivative
         self * o.recip()
     }
 }
