@@ -6,15 +6,18 @@
 use super::registry::{
     BuildError, Capabilities, SurfaceBinding, WingBuilder, WingContext, WingFidelity,
 };
+use crate::wing::{N_PLANFORM, PLANFORM_NAMES};
 use anyhow::{Context, Result};
 use gustkit_cfd::airfoil::AirfoilShape;
 use gustkit_cfd::gafs::Lfd;
 use gustkit_cfd::lfd::{LfdOperator, LfdParams, Preconditioner};
 use gustkit_cfd::mesh::{Boundary, Mesh};
+use gustkit_cfd::mesh_sensitivity::MeshTangent;
 use gustkit_cfd::residual::{free_stream, Euler, Limiter, Order};
 use gustkit_cfd::steady::NewtonLinearSolver;
 use gustkit_cfd::steady::SteadyParams;
 use gustkit_cfd::wing_mesh::{WingMesh, WingMeshSpec};
+use gustkit_core::scalar::Dual;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -451,11 +454,10 @@ impl WingBuilder for LfdWingSpec {
     }
 
     fn capabilities(&self) -> Capabilities {
-        // the LFD adjoint covers the mode shapes; the planform's (mesh motion, q₀ and the LFD
-        // operator's second derivatives) is not built yet
+        // the mode shapes by adjoint LFD solves, the planform through the mesh tangents
         Capabilities {
             reverse: true,
-            reverse_planform: false,
+            reverse_planform: true,
         }
     }
 
@@ -568,11 +570,30 @@ impl WingBuilder for LfdWingSpec {
             .iter()
             .map(|&n| mesh.parametric(n))
             .collect();
+        // the planform variables move the mesh (and the deformation radius, a multiple of the
+        // root chord): their tangents, for the reverse mode's geometry gradient
+        let mut model = model;
+        let pd: [Dual<N_PLANFORM>; N_PLANFORM] = std::array::from_fn(|k| Dual::var(p[k], k));
+        let xd = mesh.nodes_at(pd);
+        model.tangents = (0..N_PLANFORM)
+            .map(|k| MeshTangent {
+                name: PLANFORM_NAMES[k].to_string(),
+                nodes: xd.iter().map(|x| x.map(|v| v.d[k])).collect(),
+                radius: if k == 2 {
+                    self.deform_radius_chords
+                } else {
+                    0.0
+                },
+            })
+            .collect();
+        let geometry_jacobian = (0..N_PLANFORM)
+            .map(|k| std::array::from_fn(|j| if j == k { 1.0 } else { 0.0 }))
+            .collect();
         Ok(WingFidelity {
             model: Box::new(model),
             binding: SurfaceBinding {
                 points,
-                geometry_jacobian: Vec::new(),
+                geometry_jacobian,
             },
         })
     }
