@@ -106,6 +106,14 @@ pub enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// The aerodynamic model's linearizations against their transposes and finite differences
+    /// at steps 1e-8 … 1e-13 (like paper Table 3), at the study's initial design.
+    CheckLinearization {
+        study: PathBuf,
+        /// Print the rows as JSON (name, forward, reverse, fd).
+        #[arg(long)]
+        json: bool,
+    },
     /// Time the structural chain (assembly, modes, all sensitivities) of a study.
     Bench {
         study: PathBuf,
@@ -164,6 +172,12 @@ pub fn dispatch(cli: Cli) -> Result<runner::Outcome> {
             &dv,
             json,
         )),
+        Command::CheckLinearization { study, json } => {
+            done(runner::wing::gradient::check_linearization(
+                &wing(&study, "check-linearization")?,
+                json,
+            ))
+        }
         Command::Bench {
             study,
             repeat,

@@ -512,6 +512,28 @@ impl WingBuilder for LfdWingSpec {
         Ok(())
     }
 
+    fn validate_gradients(&self, wing: &WingContext) -> Result<(), BuildError> {
+        self.validate(wing)?;
+        let cells = self.mesh_spec().n_cells();
+        let gb = self.memory_estimate_gb()
+            + gustkit_cfd::adjoint::LfdReverse::estimate_bytes(cells) as f64 / 1e9;
+        if !(gb <= self.memory_limit_gb) {
+            return Err(BuildError {
+                path: if self.mesh_sizes.is_some() {
+                    "mesh_sizes".into()
+                } else {
+                    "mesh".into()
+                },
+                reason: format!(
+                    "gradients on the {} mesh ({cells} cells) need about {gb:.1} GB with the reverse mode's tapes, above memory_limit_gb = {}: choose a coarser mesh or raise the limit",
+                    if self.mesh_sizes.is_some() { "given" } else { self.mesh.name() },
+                    self.memory_limit_gb
+                ),
+            });
+        }
+        Ok(())
+    }
+
     fn build(&self, wing: &WingContext) -> Result<WingFidelity, BuildError> {
         self.validate(wing)?;
         // the steady state is reused from `wing.cache_dir` when the mesh, the section, the

@@ -104,6 +104,11 @@ pub trait WingBuilder {
     /// Cheap checks of the settings for a wing (sizes, memory estimates); builds nothing
     /// expensive.
     fn validate(&self, wing: &WingContext) -> Result<(), BuildError>;
+    /// Cheap checks for a use with gradients (the reverse mode's memory, say); the default has
+    /// nothing more to check.
+    fn validate_gradients(&self, wing: &WingContext) -> Result<(), BuildError> {
+        self.validate(wing)
+    }
     /// The model of the wing, with its binding.
     fn build(&self, wing: &WingContext) -> Result<WingFidelity, BuildError>;
 }

@@ -161,6 +161,39 @@ pub fn bench(study: &Study, repeat: usize, optimization: bool) -> Result<()> {
         println!("{}", a.gafs.line("GAFs (all k, with matrices)"));
         println!("{}", a.gafs_vjp.line("GAF reverse (matrices reused)"));
     }
+    if let Some(crate::study::FidelitySpec::Lfd(spec)) =
+        study.spec.aero.as_ref().map(|a| &a.fidelity)
+    {
+        // an LFD run takes seconds to minutes: one run of each, no warm-up
+        let t = bench_lfd(&study)?;
+        println!(
+            "aerodynamics (LFD, {} cells, {} reduced frequencies, {} modes + gust; one run each, no warm-up):",
+            spec.mesh_spec().n_cells(),
+            t.n_k,
+            t.n_modes
+        );
+        println!(
+            "  model: mesh, steady Euler (from the free stream), Jacobians   {:>9.2} s",
+            t.build_s
+        );
+        println!(
+            "  GAF table (the function's aerodynamics)                      {:>9.2} s",
+            t.gafs_s
+        );
+        println!(
+            "  GAF reverse, first call (records the tapes), all 104 variables {:>7.2} s",
+            t.vjp_first_s
+        );
+        println!(
+            "  GAF reverse, tapes reused                                    {:>9.2} s",
+            t.vjp_s
+        );
+        println!(
+            "  reverse / function: {:.2} (paper: 146.4 / 70.5 min = 2.08 on 400 cores)",
+            t.vjp_s / t.gafs_s
+        );
+        return Ok(());
+    }
     if study.spec.gust.is_some() {
         let p = bench_pipeline(&study, repeat)?;
         println!(
@@ -202,6 +235,61 @@ pub fn bench(study: &Study, repeat: usize, optimization: bool) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Timings of the LFD chain for a study (one run each).
+#[derive(Debug, Serialize)]
+pub struct LfdTimings {
+    pub n_k: usize,
+    pub n_modes: usize,
+    /// Mesh, steady state from the free stream, Jacobians and colouring.
+    pub build_s: f64,
+    /// `Aerodynamics::gafs`: every k, every mode and the gust.
+    pub gafs_s: f64,
+    /// The first reverse call (it records the tapes) with a seed on every GAF entry.
+    pub vjp_first_s: f64,
+    /// A second reverse call (tapes reused).
+    pub vjp_s: f64,
+}
+
+/// One run of each LFD stage on the study's initial design (no steady-state cache).
+pub fn bench_lfd(study: &Study) -> Result<LfdTimings> {
+    let (plate, modes, _) = analyze(study)?;
+    let mut study = study.clone();
+    study.cache_dir = None;
+    let t = Instant::now();
+    let aero = study.aero_model(&plate)?;
+    let build_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let table = aero
+        .gafs(&plate, &modes)
+        .map_err(|e| anyhow::anyhow!("aerodynamics: {e}"))?;
+    let gafs_s = t.elapsed().as_secs_f64();
+    let mut seed = table.clone();
+    for q in seed.q_ss.iter_mut().flatten().flatten() {
+        *q = faer::c64::new(1.0, 0.5);
+    }
+    for q in seed.q_gs.iter_mut().flatten() {
+        *q = faer::c64::new(0.5, -1.0);
+    }
+    let vjp = || -> Result<f64> {
+        let t = Instant::now();
+        std::hint::black_box(
+            aero.gafs_vjp(&plate, &modes, &seed)
+                .map_err(|e| anyhow::anyhow!("aerodynamics reverse: {e}"))?,
+        );
+        Ok(t.elapsed().as_secs_f64())
+    };
+    let vjp_first_s = vjp()?;
+    let vjp_s = vjp()?;
+    Ok(LfdTimings {
+        n_k: table.k.len(),
+        n_modes: table.n_modes(),
+        build_s,
+        gafs_s,
+        vjp_first_s,
+        vjp_s,
+    })
 }
 
 /// Timings of the aerodynamic chain for a study.

@@ -235,12 +235,22 @@ impl Study {
         })?;
         let builder = aero.fidelity.builder();
         let caps = builder.capabilities();
+        let path = format!("aero.fidelity.{}", builder.name());
         if planform {
             caps.require_planform_reverse(builder.name(), what)
         } else {
             caps.require_reverse(builder.name(), what)
         }
-        .map_err(|reason| self.err(&format!("aero.fidelity.{}", builder.name()), reason))
+        .map_err(|reason| self.err(&path, reason))?;
+        let flight = self.flight_condition()?;
+        builder
+            .validate_gradients(&crate::aero::WingContext {
+                planform: &self.planform()?,
+                airfoil: &self.airfoil()?,
+                flight: &flight,
+                cache_dir: None,
+            })
+            .map_err(|e| self.fidelity_err(&e))
     }
 
     /// A fidelity builder's error, with the JSON path of the field in this study.

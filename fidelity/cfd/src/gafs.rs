@@ -42,6 +42,17 @@ pub struct Lfd {
     /// The mesh motions of the geometry parameters (the builder's planform variables), whose
     /// derivatives the reverse mode gives in [`GafGradient::geometry`]; none for a fixed mesh.
     pub tangents: Vec<MeshTangent>,
+    /// The forward solutions of the last GAF table, reused by a reverse sweep at the same point.
+    last_forward: std::sync::Mutex<Option<ForwardCache>>,
+}
+
+/// The LFD solutions of one GAF table and what they were solved for.
+struct ForwardCache {
+    flight: FlightCondition,
+    modes: ModalSurface,
+    k: Vec<f64>,
+    /// Per reduced frequency: the mode columns, then the gust.
+    solutions: Vec<Vec<Solution>>,
 }
 
 /// Complex node displacements (mesh frame, mesh units).
@@ -78,6 +89,30 @@ fn solver_error(e: LfdError, k: f64, n_modes: usize) -> AeroError {
             },
         },
         LfdError::Input(reason) => AeroError::Input(reason),
+    }
+}
+
+/// An adjoint LFD failure at `k`: the right-hand sides are, per seed, the adjoints of the
+/// `n_modes` mode columns and (when `n_cols` > `n_modes`) of the gust column.
+fn adjoint_error(e: LfdError, k: f64, n_modes: usize, n_cols: usize) -> AeroError {
+    let rhs_index = match &e {
+        LfdError::Gmres { rhs, .. } => Some(*rhs),
+        _ => None,
+    };
+    match (solver_error(e, k, usize::MAX), rhs_index) {
+        (AeroError::Solver { k, source, .. }, Some(i)) => {
+            let (seed, col) = (i / n_cols, i % n_cols);
+            AeroError::Solver {
+                k,
+                rhs: if col < n_modes {
+                    format!("adjoint of mode {} (seed {})", col + 1, seed + 1)
+                } else {
+                    format!("adjoint of the gust (seed {})", seed + 1)
+                },
+                source,
+            }
+        }
+        (other, _) => other,
     }
 }
 
@@ -136,6 +171,7 @@ impl Lfd {
             mach,
             reverse: std::sync::OnceLock::new(),
             tangents: Vec::new(),
+            last_forward: std::sync::Mutex::new(None),
         }
     }
 
@@ -273,6 +309,19 @@ impl Lfd {
             .unzip()
     }
 
+    /// The factored preconditioner at reduced frequency `kk`.
+    fn factor_at(
+        &self,
+        flight: &FlightCondition,
+        kk: f64,
+        n_modes: usize,
+    ) -> Result<Factored, AeroError> {
+        let omega = kk * self.mach * self.length_m / flight.b_ref;
+        self.lfd
+            .factor(omega, Symbol::Exact)
+            .map_err(|e| solver_error(e, kk, n_modes))
+    }
+
     /// The reverse mode's tapes, recorded at the first call.
     pub fn reverse_tapes(&self) -> &LfdReverse {
         self.reverse.get_or_init(|| LfdReverse::new(&self.lfd))
@@ -323,10 +372,15 @@ impl Aerodynamics for Lfd {
         self.check(flight, modes, k)?;
         let (x_hat, shapes) = self.mode_motion(modes);
         let scale = self.force_scale();
+        let solved: Result<Vec<Vec<Solution>>, AeroError> = k
+            .par_iter()
+            .map(|&kk| Ok(self.forward(flight, kk, &x_hat)?.1))
+            .collect();
+        let solved = solved?;
         let parts: Result<Vec<_>, AeroError> = k
             .par_iter()
-            .map(|&kk| {
-                let (_, sol) = self.forward(flight, kk, &x_hat)?;
+            .zip(&solved)
+            .map(|(_, sol)| {
                 let n = x_hat.len();
                 let mut q_ss = vec![vec![C64::new(0.0, 0.0); n]; n];
                 for (j, (q, _)) in sol[..n].iter().enumerate() {
@@ -344,11 +398,23 @@ impl Aerodynamics for Lfd {
                 Ok((q_ss, q_gs))
             })
             .collect();
-        Ok(GafTable::from_parts(flight, k, parts?))
+        let table = GafTable::from_parts(flight, k, parts?);
+        // kept for a reverse sweep at the same point (the pipeline's gradient follows its function)
+        *self.last_forward.lock().unwrap_or_else(|e| e.into_inner()) = Some(ForwardCache {
+            flight: *flight,
+            modes: modes.clone(),
+            k: k.to_vec(),
+            solutions: solved,
+        });
+        Ok(table)
     }
 
     fn reverse(&self) -> Option<&dyn AerodynamicsReverse> {
         Some(self)
+    }
+
+    fn linearization_checks(&self) -> Vec<gustkit_core::LinearizationCheck> {
+        crate::adjoint::linearization_table(&self.lfd, self.reverse_tapes(), &self.deform, 7)
     }
 }
 
@@ -396,6 +462,14 @@ impl AerodynamicsReverse for Lfd {
         }
         let rev = self.reverse_tapes();
         let (x_hat, shapes) = self.mode_motion(modes);
+        // the forward solutions of the last GAF table, when it was this one
+        let cached: Option<Vec<Vec<Solution>>> = self
+            .last_forward
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .as_ref()
+            .filter(|c| c.flight == *flight && c.k == k && c.modes == *modes)
+            .map(|c| c.solutions.clone());
         let scale = self.force_scale();
         let mesh = &self.lfd.euler.mesh;
         let n_nodes = mesh.nodes.len();
@@ -424,7 +498,10 @@ impl AerodynamicsReverse for Lfd {
             .par_iter()
             .enumerate()
             .map(|(ik, &kk)| {
-                let (f, sol) = self.forward(flight, kk, &x_hat)?;
+                let (f, sol) = match cached.as_ref() {
+                    Some(c) => (self.factor_at(flight, kk, nm)?, c[ik].clone()),
+                    None => self.forward(flight, kk, &x_hat)?,
+                };
                 // linearized wall forces of each mode motion and of the gust
                 let forces: Vec<Vec<[C64; 3]>> = (0..=nm)
                     .map(|j| {
@@ -500,7 +577,7 @@ impl AerodynamicsReverse for Lfd {
                 }
                 let lambda = rev
                     .solve_transpose(&self.lfd, &f, &adjoint_rhs)
-                    .map_err(|e| solver_error(e, kk, nm))?;
+                    .map_err(|e| adjoint_error(e, kk, nm, n_cols))?;
                 // geometry: Σ_columns Re(uᵀ ∂f̂ − λᵀ t) for each mesh tangent
                 let mut geo = vec![vec![0.0; self.tangents.len()]; seeds.len()];
                 for (d, (dq0, dx_hat)) in geometry.iter().enumerate() {
@@ -836,6 +913,35 @@ mod tests {
             let (e2, e4) = ((fd2 - adj).abs() / adj.abs(), (fd4 - adj).abs() / adj.abs());
             eprintln!("h = {h:e}: adjoint {adj:.12e}, central {fd2:.12e} ({e2:.1e}), fourth order {fd4:.12e} ({e4:.1e})");
             assert!(e4 < 1e-8, "h = {h}: {adj} vs {fd4}");
+        }
+    }
+
+    /// A stalled adjoint GMRES names the frequency, the column and the seed (right-hand sides
+    /// are ordered seed by seed, modes then the gust), and keeps the residual history.
+    #[test]
+    fn adjoint_failures_name_the_seed() {
+        let stalled = |rhs: usize| LfdError::Gmres {
+            omega: 0.3,
+            rhs,
+            source: crate::krylov::GmresError {
+                reached: 1e-3,
+                wanted: 1e-10,
+                iterations: 2,
+                history: vec![1.0, 1e-2, 1e-3],
+            },
+        };
+        for (rhs, want) in [
+            (1, "adjoint of mode 2 (seed 1)"),
+            (2, "adjoint of the gust (seed 1)"),
+            (3, "adjoint of mode 1 (seed 2)"),
+        ] {
+            match adjoint_error(stalled(rhs), 0.5, 2, 3) {
+                AeroError::Solver { k, rhs, source } => {
+                    assert_eq!((k, rhs.as_str()), (0.5, want));
+                    assert_eq!(source.history, vec![1.0, 1e-2, 1e-3]);
+                }
+                other => panic!("{other:?}"),
+            }
         }
     }
 

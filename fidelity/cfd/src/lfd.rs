@@ -9,7 +9,7 @@
 
 use crate::gas::NVAR;
 use crate::ilu::BlockIlu;
-use crate::jacobian::Blocks;
+use crate::jacobian::{BlockRows, Blocks};
 use crate::krylov::{gmres, GmresError, GmresInfo};
 use crate::residual::{Euler, State};
 use faer::linalg::solvers::Solve;
@@ -125,6 +125,9 @@ pub struct LfdOperator {
     pub q0: Vec<State<f64>>,
     /// Jacobian blocks at q₀ of the preconditioner's matrix.
     blocks: Blocks,
+    /// The exact Jacobian at the scheme's order at q₀, in compressed rows: the operator's
+    /// products (forward and transposed).
+    exact: BlockRows,
     pub preconditioner: Preconditioner,
     pub params: LfdParams,
 }
@@ -157,17 +160,18 @@ impl LfdOperator {
         q0: Vec<State<f64>>,
         preconditioner: Preconditioner,
     ) -> Self {
+        let coloring = crate::jacobian::Coloring::new(&euler, euler.order);
+        let exact_blocks = euler.jacobian_colored(&q0, &coloring, euler.order);
+        let exact = BlockRows::new(euler.mesh.n_cells, &exact_blocks);
         let blocks = match preconditioner {
             Preconditioner::FirstOrder | Preconditioner::FirstOrderIlu => euler.jacobian(&q0),
-            Preconditioner::Exact | Preconditioner::BlockIlu => {
-                let coloring = crate::jacobian::Coloring::new(&euler, euler.order);
-                euler.jacobian_colored(&q0, &coloring, euler.order)
-            }
+            Preconditioner::Exact | Preconditioner::BlockIlu => exact_blocks,
         };
         Self {
             euler,
             q0,
             blocks,
+            exact,
             preconditioner,
             params: LfdParams::default(),
         }
@@ -177,9 +181,29 @@ impl LfdOperator {
         self.euler.mesh.n_cells * NVAR
     }
 
-    /// The exact operator (s V + ∂R/∂q) v at the scheme's order: the real and imaginary parts of v
-    /// in one dual-number pass of the residual.
+    /// The exact operator (s V + ∂R/∂q) v at the scheme's order, with the assembled Jacobian.
     pub fn apply(&self, s: C64, v: &[C64]) -> Field {
+        let vol = &self.euler.volumes;
+        let mut out = self.exact.mul(v);
+        for (i, o) in out.iter_mut().enumerate() {
+            *o += s * vol[i / NVAR] * v[i];
+        }
+        out
+    }
+
+    /// The transposed operator (s V + ∂R/∂q)ᵀ v (not conjugated), for the adjoint.
+    pub fn apply_transpose(&self, s: C64, v: &[C64]) -> Field {
+        let vol = &self.euler.volumes;
+        let mut out = self.exact.mul_transpose(v);
+        for (i, o) in out.iter_mut().enumerate() {
+            *o += s * vol[i / NVAR] * v[i];
+        }
+        out
+    }
+
+    /// [`LfdOperator::apply`] by one dual-number pass of the residual (the real and imaginary
+    /// parts of v as two directions): the reference the assembled Jacobian is checked against.
+    pub fn apply_dual(&self, s: C64, v: &[C64]) -> Field {
         let q: Vec<State<Dual<2>>> = self
             .q0
             .iter()
@@ -425,20 +449,6 @@ impl LfdOperator {
             observe(step, t, &q);
         }
         Ok(())
-    }
-
-    /// Whether the preconditioner's blocks are the exact Jacobian of the scheme (then they also
-    /// give the adjoint's transposed products).
-    pub(crate) fn blocks_are_exact(&self) -> bool {
-        matches!(
-            self.preconditioner,
-            Preconditioner::Exact | Preconditioner::BlockIlu
-        )
-    }
-
-    /// The Jacobian blocks at q₀ of the preconditioner's matrix.
-    pub(crate) fn blocks(&self) -> &Blocks {
-        &self.blocks
     }
 
     /// The preconditioner applied to v: M⁻¹ v.

@@ -216,6 +216,18 @@ pub struct GafGradient {
     pub geometry: Vec<f64>,
 }
 
+/// One row of a fidelity's linearization checks (paper Table 3): a linearization's product
+/// paired with a random vector in forward mode, the same pairing from its reverse-mode
+/// (transposed) product where it has one, and real finite differences of the underlying
+/// nonlinear function at several steps (step, value).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LinearizationCheck {
+    pub name: String,
+    pub forward: f64,
+    pub reverse: Option<f64>,
+    pub fd: Vec<(f64, f64)>,
+}
+
 /// Why a fidelity's solver failed: its own words and, for iterative solvers, the residual
 /// history (so a stalled solve can be diagnosed from the error alone).
 #[derive(Clone, Debug, PartialEq)]
@@ -319,6 +331,11 @@ pub trait Aerodynamics: Send + Sync {
     /// The model's reverse mode, if it has one (the default: none).
     fn reverse(&self) -> Option<&dyn AerodynamicsReverse> {
         None
+    }
+    /// Checks of the model's linearizations against their transposes and finite differences
+    /// (the default: none to show).
+    fn linearization_checks(&self) -> Vec<LinearizationCheck> {
+        Vec::new()
     }
 }
 

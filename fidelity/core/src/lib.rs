@@ -10,5 +10,5 @@ pub mod theory;
 
 pub use aero::{
     check_reduced_frequencies, AeroError, AeroSurface, Aerodynamics, AerodynamicsReverse,
-    FlightCondition, GafGradient, GafTable, ModalSurface, SolverFailure,
+    FlightCondition, GafGradient, GafTable, LinearizationCheck, ModalSurface, SolverFailure,
 };

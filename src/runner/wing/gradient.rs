@@ -144,3 +144,47 @@ pub fn check_gradient(study: &Study, dvs: &[String], json: bool) -> Result<()> {
     }
     Ok(())
 }
+
+/// `gustkit check-linearization`: the aerodynamic model's linearization table (paper Table 3) at
+/// the study's initial design: each linearization's forward pairing, its transposed pairing and
+/// real finite differences at steps 1e-8 … 1e-13, with the digits of agreement.
+pub fn check_linearization(study: &Study, json: bool) -> Result<()> {
+    let plate = study.build_model()?;
+    let aero = study.aero_model(&plate)?;
+    let rows = aero.fidelity.linearization_checks();
+    if rows.is_empty() {
+        anyhow::bail!(
+            "check-linearization: the {} fidelity has no linearization table (its reverse mode is checked by the dot-product tests of its crate); use an lfd study",
+            aero.name
+        );
+    }
+    let digits = |a: f64, b: f64| -((a - b).abs() / a.abs().max(f64::MIN_POSITIVE)).log10();
+    if json {
+        println!("{}", serde_json::to_string_pretty(&rows)?);
+        return Ok(());
+    }
+    println!(
+        "{}: the {} model's linearizations about its steady state (random real vectors; digits of agreement with the forward pairing)",
+        study.spec.name, aero.name
+    );
+    print!(
+        "{:<42}{:>24}{:>24}{:>8}",
+        "linearization", "forward", "reverse", "digits"
+    );
+    for (h, _) in &rows[0].fd {
+        print!("{:>10}", format!("FD {h:.0e}"));
+    }
+    println!();
+    for r in &rows {
+        print!("{:<42}{:>24.15e}", r.name, r.forward);
+        match r.reverse {
+            Some(v) => print!("{v:>24.15e}{:>8.1}", digits(r.forward, v)),
+            None => print!("{:>24}{:>8}", "(forward mode)", "-"),
+        }
+        for (_, v) in &r.fd {
+            print!("{:>10.1}", digits(r.forward, *v));
+        }
+        println!();
+    }
+    Ok(())
+}
