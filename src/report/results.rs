@@ -154,6 +154,9 @@ pub struct OptimizationResults {
     /// not `flutter`, which is the study's own p-k sweep beside it at the top level).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub flutter_check: Option<FlutterCheck>,
+    /// The results.json whose final design started this run (`optimization.warm_start.from`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub warm_start: Option<String>,
 }
 
 /// Where a design flutters: the p-k crossing, if any, below `searched_up_to_m_s`.

@@ -14,7 +14,7 @@ pub use crate::aero::{dlm::DlmSpec, FidelitySpec};
 pub use schema::{
     AeroSpec, AirfoilSpec, ClampSpec, FlightSpec, FlutterSpec, GustSpec, LengthUnit, MaterialSpec,
     MeshSpec, OptimizationSpec, OutputSpec, ReferenceSpec, StructureSpec, StudyFile, SweepCombine,
-    SweepParameter, SweepSpec, WingSpec,
+    SweepParameter, SweepSpec, WarmStartSpec, WingSpec,
 };
 
 use crate::aero::AeroModel;
@@ -219,6 +219,7 @@ impl Study {
         }
         if self.spec.optimization.is_some() {
             self.design_bounds()?;
+            self.warm_start_design()?;
             self.require_reverse_mode("optimization", true)?;
         }
         Ok(())
@@ -283,6 +284,113 @@ impl Study {
             self.cache_dir.as_deref(),
         )
         .map_err(|e| self.fidelity_err(&e))
+    }
+
+    /// The starting design of the optimization: the final design of the run named by
+    /// `optimization.warm_start.from`, checked against this study's design variables and bounds;
+    /// None without a warm start.
+    pub fn warm_start_design(&self) -> Result<Option<Vec<f64>>, StudyError> {
+        let Some(w) = self
+            .spec
+            .optimization
+            .as_ref()
+            .and_then(|o| o.warm_start.as_ref())
+        else {
+            return Ok(None);
+        };
+        let path = "optimization.warm_start.from";
+        let file = &w.from;
+        // the command that makes the file: `gustkit run` of the study named after its folder
+        let maker = || {
+            let name = file
+                .parent()
+                .and_then(|d| d.file_name())
+                .map(|n| n.to_string_lossy().to_string())
+                .unwrap_or_else(|| "STUDY".into());
+            let study = Path::new("studies").join(format!("{name}.json"));
+            if study.exists() {
+                format!("gustkit run {}", study.display())
+            } else {
+                format!("gustkit run on the optimization study named '{name}'")
+            }
+        };
+        let text = read_text(file).map_err(|e| {
+            self.err(
+                path,
+                format!(
+                    "cannot read {} ({e}): run the optimization that writes it first ({})",
+                    file.display(),
+                    maker()
+                ),
+            )
+        })?;
+        let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
+            self.err(
+                path,
+                format!("{} is not a results.json ({e})", file.display()),
+            )
+        })?;
+        let names = v.get("design_variable_names").and_then(|n| n.as_array());
+        let design = v
+            .get("final")
+            .and_then(|f| f.get("design_variables"))
+            .and_then(|d| d.as_array());
+        let (Some(names), Some(design)) = (names, design) else {
+            return Err(self.err(
+                path,
+                format!(
+                    "{} holds no finished optimization (no design_variable_names and final.design_variables): {}",
+                    file.display(),
+                    maker()
+                ),
+            ));
+        };
+        let own = self.initial_design()?;
+        let n = own.to_vec().len();
+        let theirs: Vec<String> = names
+            .iter()
+            .map(|s| s.as_str().unwrap_or("?").to_string())
+            .collect();
+        if theirs.len() != n || design.len() != n {
+            return Err(self.err(
+                path,
+                format!(
+                    "{} has {} design variables, this study {n}: the warm start needs the same plate mesh and planform parametrization",
+                    file.display(),
+                    theirs.len()
+                ),
+            ));
+        }
+        if let Some(i) = (0..n).find(|&i| theirs[i] != own.name(i)) {
+            return Err(self.err(
+                path,
+                format!(
+                    "{}: design variable {i} is '{}', this study's is '{}'",
+                    file.display(),
+                    theirs[i],
+                    own.name(i)
+                ),
+            ));
+        }
+        let x: Vec<f64> = design
+            .iter()
+            .map(|d| d.as_f64().unwrap_or(f64::NAN))
+            .collect();
+        let (lower, upper) = self.design_bounds()?;
+        if let Some(i) = (0..n).find(|&i| !(x[i] >= lower[i] && x[i] <= upper[i])) {
+            return Err(self.err(
+                path,
+                format!(
+                    "{}: the final {} = {} lies outside this study's bounds [{}, {}] (SI)",
+                    file.display(),
+                    own.name(i),
+                    ranges::show(x[i]),
+                    ranges::show(lower[i]),
+                    ranges::show(upper[i])
+                ),
+            ));
+        }
+        Ok(Some(x))
     }
 
     /// Bounds of the design vector from the `optimization` section (SI), checked; the initial

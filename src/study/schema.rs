@@ -101,10 +101,24 @@ pub struct OptimizationSpec {
     /// g ≤ `damping_max`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub flutter_margin: Option<FlutterMarginSpec>,
+    /// Start from the final design of an earlier run (e.g. the DLM optimum before an LFD
+    /// refinement); the mass change and the area constraint stay relative to this study's own
+    /// initial design.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub warm_start: Option<WarmStartSpec>,
     #[serde(default = "default_max_iterations")]
     pub max_iterations: usize,
     #[serde(default = "default_tolerance")]
     pub tolerance: f64,
+}
+
+/// `optimization.warm_start`: where the starting design comes from.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct WarmStartSpec {
+    /// The results.json of a finished optimization, relative to the working directory (where
+    /// `gustkit run` writes its run folders), e.g. "reports/agard445_dlm/results.json".
+    pub from: std::path::PathBuf,
 }
 
 fn default_true() -> bool {

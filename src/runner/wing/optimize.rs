@@ -183,6 +183,8 @@ pub fn optimize(
     let settings = study.gust_settings()?;
     let (lower, upper) = study.design_bounds()?;
     let x0 = study.initial_design()?.to_vec();
+    // a warm start begins at another run's final design; mass and area stay relative to x0
+    let x_start = study.warm_start_design()?;
     let output = settings
         .outputs
         .iter()
@@ -302,7 +304,7 @@ pub fn optimize(
         .resume(checkpoint)
         .observe(&mut observer)
         .checkpoint(&mut store)
-        .run(&mut problem, &x0);
+        .run(&mut problem, x_start.as_deref().unwrap_or(&x0));
     observer.bar.finish_and_clear();
     let info = info.map_err(|e| anyhow::anyhow!("optimization: {e}"))?;
     let wall_time_s = t0.elapsed().as_secs_f64();
@@ -393,6 +395,7 @@ pub fn optimize(
         final_: snapshot(study, &ev, output, unit_scale),
         history,
         flutter_check: flutter,
+        warm_start: o.warm_start.as_ref().map(|w| w.from.display().to_string()),
     })
 }
 
