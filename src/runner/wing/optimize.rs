@@ -24,6 +24,21 @@ struct RunObserver {
     damping_max: Option<f64>,
     quiet: bool,
     bar: indicatif::ProgressBar,
+    /// When the previous iteration ended (the run's start before the first).
+    last: Instant,
+    /// The iteration limit, for the bound on the remaining time.
+    max_iterations: usize,
+}
+
+/// A wall time for a progress line: seconds below two minutes, then minutes, then hours.
+fn duration(s: f64) -> String {
+    if s < 120.0 {
+        format!("{s:.1} s")
+    } else if s < 7200.0 {
+        format!("{:.1} min", s / 60.0)
+    } else {
+        format!("{:.1} h", s / 3600.0)
+    }
 }
 
 /// Keeps every iteration's checkpoint in `checkpoint.json` of the run folder, written
@@ -68,6 +83,16 @@ impl crate::optim::Observer for RunObserver {
             } else {
                 String::new()
             }
+        );
+        // wall time of this iteration, and the remaining time if every iteration up to the
+        // limit took as long (a bound: the run stops earlier when it converges)
+        let took = self.last.elapsed().as_secs_f64();
+        self.last = Instant::now();
+        let left = self.max_iterations.saturating_sub(cp.iteration) as f64 * took;
+        let line = format!(
+            "{line}; {} this iteration, at most {} to the iteration limit",
+            duration(took),
+            duration(left)
         );
         if !self.quiet {
             self.bar.suspend(|| println!("{line}"));
@@ -294,6 +319,8 @@ pub fn optimize(
         damping_max: spec.flutter.map(|m| m.damping_max),
         quiet,
         bar,
+        last: Instant::now(),
+        max_iterations: o.max_iterations,
     };
     let mut store = FileCheckpoint {
         path: dir.join("checkpoint.json"),
