@@ -335,11 +335,13 @@ fn default_memory_limit() -> f64 {
 /// Bytes per cell of the LFD wing model with two threads, from its parts: the mesh, geometry,
 /// states and deformation (≈ 8 kB), the exact second-order Jacobian (≈ 12 kB), per concurrent
 /// frequency its complex block ILU(0) (≈ 24 kB) and per concurrent right-hand side the GMRES
-/// basis (restart + 1 complex vectors of 5 unknowns). 81 kB a cell at restart 80; measured on
-/// the medium wing mesh: 3.94 GB peak for 57 344 cells (69 kB a cell).
+/// basis (restart + 1 complex vectors of 5 unknowns), and the forward solutions of one GAF table
+/// kept for the reverse sweep (≈ 7 kB: 11 k × 7 columns × 80 B). 88 kB a cell at restart 80;
+/// measured on the medium wing mesh: 3.94 GB peak for 57 344 cells (69 kB a cell, before the
+/// solutions were kept).
 fn bytes_per_cell(restart: usize) -> f64 {
     let threads = 2.0;
-    8e3 + 12e3 + threads * (24e3 + (restart as f64 + 1.0) * 5.0 * 16.0)
+    8e3 + 12e3 + 7e3 + threads * (24e3 + (restart as f64 + 1.0) * 5.0 * 16.0)
 }
 
 impl LfdWingSpec {
