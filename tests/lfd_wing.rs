@@ -27,6 +27,25 @@ fn lfd_wing_optimization_study_loads() {
         .is_ok());
 }
 
+/// The flagship's initial design with 4 modes and 6 reduced frequencies on a small built-in
+/// wing mesh (576 cells, LFD solves to 1e-12), its steady state kept in a scratch folder (also
+/// returned, for removal).
+fn small_lfd_study(name: &str) -> (Study, std::path::PathBuf) {
+    let dir = std::env::temp_dir().join(format!("gustkit-lfd-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut v = flagship();
+    v.as_object_mut().unwrap().remove("optimization");
+    v["structure"]["modes"] = serde_json::json!(4);
+    v["aero"]["reduced_frequencies"] = serde_json::json!([0.0, 0.1, 0.3, 0.6, 1.0, 2.0]);
+    v["aero"]["fidelity"] = serde_json::json!({"lfd": {"gmres_tolerance": 1e-12, "mesh_sizes": {
+        "n_around": 16, "n_radial": 6, "n_span": 4, "n_outboard": 2, "first_spacing_chords": 0.02
+    }}});
+    let mut study = load(&v).unwrap();
+    study.cache_dir = Some(dir.clone());
+    (study, dir)
+}
+
 /// The adjoint gradient of the RMS tip displacement with LFD aerodynamics (a small built-in
 /// wing mesh, second order, M 0.5, the default first-order ILU preconditioner, so the adjoint
 /// operator comes from the residual's tape) with respect to two plate thicknesses and the
@@ -43,18 +62,7 @@ fn lfd_wing_optimization_study_loads() {
 /// 1e-3, where its central difference is 2.6e-6 off by truncation).
 #[test]
 fn lfd_gradients_match_differences() {
-    let dir = std::env::temp_dir().join(format!("gustkit-lfd-gradient-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    let mut v = flagship();
-    v.as_object_mut().unwrap().remove("optimization");
-    v["structure"]["modes"] = serde_json::json!(4);
-    v["aero"]["reduced_frequencies"] = serde_json::json!([0.0, 0.1, 0.3, 0.6, 1.0, 2.0]);
-    v["aero"]["fidelity"] = serde_json::json!({"lfd": {"gmres_tolerance": 1e-12, "mesh_sizes": {
-        "n_around": 16, "n_radial": 6, "n_span": 4, "n_outboard": 2, "first_spacing_chords": 0.02
-    }}});
-    let mut study = load(&v).unwrap();
-    study.cache_dir = Some(dir.clone());
+    let (study, dir) = small_lfd_study("gradient");
     let settings = study.gust_settings().unwrap();
     let x0 = study.initial_design().unwrap().to_vec();
     let ev = gustkit::pipeline::evaluate(&study, &settings, &x0).unwrap();
@@ -264,18 +272,7 @@ fn steady_state_is_saved_and_reused() {
 #[test]
 fn lfd_flutter_margin_gradient_matches_differences() {
     use gustkit::flutter::margin::FlutterMargin;
-    let dir = std::env::temp_dir().join(format!("gustkit-lfd-margin-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    let mut v = flagship();
-    v.as_object_mut().unwrap().remove("optimization");
-    v["structure"]["modes"] = serde_json::json!(4);
-    v["aero"]["reduced_frequencies"] = serde_json::json!([0.0, 0.1, 0.3, 0.6, 1.0, 2.0]);
-    v["aero"]["fidelity"] = serde_json::json!({"lfd": {"gmres_tolerance": 1e-12, "mesh_sizes": {
-        "n_around": 16, "n_radial": 6, "n_span": 4, "n_outboard": 2, "first_spacing_chords": 0.02
-    }}});
-    let mut study = load(&v).unwrap();
-    study.cache_dir = Some(dir.clone());
+    let (study, dir) = small_lfd_study("margin");
     let settings = study.gust_settings().unwrap();
     let x0 = study.initial_design().unwrap().to_vec();
     let margin = FlutterMargin {

@@ -763,6 +763,33 @@ mod tests {
         }
     }
 
+    /// The flight condition of the reverse-mode tests: M 0.5, 1 m chord.
+    fn subsonic_test_flight() -> FlightCondition {
+        FlightCondition {
+            mach: 0.5,
+            velocity: 170.0,
+            density: 1.2,
+            b_ref: 0.5,
+            x_ref: 0.1,
+        }
+    }
+
+    /// A seed table of random complex entries for `n` modes.
+    fn random_seed(flight: &FlightCondition, ks: &[f64], n: usize, seed: u64) -> GafTable {
+        let mut t = GafTable::zeros(flight, ks, n);
+        let v = gustkit_testkit::rand_vec(ks.len() * 2 * n * (n + 1), seed);
+        let mut it = v.chunks(2).map(|c| C64::new(c[0], c[1]));
+        for ik in 0..ks.len() {
+            for i in 0..n {
+                for j in 0..n {
+                    t.q_ss[ik][i][j] = it.next().expect("enough numbers");
+                }
+                t.q_gs[ik][i] = it.next().expect("enough numbers");
+            }
+        }
+        t
+    }
+
     /// The reverse mode against central differences of the seeded GAFs along a random
     /// direction of the wall mode shapes, at steps 1e-1 … 1e-4 (m of a 1 m chord): the GAFs are
     /// bilinear in the shapes, so the central difference is exact up to round-off and the GMRES
@@ -782,13 +809,7 @@ mod tests {
         let mut lfd = LfdOperator::new(e, q0);
         lfd.params.tolerance = 1e-12;
         let aero = Lfd::new(lfd, 1.0, 1.0, 10.0);
-        let flight = FlightCondition {
-            mach: 0.5,
-            velocity: 170.0,
-            density: 1.2,
-            b_ref: 0.5,
-            x_ref: 0.1,
-        };
+        let flight = subsonic_test_flight();
         let ks = [0.0, 0.4, 1.5];
         let base = rigid_modes(&aero);
         let np = base.disp[0].len();
@@ -802,22 +823,7 @@ mod tests {
                 modes.disp[m][p][0] += 0.1 * r[(m * np + p) * 3 + 1];
             }
         }
-        let seeds: Vec<GafTable> = [7, 8]
-            .map(|sd| {
-                let mut t = GafTable::zeros(&flight, &ks, 2);
-                let v = gustkit_testkit::rand_vec(ks.len() * 12, sd);
-                let mut it = v.chunks(2).map(|c| C64::new(c[0], c[1]));
-                for ik in 0..ks.len() {
-                    for i in 0..2 {
-                        for j in 0..2 {
-                            t.q_ss[ik][i][j] = it.next().unwrap();
-                        }
-                        t.q_gs[ik][i] = it.next().unwrap();
-                    }
-                }
-                t
-            })
-            .to_vec();
+        let seeds: Vec<GafTable> = [7, 8].map(|sd| random_seed(&flight, &ks, 2, sd)).to_vec();
         let grads = aero.gafs_vjp_many(&flight, &modes, &ks, &seeds).unwrap();
         let moved = |h: f64| {
             let mut m = modes.clone();
@@ -876,13 +882,7 @@ mod tests {
             lfd.params.tolerance = 1e-13;
             Lfd::new(lfd, 1.0, 1.0, radius + h * d_radius)
         };
-        let flight = FlightCondition {
-            mach: 0.5,
-            velocity: 170.0,
-            density: 1.2,
-            b_ref: 0.5,
-            x_ref: 0.1,
-        };
+        let flight = subsonic_test_flight();
         let ks = [0.0, 0.4, 1.5];
         let mut aero = model(0.0);
         aero.tangents = vec![MeshTangent {
@@ -892,17 +892,7 @@ mod tests {
         }];
         assert_eq!(aero.geometry_names(), ["stretch"]);
         let modes = rigid_modes(&aero);
-        let mut seed = GafTable::zeros(&flight, &ks, 2);
-        let v = gustkit_testkit::rand_vec(ks.len() * 12, 3);
-        let mut it = v.chunks(2).map(|c| C64::new(c[0], c[1]));
-        for ik in 0..ks.len() {
-            for i in 0..2 {
-                for j in 0..2 {
-                    seed.q_ss[ik][i][j] = it.next().unwrap();
-                }
-                seed.q_gs[ik][i] = it.next().unwrap();
-            }
-        }
+        let seed = random_seed(&flight, &ks, 2, 3);
         let g = aero.gafs_vjp(&flight, &modes, &ks, &seed).unwrap();
         let adj = g.geometry[0];
         let f = |h: f64| seed.pair(&model(h).gafs(&flight, &modes, &ks).unwrap());

@@ -210,14 +210,37 @@ impl Mesh {
 
 /// n + 1 points s_0 = 0 < … < s_n = 1 with geometrically growing steps, the first `first`.
 pub fn geometric_distribution(first: f64, n: usize) -> Vec<f64> {
-    // solve first · (g^n − 1)/(g − 1) = 1 for g by bisection
-    let sum = |g: f64| {
-        if (g - 1.0).abs() < 1e-12 {
-            first * n as f64
-        } else {
-            first * (g.powi(n as i32) - 1.0) / (g - 1.0)
-        }
+    geometric_distribution_at(first, n)
+}
+
+/// [`geometric_distribution`] in any scalar: the growth ratio g of first · Σ_{k<n} g^k = 1 found
+/// in f64 (within [1e-6, 10], as the f64 version), then one Newton step in S (exact first
+/// derivatives by the implicit function theorem; none when g sits at the bound).
+pub fn geometric_distribution_at<S: Scalar>(first: S, n: usize) -> Vec<S> {
+    let g0 = ratio_of(first.re(), n);
+    let powers: Vec<f64> = (0..n).map(|k| g0.powi(k as i32)).collect();
+    let residual = first * powers.iter().sum::<f64>() - 1.0;
+    let slope = first.re() * (1..n).map(|k| k as f64 * powers[k - 1]).sum::<f64>();
+    // a ratio held at the bisection's bound (very few, very stretched steps) does not move
+    let g = if residual.re().abs() < 1e-10 && slope != 0.0 {
+        S::cst(g0) - residual / slope
+    } else {
+        S::cst(g0)
     };
+    let mut s = vec![S::zero()];
+    let mut step = first;
+    for _ in 0..n {
+        let last = *s.last().expect("starts with 0");
+        s.push(last + step);
+        step *= g;
+    }
+    let top = *s.last().expect("n > 0");
+    s.into_iter().map(|v| v / top).collect()
+}
+
+/// The growth ratio g with first · (g^n − 1)/(g − 1) = 1, by bisection.
+fn ratio_of(first: f64, n: usize) -> f64 {
+    let sum = |g: f64| (0..n).map(|k| g.powi(k as i32)).sum::<f64>() * first;
     let (mut lo, mut hi) = (1e-6, 10.0);
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
@@ -227,17 +250,7 @@ pub fn geometric_distribution(first: f64, n: usize) -> Vec<f64> {
             lo = mid;
         }
     }
-    let ratio = 0.5 * (lo + hi);
-    let mut s = vec![0.0];
-    let mut step = first;
-    for _ in 0..n {
-        let last = *s.last().expect("starts with 0");
-        s.push(last + step);
-        step *= ratio;
-    }
-    let top = *s.last().expect("n > 0");
-    s.iter_mut().for_each(|v| *v /= top);
-    s
+    0.5 * (lo + hi)
 }
 
 /// A 2-D O-mesh around the closed curve `body(t)`, t ∈ [0, 1) counter-clockwise, with

@@ -26,7 +26,7 @@
 //! exactly; every distribution (spanwise, radial, outboard) is a fixed fraction, so the mesh is one
 //! smooth function of the planform.
 
-use crate::mesh::{geometric_distribution, Boundary, Face, Mesh, Side};
+use crate::mesh::{geometric_distribution, geometric_distribution_at, Boundary, Face, Mesh, Side};
 use gustkit_core::scalar::Scalar;
 
 /// The planform variables in the order the structural side uses: semispan, quarter-chord sweep
@@ -276,46 +276,6 @@ fn outboard_stations<S: Scalar>(p: [S; N_PLANFORM], wing: &[f64], spec: &WingMes
     let first = last / far;
     let first = if first.re() > 0.5 { S::cst(0.5) } else { first };
     geometric_distribution_at(first, spec.n_outboard)
-}
-
-/// [`geometric_distribution`] in any scalar: the growth ratio g of first · Σ_{k<n} g^k = 1 found
-/// in f64 (within [1e-6, 10], as the f64 version), then one Newton step in S (exact first
-/// derivatives by the implicit function theorem; none when g sits at the bound).
-pub fn geometric_distribution_at<S: Scalar>(first: S, n: usize) -> Vec<S> {
-    let g0 = ratio_of(first.re(), n);
-    let powers: Vec<f64> = (0..n).map(|k| g0.powi(k as i32)).collect();
-    let residual = first * powers.iter().sum::<f64>() - 1.0;
-    let slope = first.re() * (1..n).map(|k| k as f64 * powers[k - 1]).sum::<f64>();
-    // a ratio held at the bisection's bound (very few, very stretched steps) does not move
-    let g = if residual.re().abs() < 1e-10 && slope != 0.0 {
-        S::cst(g0) - residual / slope
-    } else {
-        S::cst(g0)
-    };
-    let mut s = vec![S::zero()];
-    let mut step = first;
-    for _ in 0..n {
-        let last = *s.last().expect("starts with 0");
-        s.push(last + step);
-        step *= g;
-    }
-    let top = *s.last().expect("n > 0");
-    s.into_iter().map(|v| v / top).collect()
-}
-
-/// The growth ratio g with first · (g^n − 1)/(g − 1) = 1, by bisection.
-fn ratio_of(first: f64, n: usize) -> f64 {
-    let sum = |g: f64| (0..n).map(|k| g.powi(k as i32)).sum::<f64>() * first;
-    let (mut lo, mut hi) = (1e-6, 10.0);
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if sum(mid) > 1.0 {
-            hi = mid;
-        } else {
-            lo = mid;
-        }
-    }
-    0.5 * (lo + hi)
 }
 
 /// Quality figures of any mesh with cell node lists.
