@@ -423,13 +423,15 @@ impl Aerodynamics for Lfd {
 type NodeSeeds = (Vec<Vec<[f64; 3]>>, Vec<Vec<[f64; 3]>>);
 
 impl AerodynamicsReverse for Lfd {
-    /// The adjoint of the GAFs with respect to the mode shapes at the wall nodes (the geometry
-    /// of the mesh is fixed; see [`crate::adjoint`]). Per frequency: the forward solves as for
-    /// the GAFs, then for every seed and mode j the adjoint LFD solve (s V + ∂R/∂q)ᵀ λ_j = F_qᵀ u_j
-    /// with u_j = Σ_i conj(Q̄_ij) · scale · φ̄_i on the wall faces, and the shape seed
-    /// Re(F_xᵀ u_j − Bᵀ λ_j) carried back through the mesh deformation; the projection's own
-    /// seed Re(conj(Q̄) · scale · f̂) goes to the projecting mode. One factorization per frequency
-    /// serves the forward and the adjoint solves of every seed.
+    /// The adjoint of the GAFs with respect to the mode shapes at the wall nodes and, along the
+    /// model's mesh tangents, the geometry parameters (see [`crate::adjoint`] and
+    /// [`crate::mesh_sensitivity`]). Per frequency: the forward solutions of the GAF table (kept
+    /// from the last one at this point, else solved), then for every seed and mode j the adjoint
+    /// LFD solve (s V + ∂R/∂q)ᵀ λ_j = F_qᵀ u_j with u_j = Σ_i conj(Q̄_ij) · scale · φ̄_i on the
+    /// wall faces, and the shape seed Re(F_xᵀ u_j − Bᵀ λ_j) carried back through the mesh
+    /// deformation; the projection's own seed Re(conj(Q̄) · scale · f̂) goes to the projecting
+    /// mode. One factorization per frequency serves the forward and the adjoint solves of every
+    /// seed.
     fn gafs_vjp(
         &self,
         flight: &FlightCondition,
@@ -453,13 +455,7 @@ impl AerodynamicsReverse for Lfd {
         if seeds.is_empty() {
             return Ok(Vec::new());
         }
-        if seeds.iter().any(|s| {
-            s.k.len() != k.len() || s.n_modes() != nm || s.q_ss.iter().any(|q| q.len() != nm)
-        }) {
-            return Err(AeroError::Input(
-                "seed: its shape does not match the GAF table".into(),
-            ));
-        }
+        gustkit_core::aero::check_seeds(seeds, k.len(), nm)?;
         let rev = self.reverse_tapes();
         let (x_hat, shapes) = self.mode_motion(modes);
         // the forward solutions of the last GAF table, when it was this one
@@ -774,6 +770,26 @@ mod tests {
         }
     }
 
+    /// The 4 %-thick section's O-mesh of the reverse-mode tests (32 × 12, far field 30 chords).
+    fn lifting_mesh() -> crate::mesh::Mesh {
+        AirfoilShape::naca64a010()
+            .scaled(0.4)
+            .o_mesh(32, 12, 30.0, 0.002 / 30.0, 1.0)
+    }
+
+    /// The LFD model of `mesh` at M 0.5 and 2° (second order, steady state solved, GMRES to
+    /// `tolerance`, the deformation blended out at `radius` chords).
+    fn lifting_section(mesh: crate::mesh::Mesh, tolerance: f64, radius: f64) -> Lfd {
+        let mut e = Euler::new(mesh, free_stream(0.5, 2f64.to_radians()));
+        e.order = Order::Second;
+        let (q0, _) = e
+            .solve_steady(vec![e.q_inf; e.mesh.n_cells], &SteadyParams::default())
+            .unwrap();
+        let mut lfd = LfdOperator::new(e, q0);
+        lfd.params.tolerance = tolerance;
+        Lfd::new(lfd, 1.0, 1.0, radius)
+    }
+
     /// A seed table of random complex entries for `n` modes.
     fn random_seed(flight: &FlightCondition, ks: &[f64], n: usize, seed: u64) -> GafTable {
         let mut t = GafTable::zeros(flight, ks, n);
@@ -798,17 +814,7 @@ mod tests {
     /// one call. Agreement: 10 digits or more (measured 13 to 14 at h = 0.1, 11 at 1e-4).
     #[test]
     fn reverse_mode_matches_central_differences() {
-        let mesh = AirfoilShape::naca64a010()
-            .scaled(0.4)
-            .o_mesh(32, 12, 30.0, 0.002 / 30.0, 1.0);
-        let mut e = Euler::new(mesh, free_stream(0.5, 2f64.to_radians()));
-        e.order = Order::Second;
-        let (q0, _) = e
-            .solve_steady(vec![e.q_inf; e.mesh.n_cells], &SteadyParams::default())
-            .unwrap();
-        let mut lfd = LfdOperator::new(e, q0);
-        lfd.params.tolerance = 1e-12;
-        let aero = Lfd::new(lfd, 1.0, 1.0, 10.0);
+        let aero = lifting_section(lifting_mesh(), 1e-12, 10.0);
         let flight = subsonic_test_flight();
         let ks = [0.0, 0.4, 1.5];
         let base = rigid_modes(&aero);
@@ -853,9 +859,7 @@ mod tests {
     /// 3e-4 agree to 8 digits or more (measured 3.8e-11 at 1e-3; the central ones 3.0e-9).
     #[test]
     fn geometry_reverse_mode_matches_differences() {
-        let base = AirfoilShape::naca64a010()
-            .scaled(0.4)
-            .o_mesh(32, 12, 30.0, 0.002 / 30.0, 1.0);
+        let base = lifting_mesh();
         let d_nodes: Vec<[f64; 3]> = base
             .nodes
             .iter()
@@ -873,14 +877,7 @@ mod tests {
                     p[k] += h * d[k];
                 }
             }
-            let mut e = Euler::new(mesh, free_stream(0.5, 2f64.to_radians()));
-            e.order = Order::Second;
-            let (q0, _) = e
-                .solve_steady(vec![e.q_inf; e.mesh.n_cells], &SteadyParams::default())
-                .unwrap();
-            let mut lfd = LfdOperator::new(e, q0);
-            lfd.params.tolerance = 1e-13;
-            Lfd::new(lfd, 1.0, 1.0, radius + h * d_radius)
+            lifting_section(mesh, 1e-13, radius + h * d_radius)
         };
         let flight = subsonic_test_flight();
         let ks = [0.0, 0.4, 1.5];

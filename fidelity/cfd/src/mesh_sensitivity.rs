@@ -160,6 +160,20 @@ mod tests {
     use crate::residual::{free_stream, Euler};
     use crate::steady::SteadyParams;
 
+    /// Every entry of `t` equals the central difference of `plus` and `minus` at step `h` to
+    /// 1e-6 of the largest entry.
+    fn assert_central(t: &[C64], plus: &[C64], minus: &[C64], h: f64, what: &str) {
+        let scale = t.iter().fold(0.0f64, |a, v| a.max(v.norm()));
+        for i in 0..t.len() {
+            let fd = (plus[i] - minus[i]) / (2.0 * h);
+            assert!(
+                (fd - t[i]).norm() < 1e-6 * scale,
+                "{what} t[{i}]: {} vs {fd}",
+                t[i]
+            );
+        }
+    }
+
     /// The hyper-dual tangents of a motion column (A q̂ + B x̂ and the linearized forces) and of
     /// the gust column (A q̂ + b_gust, with the generic gust fluxes' values equal to the plain
     /// ones) equal central differences (step 1e-6) of the forward pieces on the moved mesh with
@@ -212,7 +226,8 @@ mod tests {
             &dq0,
         );
         // the forward pieces at mesh X + h δX, state q₀ + h δq₀, motion x̂ + h δx̂
-        let at = |h: f64| {
+        // the LFD problem on the mesh X + h δX about the state q₀ + h δq₀
+        let moved = |h: f64| {
             let mut m = e.mesh.clone();
             for (p, d) in m.nodes.iter_mut().zip(&d_nodes) {
                 for k in 0..3 {
@@ -226,7 +241,10 @@ mod tests {
                 .enumerate()
                 .map(|(c, s)| std::array::from_fn(|k| s[k] + h * dq0[c * NVAR + k]))
                 .collect();
-            let op = LfdOperator::new(eh, qh);
+            LfdOperator::new(eh, qh)
+        };
+        let at = |h: f64| {
+            let op = moved(h);
             let xh: Vec<[C64; 3]> = x_hat
                 .iter()
                 .zip(&dx_hat)
@@ -239,15 +257,7 @@ mod tests {
         };
         let h = 1e-6;
         let ((tp, fp), (tm, fm)) = (at(h), at(-h));
-        let scale = t.iter().fold(0.0f64, |a, v| a.max(v.norm()));
-        for i in 0..t.len() {
-            let fd = (tp[i] - tm[i]) / (2.0 * h);
-            assert!(
-                (fd - t[i]).norm() < 1e-6 * scale,
-                "t[{i}]: {} vs {fd}",
-                t[i]
-            );
-        }
+        assert_central(&t, &tp, &tm, h, "motion");
         let fscale = df.iter().flatten().fold(0.0f64, |a, v| a.max(v.norm()));
         for (w, d) in df.iter().enumerate() {
             for k in 0..3 {
@@ -277,33 +287,13 @@ mod tests {
         let (t, _) =
             lfd.column_tangent(s, &q_hat, &Column::Gust { g: &g, dg: &dg }, &d_nodes, &dq0);
         let at = |h: f64| {
-            let mut m = e.mesh.clone();
-            for (p, d) in m.nodes.iter_mut().zip(&d_nodes) {
-                for k in 0..3 {
-                    p[k] += h * d[k];
-                }
-            }
-            let eh = Euler::new(m, e.q_inf);
-            let qh: Vec<State<f64>> = q0
-                .iter()
-                .enumerate()
-                .map(|(c, s)| std::array::from_fn(|k| s[k] + h * dq0[c * NVAR + k]))
-                .collect();
-            let op = LfdOperator::new(eh, qh);
+            let op = moved(h);
             let gh = op.euler.harmonic_gust_fluxes(0.7, 0.5, 0.1);
             let aq = op.apply(s, &q_hat);
             let b = op.volume_flux_rhs(&gh);
             aq.iter().zip(&b).map(|(a, b)| a + b).collect::<Vec<_>>()
         };
         let (tp, tm) = (at(h), at(-h));
-        let scale = t.iter().fold(0.0f64, |a, v| a.max(v.norm()));
-        for i in 0..t.len() {
-            let fd = (tp[i] - tm[i]) / (2.0 * h);
-            assert!(
-                (fd - t[i]).norm() < 1e-6 * scale,
-                "gust t[{i}]: {} vs {fd}",
-                t[i]
-            );
-        }
+        assert_central(&t, &tp, &tm, h, "gust");
     }
 }

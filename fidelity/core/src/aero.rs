@@ -313,6 +313,27 @@ pub fn check_request(
     modes.check(n_points)
 }
 
+/// Checks reverse-mode seeds against the GAF table they seed: `n_k` frequencies, `n_modes`
+/// modes, every row of Q_ss and Q_gs complete.
+pub fn check_seeds(seeds: &[GafTable], n_k: usize, n_modes: usize) -> Result<(), AeroError> {
+    let fits = |s: &GafTable| {
+        s.k.len() == n_k
+            && s.q_ss.len() == n_k
+            && s.q_gs.len() == n_k
+            && s.q_gs.iter().all(|q| q.len() == n_modes)
+            && s.q_ss
+                .iter()
+                .all(|q| q.len() == n_modes && q.iter().all(|r| r.len() == n_modes))
+    };
+    if seeds.iter().all(fits) {
+        Ok(())
+    } else {
+        Err(AeroError::Input(
+            "seed: its shape does not match the GAF table".into(),
+        ))
+    }
+}
+
 /// An aerodynamic model that supplies GAFs. Its reverse mode is a separate capability
 /// ([`AerodynamicsReverse`], reached through [`Aerodynamics::reverse`]), so a caller that needs
 /// gradients asks for it once, up front, instead of failing at the first gradient.

@@ -556,14 +556,7 @@ impl AerodynamicsReverse for Dlm {
             return Ok(Vec::new());
         }
         let nm = modes.n_modes();
-        if seeds
-            .iter()
-            .any(|seed| seed.k.len() != k.len() || seed.n_modes() != nm)
-        {
-            return Err(AeroError::Input(
-                "seed: its shape does not match the GAF table".into(),
-            ));
-        }
+        gustkit_core::aero::check_seeds(seeds, k.len(), nm)?;
         let n = self.n_boxes();
         let weights = Self::force_weights(&self.boxes, modes);
         let mats = self.matrices(flight, k);
