@@ -50,6 +50,16 @@ pub enum Command {
         /// A run folder written by `gustkit run` (holds results.json).
         run_dir: PathBuf,
     },
+    /// One report across optimization runs and fidelities (convergence, thickness maps, PSDs,
+    /// GAFs, cross-evaluation), from their results.json files alone.
+    Compare {
+        /// Run folders written by `gustkit run` of optimization studies.
+        #[arg(required = true)]
+        run_dirs: Vec<PathBuf>,
+        /// Folder of the comparison report.
+        #[arg(long, default_value = "reports/compare")]
+        out: PathBuf,
+    },
     /// Modal analysis of a study's wing: frequency table, mode-shape figures and a VTK file.
     Modes {
         study: PathBuf,
@@ -141,6 +151,9 @@ pub fn dispatch(cli: Cli) -> Result<runner::Outcome> {
             resume,
         } => runner::run(&study, &reports, resume),
         Command::Report { run_dir } => done(runner::report(&run_dir)),
+        Command::Compare { run_dirs, out } => {
+            done(crate::report::compare::compare(&run_dirs, &out))
+        }
         Command::Sweep {
             study,
             reports,

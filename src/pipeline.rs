@@ -117,8 +117,22 @@ impl DampingSeed {
     }
 }
 
+/// A design's aeroelastic model: plate, modes, aerodynamic model and its GAF table.
+pub struct Aeroelastic {
+    pub x: Vec<f64>,
+    pub plate: PlateModel,
+    pub modes: Modes,
+    pub aero: AeroModel,
+    pub table: GafTable,
+}
+
 /// Evaluates a design of the study.
 pub fn evaluate(study: &Study, settings: &GustSettings, x: &[f64]) -> Result<Evaluation> {
+    respond(aeroelastic(study, x)?, settings)
+}
+
+/// The aeroelastic model of a design: plate, modes, aerodynamic model, GAFs.
+pub fn aeroelastic(study: &Study, x: &[f64]) -> Result<Aeroelastic> {
     let plate = study
         .model_at(DesignVector::from_slice(x))
         .map_err(|e: StudyError| anyhow::anyhow!("design: {}", e.reason))?;
@@ -129,6 +143,25 @@ pub fn evaluate(study: &Study, settings: &GustSettings, x: &[f64]) -> Result<Eva
     let table = aero
         .gafs(&plate, &modes)
         .map_err(|e| anyhow::anyhow!("aerodynamics: {e}"))?;
+    Ok(Aeroelastic {
+        x: x.to_vec(),
+        plate,
+        modes,
+        aero,
+        table,
+    })
+}
+
+/// The gust response of an aeroelastic model (Eqs. 16–18), after the check that it is stable at
+/// the flight condition (an unstable model has no stationary response).
+pub fn respond(a: Aeroelastic, settings: &GustSettings) -> Result<Evaluation> {
+    let Aeroelastic {
+        x,
+        plate,
+        modes,
+        aero,
+        table,
+    } = a;
     let f = &aero.flight;
     check_stability(&modes, &table, f)?;
     let omega_max = table.k.last().copied().unwrap_or(0.0) * f.velocity / f.b_ref;
@@ -153,7 +186,7 @@ pub fn evaluate(study: &Study, settings: &GustSettings, x: &[f64]) -> Result<Eva
         })
         .collect();
     let mut ev = Evaluation {
-        x: x.to_vec(),
+        x,
         mass_kg: plate.mass(),
         area_m2: plate.planform().area(),
         freq_hz: modes.freq_hz(),

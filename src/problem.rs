@@ -38,6 +38,9 @@ pub struct DesignProblem<'a> {
     /// The largest p-k damping up to the margin speed at every point evaluated (with a flutter
     /// margin): the quantity the KS constraint bounds, for the report.
     pub damping_peaks: Vec<(Vec<f64>, f64)>,
+    /// Wall time of every function (values) and gradient evaluated, s.
+    pub function_times: Vec<f64>,
+    pub gradient_times: Vec<f64>,
 }
 
 impl<'a> DesignProblem<'a> {
@@ -48,6 +51,8 @@ impl<'a> DesignProblem<'a> {
             spec,
             last: None,
             damping_peaks: Vec::new(),
+            function_times: Vec::new(),
+            gradient_times: Vec::new(),
         }
     }
 
@@ -65,6 +70,7 @@ impl Problem for DesignProblem<'_> {
         self.spec.upper.clone()
     }
     fn values(&mut self, x: &[f64]) -> Result<Values, String> {
+        let t0 = std::time::Instant::now();
         let ev = evaluate(self.study, &self.settings, x).map_err(|e| format!("{e:#}"))?;
         let mut ineq = vec![ev.rms_m[self.spec.output] / self.spec.rms_limit - 1.0];
         let mut flutter = None;
@@ -84,6 +90,7 @@ impl Problem for DesignProblem<'_> {
             ineq,
         };
         self.last = Some((ev, flutter));
+        self.function_times.push(t0.elapsed().as_secs_f64());
         Ok(v)
     }
     fn gradients(&mut self, x: &[f64]) -> Result<Gradients, String> {
@@ -112,9 +119,11 @@ impl Problem for DesignProblem<'_> {
             s.damping = Some(d);
             all.push(s);
         }
+        let t0 = std::time::Instant::now();
         let mut g = gradients(ev, &all)
             .map_err(|e| format!("{e:#}"))?
             .into_iter();
+        self.gradient_times.push(t0.elapsed().as_secs_f64());
         let (f, h) = (g.next().expect("mass"), g.next().expect("area"));
         let ineq: Vec<Vec<f64>> = g.collect();
         Ok(Gradients {

@@ -190,7 +190,8 @@ fn coarse_lfd_gafs_beside_the_dlm() {
 /// The steady state is kept in the cache folder (the run folder) and reused: a second build of
 /// the same wing and flight condition reads it (the file is not written again), a corrupted or
 /// foreign file is ignored and the state solved again (to the same bits), and another Mach
-/// number gets its own file, which replaces the old one.
+/// number gets its own file, which replaces the old one, solved from the old state as its
+/// initial guess to the state a solve from the free stream gives.
 #[test]
 fn steady_state_is_saved_and_reused() {
     let dir = std::env::temp_dir().join(format!("gustkit-steady-cache-{}", std::process::id()));
@@ -260,6 +261,37 @@ fn steady_state_is_saved_and_reused() {
     let now = files();
     assert_eq!(now.len(), 1, "{now:?}");
     assert_ne!(&now[0], file);
+    // that solve started from the M 0.5 state left in the folder (the previous design's state is
+    // the next one's initial guess); it reaches the state solved from the free stream in a fresh
+    // folder, both converged to round-off: equal to 1e-10 of each variable's scale
+    let fresh = dir.join("fresh");
+    std::fs::create_dir_all(&fresh).unwrap();
+    other.cache_dir = Some(fresh.clone());
+    other.aero_model(&plate).unwrap();
+    let read = |p: &Path| -> Vec<f64> {
+        std::fs::read(p)
+            .unwrap()
+            .chunks_exact(8)
+            .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
+            .collect()
+    };
+    let warm = read(&now[0]);
+    let cold = read(&fresh.join(now[0].file_name().unwrap()));
+    assert_eq!(warm.len(), cold.len());
+    for var in 0..5 {
+        let scale = cold
+            .iter()
+            .skip(var)
+            .step_by(5)
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        let diff = (0..cold.len() / 5)
+            .map(|c| (warm[5 * c + var] - cold[5 * c + var]).abs())
+            .fold(0.0f64, f64::max);
+        assert!(
+            diff <= 1e-10 * scale,
+            "variable {var}: {diff:e} of {scale:e}"
+        );
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -395,10 +395,9 @@ impl LfdWingSpec {
     }
 }
 
-/// A steady state read from `file` if it is one of this mesh (length), physical, and converged
-/// (‖R‖ within 1e-12 of the flux scale, well above round-off and far below any truncation
-/// error); anything else is ignored and the state solved again.
-fn converged_state(e: &Euler, file: &Path) -> Option<Vec<gustkit_cfd::residual::State<f64>>> {
+/// A state read from `file` if it is one of this mesh (length) and physical (finite, positive
+/// density); `None` for anything else.
+fn read_state(e: &Euler, file: &Path) -> Option<Vec<gustkit_cfd::residual::State<f64>>> {
     let bytes = std::fs::read(file).ok()?;
     let n = e.mesh.n_cells;
     let nvar = gustkit_cfd::gas::NVAR;
@@ -416,6 +415,14 @@ fn converged_state(e: &Euler, file: &Path) -> Option<Vec<gustkit_cfd::residual::
     if q.iter().flatten().any(|v| !v.is_finite()) || q.iter().any(|s| !(s[0] > 0.0)) {
         return None;
     }
+    Some(q)
+}
+
+/// A steady state read from `file` if it is one of this mesh, physical, and converged
+/// (‖R‖ within 1e-12 of the flux scale, well above round-off and far below any truncation
+/// error); anything else is ignored and the state solved again.
+fn converged_state(e: &Euler, file: &Path) -> Option<Vec<gustkit_cfd::residual::State<f64>>> {
+    let q = read_state(e, file)?;
     let r: f64 = e
         .residual(&q)
         .iter()
@@ -424,6 +431,25 @@ fn converged_state(e: &Euler, file: &Path) -> Option<Vec<gustkit_cfd::residual::
         .sum::<f64>()
         .sqrt();
     (r <= 1e-12 * e.flux_scale(&q)).then_some(q)
+}
+
+/// The steady state of the folder's previous wing (another design of an optimization), when one
+/// of this mesh's size is there: the initial guess of the next steady solve, which converges to
+/// the same state as from the free stream in fewer Newton iterations.
+fn previous_state(
+    e: &Euler,
+    cache: Option<&Path>,
+) -> Option<Vec<gustkit_cfd::residual::State<f64>>> {
+    cache.and_then(Path::parent).and_then(|dir| {
+        std::fs::read_dir(dir).ok()?.flatten().find_map(|entry| {
+            let name = entry.file_name();
+            let name = name.to_string_lossy();
+            let ours = Some(entry.path()) == cache.map(Path::to_path_buf);
+            (!ours && name.starts_with(STEADY_PREFIX) && name.ends_with(".bin"))
+                .then(|| read_state(e, &entry.path()))
+                .flatten()
+        })
+    })
 }
 
 /// Writes a steady state to `file` atomically (little-endian f64, cell by cell), and removes the
@@ -560,9 +586,16 @@ impl WingBuilder for LfdWingSpec {
         let q0 = match cache.as_deref().and_then(|f| converged_state(&e, f)) {
             Some(q) => q,
             None => {
-                let (q, _) = e
-                    .solve_steady(vec![e.q_inf; e.mesh.n_cells], &params)
-                    .map_err(|err| fail(format!("steady state did not converge: {err}")))?;
+                let free_stream = || vec![e.q_inf; e.mesh.n_cells];
+                // from the previous design's state, and from the free stream should that fail
+                let warm = previous_state(&e, cache.as_deref())
+                    .and_then(|q| e.solve_steady(q, &params).ok());
+                let (q, _) = match warm {
+                    Some(solved) => solved,
+                    None => e
+                        .solve_steady(free_stream(), &params)
+                        .map_err(|err| fail(format!("steady state did not converge: {err}")))?,
+                };
                 if let Some(f) = &cache {
                     // a cache that cannot be written costs the next run a steady solve, no more
                     let _ = save_state(f, &q);

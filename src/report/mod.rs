@@ -1,5 +1,6 @@
 //! Reports: figures (plotters, PNG and SVG), VTK files and markdown, always written atomically.
 
+pub mod compare;
 pub mod figures;
 pub mod folder;
 pub mod results;

@@ -157,6 +157,113 @@ pub struct OptimizationResults {
     /// The results.json whose final design started this run (`optimization.warm_start.from`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub warm_start: Option<String>,
+    /// Wall times of the functions and gradients this run evaluated (absent before this field).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub timing: Option<Timing>,
+    /// The initial, starting and final designs analysed with this run's fidelity and the one of
+    /// `optimization.cross_evaluation` (absent without it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cross_evaluation: Option<CrossEvaluation>,
+}
+
+/// Wall times of repeated measurements, seconds: median, minimum and maximum.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Stats {
+    pub repetitions: usize,
+    pub median_s: f64,
+    pub min_s: f64,
+    pub max_s: f64,
+}
+
+impl Stats {
+    /// The statistics of `samples` (at least one).
+    pub fn of(mut samples: Vec<f64>) -> Self {
+        samples.sort_by(f64::total_cmp);
+        let n = samples.len();
+        Self {
+            repetitions: n,
+            median_s: if n % 2 == 1 {
+                samples[n / 2]
+            } else {
+                0.5 * (samples[n / 2 - 1] + samples[n / 2])
+            },
+            min_s: samples[0],
+            max_s: samples[n - 1],
+        }
+    }
+
+    /// One report line: `label  median ms (min … max, N reps)`.
+    pub fn line(&self, label: &str) -> String {
+        format!(
+            "  {label:<42}{:9.2} ms  (min {:.2}, max {:.2}, {} reps)",
+            1e3 * self.median_s,
+            1e3 * self.min_s,
+            1e3 * self.max_s,
+            self.repetitions
+        )
+    }
+}
+
+/// How long the optimization's evaluations took in this run (a resumed run: since the resume).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct Timing {
+    /// One function: model at the design (modes, aerodynamic model, GAFs), gust response and
+    /// constraints.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub function: Option<Stats>,
+    /// One gradient of the objective and every constraint with respect to every variable.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gradient: Option<Stats>,
+    /// Threads of the process's thread pool.
+    pub threads: usize,
+}
+
+/// One design analysed with one fidelity.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct FidelityEvaluation {
+    /// `dlm` or `lfd`.
+    pub fidelity: String,
+    /// RMS of each gust output (SI), in the study's output order; absent where this fidelity
+    /// finds the design unstable at the flight condition (see `unstable`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rms: Option<Vec<f64>>,
+    /// RMS of the constrained output in the report unit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rms_display: Option<f64>,
+    /// Why there is no gust response: the unstable root at the flight condition.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unstable: Option<String>,
+    /// The p-k flutter point at the flight Mach number and density (searched up to
+    /// [`CrossEvaluation::searched_up_to_m_s`]).
+    pub flutter: FlutterPoint,
+    /// PSD of the constrained output (absent where unstable).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub psd: Option<PsdSeries>,
+    /// The GAF table of the design's modes.
+    pub gafs: gustkit_core::GafTable,
+    /// Wall time of the evaluation, s.
+    pub time_s: f64,
+}
+
+/// One design (`initial`, `start` of a warm start, `final`) and its analyses with both
+/// fidelities, this run's first.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct CrossDesign {
+    pub design: String,
+    pub mass_kg: f64,
+    pub design_variables: Vec<f64>,
+    pub evaluations: Vec<FidelityEvaluation>,
+}
+
+/// The optimization's designs analysed with both fidelities (`optimization.cross_evaluation`):
+/// RMS, flutter and GAFs of each design from each, for the comparison report.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct CrossEvaluation {
+    pub output: String,
+    pub unit: String,
+    pub flight_speed_m_s: f64,
+    pub searched_up_to_m_s: f64,
+    pub designs: Vec<CrossDesign>,
 }
 
 /// Where a design flutters: the p-k crossing, if any, below `searched_up_to_m_s`.
@@ -207,6 +314,9 @@ pub struct RunResults {
     pub frequencies_hz: Vec<f64>,
     pub modes: Vec<ModeRow>,
     pub mode_shapes: ModeShapes,
+    /// The aerodynamic fidelity of the run (`dlm`, `lfd`; absent in results before this field).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fidelity: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gust: Option<GustResults>,
     #[serde(default, skip_serializing_if = "Option::is_none")]

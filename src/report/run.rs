@@ -285,12 +285,26 @@ pub fn rerender(
     dir: &Path,
     path: &Path,
     value: &serde_json::Value,
+    r: RunResults,
+) -> Result<RunResults> {
+    let r = with_optimization(path, value, r)?;
+    render(dir, &r)?;
+    Ok(r)
+}
+
+/// A wing run's results read from `value`, the results.json at `path`.
+pub fn read(path: &Path, value: &serde_json::Value) -> Result<RunResults> {
+    with_optimization(path, value, from_json(path, value)?)
+}
+
+/// `r` with its optimization read on its own: a flattened Option swallows errors in its fields.
+fn with_optimization(
+    path: &Path,
+    value: &serde_json::Value,
     mut r: RunResults,
 ) -> Result<RunResults> {
-    // a flattened Option swallows errors in its fields: read the optimization on its own
     if value.get("converged").is_some() {
         r.optimization = Some(from_json(path, value)?);
     }
-    render(dir, &r)?;
     Ok(r)
 }

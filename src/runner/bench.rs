@@ -12,43 +12,7 @@ use std::time::Instant;
 /// Warm-up runs before any timing (discarded: page faults, caches, the thread pool's start).
 pub const WARMUP: usize = 1;
 
-/// Wall times of the repetitions of one measurement, seconds.
-#[derive(Clone, Debug, Serialize)]
-pub struct Stats {
-    pub repetitions: usize,
-    pub median_s: f64,
-    pub min_s: f64,
-    pub max_s: f64,
-}
-
-impl Stats {
-    /// The statistics of `samples` (at least one).
-    pub fn of(mut samples: Vec<f64>) -> Self {
-        samples.sort_by(f64::total_cmp);
-        let n = samples.len();
-        Self {
-            repetitions: n,
-            median_s: if n % 2 == 1 {
-                samples[n / 2]
-            } else {
-                0.5 * (samples[n / 2 - 1] + samples[n / 2])
-            },
-            min_s: samples[0],
-            max_s: samples[n - 1],
-        }
-    }
-
-    /// One report line: `label  median ms (min … max, N reps)`.
-    pub fn line(&self, label: &str) -> String {
-        format!(
-            "  {label:<42}{:9.2} ms  (min {:.2}, max {:.2}, {} reps)",
-            1e3 * self.median_s,
-            1e3 * self.min_s,
-            1e3 * self.max_s,
-            self.repetitions
-        )
-    }
-}
+pub use crate::report::results::Stats;
 
 /// Runs `f` [`WARMUP`] times untimed, then `repeat` times timed; `f` returns the wall time of
 /// its part of interest (so setup it needs is not counted).

@@ -11,6 +11,7 @@ pub(crate) mod schema;
 pub mod sweep;
 
 pub use crate::aero::{dlm::DlmSpec, FidelitySpec};
+pub use schema::CrossEvaluationSpec;
 pub use schema::{
     AeroSpec, AirfoilSpec, ClampSpec, FlightSpec, FlutterSpec, GustSpec, LengthUnit, MaterialSpec,
     MeshSpec, OptimizationSpec, OutputSpec, ReferenceSpec, StructureSpec, StudyFile, SweepCombine,
@@ -220,6 +221,7 @@ impl Study {
         if self.spec.optimization.is_some() {
             self.design_bounds()?;
             self.warm_start_design()?;
+            self.cross_evaluation_study()?;
             self.require_reverse_mode("optimization", true)?;
         }
         Ok(())
@@ -284,6 +286,43 @@ impl Study {
             self.cache_dir.as_deref(),
         )
         .map_err(|e| self.fidelity_err(&e))
+    }
+
+    /// This study with the fidelity of `optimization.cross_evaluation` in place of its own (the
+    /// same wing, flight, gust and reduced frequencies), checked as the fidelity checks a study;
+    /// None without a cross-evaluation.
+    pub fn cross_evaluation_study(&self) -> Result<Option<Study>, StudyError> {
+        let Some(c) = self
+            .spec
+            .optimization
+            .as_ref()
+            .and_then(|o| o.cross_evaluation.as_ref())
+        else {
+            return Ok(None);
+        };
+        let builder = c.fidelity.builder();
+        let flight = self.flight_condition()?;
+        builder
+            .validate(&crate::aero::WingContext {
+                planform: &self.planform()?,
+                airfoil: &self.airfoil()?,
+                flight: &flight,
+                cache_dir: None,
+            })
+            .map_err(|e| {
+                self.err(
+                    &e.path_in(&format!(
+                        "optimization.cross_evaluation.fidelity.{}",
+                        builder.name()
+                    )),
+                    e.reason.clone(),
+                )
+            })?;
+        let mut other = self.clone();
+        if let Some(aero) = other.spec.aero.as_mut() {
+            aero.fidelity = c.fidelity.clone();
+        }
+        Ok(Some(other))
     }
 
     /// The starting design of the optimization: the final design of the run named by

@@ -106,10 +106,21 @@ pub struct OptimizationSpec {
     /// initial design.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub warm_start: Option<WarmStartSpec>,
+    /// Another fidelity that analyses the initial, starting and final designs after the run
+    /// (RMS, flutter, GAFs) for `gustkit compare`; the optimization never uses it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cross_evaluation: Option<CrossEvaluationSpec>,
     #[serde(default = "default_max_iterations")]
     pub max_iterations: usize,
     #[serde(default = "default_tolerance")]
     pub tolerance: f64,
+}
+
+/// `optimization.cross_evaluation`: the other fidelity, e.g. `{"fidelity": {"dlm": {...}}}`.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct CrossEvaluationSpec {
+    pub fidelity: crate::aero::FidelitySpec,
 }
 
 /// `optimization.warm_start`: where the starting design comes from.

@@ -158,6 +158,11 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
         frequencies_hz: summary.frequencies_hz,
         modes: summary.modes,
         mode_shapes: mode_shapes(&study, &model, &modes),
+        fidelity: study
+            .spec
+            .aero
+            .as_ref()
+            .map(|a| a.fidelity.builder().name().to_string()),
         gust,
         flutter,
         optimization,

@@ -6,7 +6,8 @@ use super::unit_label;
 use crate::flutter::margin::{DAMPING_SCALE, KS_RHO};
 use crate::optim::{Checkpointing, Control, Executor};
 use crate::report::results::{
-    element_polygons, DesignSnapshot, FlutterCheck, FlutterPoint, HistoryRow, OptimizationResults,
+    element_polygons, CrossDesign, CrossEvaluation, DesignSnapshot, FidelityEvaluation,
+    FlutterCheck, FlutterPoint, HistoryRow, OptimizationResults, Stats, Timing,
 };
 use crate::report::write_atomic;
 use crate::study::Study;
@@ -127,7 +128,12 @@ fn defining_spec(study: &Study) -> Result<serde_json::Value> {
             m.remove(key);
         }
         if let Some(o) = m.get_mut("optimization").and_then(|o| o.as_object_mut()) {
-            for key in ["max_iterations", "tolerance", "reference"] {
+            for key in [
+                "max_iterations",
+                "tolerance",
+                "reference",
+                "cross_evaluation",
+            ] {
                 o.remove(key);
             }
         }
@@ -227,7 +233,9 @@ pub fn optimize(
         (1.0, "N m")
     };
     let rms_limit = if is_disp { o.rms_max * to_m } else { o.rms_max };
+    let t_ev0 = Instant::now();
     let ev0 = crate::pipeline::evaluate(study, &settings, &x0).context("initial design")?;
+    let t_ev0 = t_ev0.elapsed().as_secs_f64();
     let spec = DesignSpec {
         lower,
         upper,
@@ -284,7 +292,7 @@ pub fn optimize(
                 None => "the checkpoint belongs to another problem".to_string(),
             };
             anyhow::bail!(
-                "{}: --resume: {what}; only the description, the reference, max_iterations, tolerance, the flutter sweep and the sweep section may change between a run and its resumption. Run without --resume to start over",
+                "{}: --resume: {what}; only the description, the reference, max_iterations, tolerance, the cross-evaluation, the flutter sweep and the sweep section may change between a run and its resumption. Run without --resume to start over",
                 study.file.display()
             );
         }
@@ -335,7 +343,16 @@ pub fn optimize(
     observer.bar.finish_and_clear();
     let info = info.map_err(|e| anyhow::anyhow!("optimization: {e}"))?;
     let wall_time_s = t0.elapsed().as_secs_f64();
+    let timing = Timing {
+        function: (!problem.function_times.is_empty())
+            .then(|| Stats::of(std::mem::take(&mut problem.function_times))),
+        gradient: (!problem.gradient_times.is_empty())
+            .then(|| Stats::of(std::mem::take(&mut problem.gradient_times))),
+        threads: rayon::current_num_threads(),
+    };
+    let t_ev = Instant::now();
     let ev = crate::pipeline::evaluate(study, &settings, &info.x).context("final design")?;
+    let t_ev = t_ev.elapsed().as_secs_f64();
     // the largest p-k damping of each iterate (re-evaluated for iterates of an earlier session)
     let mut peaks = std::mem::take(&mut problem.damping_peaks);
     let mut peak_at = |x: &[f64]| -> Result<Option<f64>> {
@@ -396,6 +413,35 @@ pub fn optimize(
         ev.rms_m[output] * unit_scale
     );
     }
+    let cross_evaluation = match study.cross_evaluation_study()? {
+        Some(other) => {
+            let mut designs = vec![("initial", x0.clone(), Some((&ev0, t_ev0)))];
+            if let Some(x) = &x_start {
+                designs.push(("start", x.clone(), None));
+            }
+            designs.push(("final", info.x.clone(), Some((&ev, t_ev))));
+            let c = cross_evaluate(study, &other, &settings, &designs, output, unit_scale, unit)?;
+            if !quiet {
+                for d in &c.designs {
+                    let row: Vec<String> = d
+                        .evaluations
+                        .iter()
+                        .map(|e| match e.rms_display {
+                            Some(v) => format!("{} {v:.4} {unit}", e.fidelity),
+                            None => format!("{} unstable", e.fidelity),
+                        })
+                        .collect();
+                    println!(
+                        "cross-evaluation, {} design: RMS {}",
+                        d.design,
+                        row.join(", ")
+                    );
+                }
+            }
+            Some(c)
+        }
+        None => None,
+    };
     let design = study.initial_design()?;
     Ok(OptimizationResults {
         converged: info.converged,
@@ -423,6 +469,127 @@ pub fn optimize(
         history,
         flutter_check: flutter,
         warm_start: o.warm_start.as_ref().map(|w| w.from.display().to_string()),
+        timing: Some(timing),
+        cross_evaluation,
+    })
+}
+
+/// One design analysed with one fidelity, for the cross-evaluation: the flutter point and GAFs
+/// of its aeroelastic model, and its gust response or the reason there is none (the model is
+/// unstable at the flight condition).
+fn fidelity_evaluation(
+    model: (
+        &crate::aero::AeroModel,
+        &crate::structure::Modes,
+        &gustkit_core::GafTable,
+    ),
+    response: std::result::Result<&crate::pipeline::Evaluation, String>,
+    output: usize,
+    unit_scale: f64,
+    v_max: f64,
+) -> Result<FidelityEvaluation> {
+    let (aero, modes, table) = model;
+    let (rms, psd, unstable) = match response {
+        Ok(ev) => (Some(ev.rms_m.clone()), Some(psd_series(ev, output)), None),
+        Err(reason) => (None, None, Some(reason)),
+    };
+    Ok(FidelityEvaluation {
+        fidelity: aero.name.to_string(),
+        rms_display: rms.as_ref().map(|r| r[output] * unit_scale),
+        rms,
+        unstable,
+        flutter: flutter_point(modes, table, &aero.flight, v_max)?,
+        psd,
+        gafs: table.clone(),
+        time_s: 0.0,
+    })
+}
+
+/// A design to cross-evaluate: its name, design vector, and its evaluation with the study's own
+/// fidelity with the time it took, when the run already has it.
+type CrossPoint<'e> = (
+    &'static str,
+    Vec<f64>,
+    Option<(&'e crate::pipeline::Evaluation, f64)>,
+);
+
+/// The designs analysed with the study's fidelity and with `other` (the study with the
+/// cross-evaluation fidelity): RMS, p-k flutter point, PSD and GAFs of each. A design that one
+/// fidelity finds unstable at the flight condition gets its flutter point and GAFs from it, and
+/// the reason in place of an RMS.
+fn cross_evaluate(
+    study: &Study,
+    other: &Study,
+    settings: &crate::gust::GustSettings,
+    designs: &[CrossPoint<'_>],
+    output: usize,
+    unit_scale: f64,
+    unit: &str,
+) -> Result<CrossEvaluation> {
+    let flight = study.flight_condition()?;
+    let v_max = FLUTTER_CHECK_FACTOR * flight.velocity;
+    let analyse = |s: &Study, x: &[f64], what: &str| -> Result<FidelityEvaluation> {
+        let context = || format!("cross-evaluation of the {what} design");
+        let t = Instant::now();
+        let model = crate::pipeline::aeroelastic(s, x).with_context(context)?;
+        let pieces = (&model.aero, &model.modes, &model.table);
+        let mut e =
+            match crate::flutter::check_stability(&model.modes, &model.table, &model.aero.flight) {
+                // an unstable model has no gust response: its flutter point and GAFs, and the reason
+                Err(reason) => fidelity_evaluation(
+                    pieces,
+                    Err(format!("{reason:#}")),
+                    output,
+                    unit_scale,
+                    v_max,
+                )?,
+                Ok(()) => {
+                    let ev = crate::pipeline::respond(model, settings).with_context(context)?;
+                    fidelity_evaluation(
+                        (&ev.aero, &ev.modes, &ev.table),
+                        Ok(&ev),
+                        output,
+                        unit_scale,
+                        v_max,
+                    )?
+                }
+            };
+        e.time_s = t.elapsed().as_secs_f64();
+        Ok(e)
+    };
+    let designs = designs
+        .iter()
+        .map(|(name, x, own)| -> Result<CrossDesign> {
+            let own_eval = match own {
+                Some((ev, t)) => FidelityEvaluation {
+                    time_s: *t,
+                    ..fidelity_evaluation(
+                        (&ev.aero, &ev.modes, &ev.table),
+                        Ok(ev),
+                        output,
+                        unit_scale,
+                        v_max,
+                    )?
+                },
+                None => analyse(study, x, name)?,
+            };
+            let mass_kg = study
+                .model_at(crate::wing::DesignVector::from_slice(x))?
+                .mass();
+            Ok(CrossDesign {
+                design: name.to_string(),
+                mass_kg,
+                design_variables: x.clone(),
+                evaluations: vec![own_eval, analyse(other, x, name)?],
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(CrossEvaluation {
+        output: settings.outputs[output].name.clone(),
+        unit: unit.to_string(),
+        flight_speed_m_s: flight.velocity,
+        searched_up_to_m_s: v_max,
+        designs,
     })
 }
 

@@ -1,0 +1,534 @@
+//! `gustkit compare RUN_DIR...`: one report across optimization runs and fidelities, rendered from
+//! their results.json files alone: convergence histories overlaid (paper Fig. 6), thickness maps
+//! side by side (Fig. 7), the PSD of each optimum with both fidelities, the GAFs of both
+//! fidelities on the same design, and the paper's Sec. IV numbers as a table.
+
+use super::figures::{LinePlot, PsdPlot, Series, ThicknessMaps};
+use super::results::{CrossEvaluation, OptimizationResults, RunResults};
+use super::{save_figure, Figure};
+use crate::kind::StudyKind;
+use anyhow::{anyhow, bail, Result};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// One run of the comparison: where it came from, its results and its optimization.
+pub struct ComparedRun {
+    /// The run folder as given.
+    pub dir: PathBuf,
+    /// `study (fidelity)`: the label in tables and legends.
+    pub label: String,
+    pub results: RunResults,
+}
+
+impl ComparedRun {
+    fn opt(&self) -> &OptimizationResults {
+        self.results.optimization.as_ref().expect("checked at load")
+    }
+}
+
+/// Reads a run folder's results.json for the comparison: a wing study's optimization of this
+/// results schema; anything else is refused with the file and the reason.
+pub fn load_run(dir: &Path) -> Result<ComparedRun> {
+    let path = dir.join("results.json");
+    let value = super::read_json(&path)?;
+    let kind = StudyKind::of_results(&path, &value)?;
+    if kind != StudyKind::Wing {
+        bail!(
+            "{}: holds {} results; gustkit compare puts wing optimizations side by side",
+            path.display(),
+            kind.name()
+        );
+    }
+    if value.get("rms_tip_in").is_some() || value.get("history").is_none() {
+        bail!(
+            "{}: {}",
+            path.display(),
+            if value.get("history").is_none() {
+                "holds no optimization (gustkit compare puts optimization runs side by side)"
+                    .to_string()
+            } else {
+                "written with results schema 1 (rms_tip_in); run the study again with this gustkit"
+                    .to_string()
+            }
+        );
+    }
+    let results = super::run::read(&path, &value)?;
+    let fidelity = results.fidelity.clone().ok_or_else(|| {
+        anyhow!(
+            "{}: fidelity: missing — written before results files recorded their aerodynamic fidelity; run the study again with this gustkit",
+            path.display()
+        )
+    })?;
+    Ok(ComparedRun {
+        dir: dir.to_path_buf(),
+        label: format!("{} ({fidelity})", results.study),
+        results,
+    })
+}
+
+/// One row of the runs table (also written to compare.json).
+#[derive(Serialize)]
+struct RunRow {
+    run: String,
+    fidelity: String,
+    converged: bool,
+    iterations: usize,
+    evaluations: usize,
+    warm_start: Option<String>,
+    mass_initial_kg: f64,
+    mass_final_kg: f64,
+    mass_change_percent: f64,
+    unit: String,
+    rms_initial: f64,
+    rms_start: f64,
+    rms_final: f64,
+    function_median_s: Option<f64>,
+    gradient_median_s: Option<f64>,
+    threads: Option<usize>,
+    wall_time_s: f64,
+}
+
+/// One design analysed with one fidelity (compare.json and the cross-evaluation table).
+#[derive(Serialize)]
+struct CrossRow {
+    run: String,
+    design: String,
+    fidelity: String,
+    mass_kg: f64,
+    /// None where this fidelity finds the design unstable at the flight condition.
+    rms: Option<f64>,
+    flutter_speed_m_s: Option<f64>,
+    flutter_speed_ratio: Option<f64>,
+}
+
+/// A start design of one run that is another run's optimum, analysed with that run's fidelity
+/// by both: the two numbers must agree (the same design, the same model).
+#[derive(Serialize)]
+struct Consistency {
+    run: String,
+    other: String,
+    fidelity: String,
+    rms_here: f64,
+    rms_there: f64,
+    relative_difference: f64,
+}
+
+/// compare.json: the tables of the report as numbers.
+#[derive(Serialize)]
+struct CompareDoc {
+    runs: Vec<RunRow>,
+    cross_evaluation: Vec<CrossRow>,
+    consistency: Vec<Consistency>,
+}
+
+fn run_row(r: &ComparedRun) -> RunRow {
+    let o = r.opt();
+    let timing = o.timing.as_ref();
+    RunRow {
+        run: r.results.study.clone(),
+        fidelity: r.results.fidelity.clone().unwrap_or_default(),
+        converged: o.converged,
+        iterations: o.iterations,
+        evaluations: o.evaluations,
+        warm_start: o.warm_start.clone(),
+        mass_initial_kg: o.initial.mass_kg,
+        mass_final_kg: o.final_.mass_kg,
+        mass_change_percent: 100.0 * (o.final_.mass_kg / o.initial.mass_kg - 1.0),
+        unit: o.unit.clone(),
+        rms_initial: o.initial.rms_display,
+        rms_start: o.history.first().map_or(f64::NAN, |h| h.rms_display),
+        rms_final: o.final_.rms_display,
+        function_median_s: timing.and_then(|t| t.function.as_ref()).map(|s| s.median_s),
+        gradient_median_s: timing.and_then(|t| t.gradient.as_ref()).map(|s| s.median_s),
+        threads: timing.map(|t| t.threads),
+        wall_time_s: o.wall_time_s,
+    }
+}
+
+fn cross_rows(r: &ComparedRun, c: &CrossEvaluation) -> Vec<CrossRow> {
+    c.designs
+        .iter()
+        .flat_map(|d| {
+            d.evaluations.iter().map(move |e| CrossRow {
+                run: r.results.study.clone(),
+                design: d.design.clone(),
+                fidelity: e.fidelity.clone(),
+                mass_kg: d.mass_kg,
+                rms: e.rms_display,
+                flutter_speed_m_s: e.flutter.speed_m_s,
+                flutter_speed_ratio: e.flutter.speed_m_s.map(|v| v / c.flight_speed_m_s),
+            })
+        })
+        .collect()
+}
+
+/// Where a run's cross-evaluated design is another run's final design, analysed there with that
+/// run's own fidelity: the pairs of RMS values of the same design and model.
+fn consistency(runs: &[ComparedRun]) -> Vec<Consistency> {
+    let mut out = Vec::new();
+    for r in runs {
+        let Some(c) = &r.opt().cross_evaluation else {
+            continue;
+        };
+        for other in runs.iter().filter(|o| !std::ptr::eq(*o, r)) {
+            let of = other.opt();
+            let fidelity = other.results.fidelity.clone().unwrap_or_default();
+            // the first design of this run that is the other's optimum
+            let same = c
+                .designs
+                .iter()
+                .find(|d| d.design_variables == of.final_.design_variables);
+            if let Some(d) = same {
+                let here = d
+                    .evaluations
+                    .iter()
+                    .find(|e| e.fidelity == fidelity)
+                    .and_then(|e| e.rms_display);
+                if let Some(rms_here) = here {
+                    out.push(Consistency {
+                        run: r.label.clone(),
+                        other: other.label.clone(),
+                        fidelity: fidelity.clone(),
+                        rms_here,
+                        rms_there: of.final_.rms_display,
+                        relative_difference: (rms_here / of.final_.rms_display - 1.0).abs(),
+                    });
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Line plots in a grid of `cols` columns under one title.
+struct Panels {
+    title: String,
+    cols: usize,
+    plots: Vec<LinePlot>,
+}
+
+impl Figure for Panels {
+    fn size(&self) -> (u32, u32) {
+        let rows = self.plots.len().div_ceil(self.cols.max(1)).max(1) as u32;
+        (760 * self.cols.max(1) as u32, 40 + 430 * rows)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing {}: {e}", self.title);
+        area.fill(&WHITE).map_err(err)?;
+        let body = area.titled(&self.title, ("sans-serif", 20)).map_err(err)?;
+        let rows = self.plots.len().div_ceil(self.cols.max(1)).max(1);
+        for (cell, plot) in body
+            .split_evenly((rows, self.cols.max(1)))
+            .iter()
+            .zip(&self.plots)
+        {
+            plot.draw(cell)?;
+        }
+        Ok(())
+    }
+}
+
+fn line_plot(title: String, x_label: &str, y_label: &str, series: Vec<Series>) -> LinePlot {
+    LinePlot {
+        title,
+        x_label: x_label.into(),
+        y_label: y_label.into(),
+        series,
+        log_y: false,
+        flip_y: false,
+    }
+}
+
+/// Histories of every run overlaid: mass and RMS normalized by their references, against the
+/// iteration.
+fn convergence(runs: &[ComparedRun]) -> Panels {
+    let curve = |r: &ComparedRun, f: &dyn Fn(&OptimizationResults, usize) -> f64| -> Series {
+        let o = r.opt();
+        (
+            r.label.clone(),
+            (0..o.history.len())
+                .map(|i| (o.history[i].iteration as f64, f(o, i)))
+                .collect(),
+        )
+    };
+    let mass = runs
+        .iter()
+        .map(|r| curve(r, &|o, i| o.history[i].mass_kg / o.initial.mass_kg))
+        .collect();
+    let rms = runs
+        .iter()
+        .map(|r| curve(r, &|o, i| o.history[i].rms_display / o.rms_limit))
+        .collect();
+    Panels {
+        title: "Optimization histories".into(),
+        cols: 1,
+        plots: vec![
+            line_plot(
+                "mass / mass of the study's initial design".into(),
+                "iteration",
+                "mass ratio",
+                mass,
+            ),
+            line_plot(
+                "RMS of the constrained output / its limit".into(),
+                "iteration",
+                "RMS ratio",
+                rms,
+            ),
+        ],
+    }
+}
+
+/// The first run's initial design, then every run's optimum, on one thickness scale.
+fn thickness(runs: &[ComparedRun]) -> ThicknessMaps {
+    let first = runs[0].opt();
+    let mut panels = vec![(
+        "initial design".to_string(),
+        first.initial.elements.clone(),
+        first.initial.thickness.clone(),
+    )];
+    for r in runs {
+        let o = r.opt();
+        panels.push((
+            format!("{} optimum", r.label),
+            o.final_.elements.clone(),
+            o.final_.thickness.clone(),
+        ));
+    }
+    ThicknessMaps {
+        title: "Planform and thickness of the optima".into(),
+        unit: runs[0].results.length_unit.name().to_string(),
+        panels,
+    }
+}
+
+/// The PSD of each optimum: with the run's own fidelity, and with the other where the run
+/// cross-evaluated it.
+fn psd(runs: &[ComparedRun]) -> PsdPlot {
+    let mut series = Vec::new();
+    for r in runs {
+        let o = r.opt();
+        let own = r.results.fidelity.clone().unwrap_or_default();
+        let mut s = o.final_.psd.clone();
+        s.label = format!("{} optimum, {own}", r.results.study);
+        series.push(s);
+        if let Some(c) = &o.cross_evaluation {
+            for d in c.designs.iter().filter(|d| d.design == "final") {
+                for e in d.evaluations.iter().filter(|e| e.fidelity != own) {
+                    if let Some(mut s) = e.psd.clone() {
+                        s.label = format!("{} optimum, {}", r.results.study, e.fidelity);
+                        series.push(s);
+                    }
+                }
+            }
+        }
+    }
+    PsdPlot {
+        title: format!(
+            "PSD of {} at each optimum with each fidelity",
+            runs[0].opt().output
+        ),
+        panels: vec![series],
+    }
+}
+
+/// One GAF entry of a table at the i-th reduced frequency.
+type GafEntry = Box<dyn Fn(&gustkit_core::GafTable, usize) -> num_complex::Complex64>;
+
+/// The GAFs of both fidelities on one design (the first cross-evaluated run's final design):
+/// Q_ss diagonal and main couplings of the first two modes, and Q_gs of the first two.
+fn gafs(r: &ComparedRun, c: &CrossEvaluation) -> Option<Panels> {
+    let d = c.designs.iter().find(|d| d.design == "final")?;
+    let n = d.evaluations.first()?.gafs.q_gs.first()?.len();
+    let mut entries: Vec<(String, GafEntry)> = Vec::new();
+    for (m, l) in [(0, 0), (1, 1), (0, 1), (1, 0)] {
+        if m < n && l < n {
+            entries.push((
+                format!("Q_ss[{}][{}]", m + 1, l + 1),
+                Box::new(move |t: &gustkit_core::GafTable, i| t.q_ss[i][m][l]),
+            ));
+        }
+    }
+    for m in 0..n.min(2) {
+        entries.push((
+            format!("Q_gs[{}]", m + 1),
+            Box::new(move |t: &gustkit_core::GafTable, i| t.q_gs[i][m]),
+        ));
+    }
+    let plots = entries
+        .iter()
+        .map(|(name, get)| {
+            let mut series = Vec::new();
+            for e in &d.evaluations {
+                let t = &e.gafs;
+                let pts = |part: &dyn Fn(num_complex::Complex64) -> f64| -> Vec<(f64, f64)> {
+                    (0..t.k.len()).map(|i| (t.k[i], part(get(t, i)))).collect()
+                };
+                series.push((format!("Re, {}", e.fidelity), pts(&|v| v.re)));
+                series.push((format!("Im, {}", e.fidelity), pts(&|v| v.im)));
+            }
+            line_plot(
+                name.clone(),
+                "reduced frequency k",
+                "GAF (mass-normalized modes)",
+                series,
+            )
+        })
+        .collect();
+    Some(Panels {
+        title: format!(
+            "GAFs of both fidelities on the optimum of {} (modes of that design)",
+            r.label
+        ),
+        cols: 2,
+        plots,
+    })
+}
+
+fn opt_f(v: Option<f64>, digits: usize) -> String {
+    v.map_or("–".into(), |v| format!("{v:.digits$}"))
+}
+
+fn markdown(runs: &[ComparedRun], doc: &CompareDoc, figures: &[&str]) -> String {
+    let mut md = String::from("# Comparison of optimization runs\n\nRuns: ");
+    md += &runs
+        .iter()
+        .map(|r| format!("`{}` ({})", r.dir.display(), r.label))
+        .collect::<Vec<_>>()
+        .join(", ");
+    md += ".\n\n## Runs\n\n| run | fidelity | iterations (evaluations) | converged | mass [kg] initial → final | change | RMS initial design | RMS start | RMS final | function (median) | gradient (median) | threads | wall time |\n|---|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for r in &doc.runs {
+        md += &format!(
+            "| {} | {} | {} ({}) | {} | {:.4} → {:.4} | {:+.1} % | {:.4} {} | {:.4} {} | {:.4} {} | {} s | {} s | {} | {:.1} min |\n",
+            r.run,
+            r.fidelity,
+            r.iterations,
+            r.evaluations,
+            if r.converged { "yes" } else { "**no**" },
+            r.mass_initial_kg,
+            r.mass_final_kg,
+            r.mass_change_percent,
+            r.rms_initial,
+            r.unit,
+            r.rms_start,
+            r.unit,
+            r.rms_final,
+            r.unit,
+            opt_f(r.function_median_s, 2),
+            opt_f(r.gradient_median_s, 2),
+            r.threads.map_or("–".into(), |t| t.to_string()),
+            r.wall_time_s / 60.0
+        );
+    }
+    let refs: Vec<_> = runs
+        .iter()
+        .filter_map(|r| r.opt().reference.as_ref().map(|x| (r, x)))
+        .collect();
+    if !refs.is_empty() {
+        md += "\nPublished numbers beside the runs:\n\n| run | source | iterations | mass change | initial RMS | notes |\n|---|---|---:|---:|---:|---|\n";
+        for (r, x) in refs {
+            md += &format!(
+                "| {} | {} | {} | {} | {} | {} |\n",
+                r.label,
+                x.source,
+                x.iterations.map_or("–".into(), |v| v.to_string()),
+                x.mass_change_percent
+                    .map_or("–".into(), |v| format!("{v:+.1} %")),
+                opt_f(x.initial_rms, 2),
+                if x.design.is_empty() {
+                    "–"
+                } else {
+                    &x.design
+                }
+            );
+        }
+    }
+    if !doc.cross_evaluation.is_empty() {
+        md += "\n## Cross-evaluation\n\nEach design analysed with both fidelities at the flight condition of its study: RMS of the constrained output and the p-k flutter speed (searched up to twice the flight speed; V/V_flight in brackets).\n\n| run | design | fidelity | mass [kg] | RMS | flutter speed [m/s] |\n|---|---|---|---:|---:|---:|\n";
+        for c in &doc.cross_evaluation {
+            md += &format!(
+                "| {} | {} | {} | {:.4} | {} | {} |\n",
+                c.run,
+                c.design,
+                c.fidelity,
+                c.mass_kg,
+                c.rms
+                    .map_or("unstable at the flight condition".into(), |v| format!(
+                        "{v:.4}"
+                    )),
+                match (c.flutter_speed_m_s, c.flutter_speed_ratio) {
+                    (Some(v), Some(q)) => format!("{v:.1} ({q:.3})"),
+                    _ => "none".into(),
+                }
+            );
+        }
+    }
+    if !doc.consistency.is_empty() {
+        md += "\nThe same design with the same fidelity in two runs (a warm start's first design is the other run's optimum):\n\n| run | other run | fidelity | RMS here | RMS there | relative difference |\n|---|---|---|---:|---:|---:|\n";
+        for c in &doc.consistency {
+            md += &format!(
+                "| {} | {} | {} | {:.6} | {:.6} | {:.1e} |\n",
+                c.run, c.other, c.fidelity, c.rms_here, c.rms_there, c.relative_difference
+            );
+        }
+    }
+    md += "\n## Figures\n\n";
+    for f in figures {
+        md += &format!("![{f}]({f}.png)\n\n");
+    }
+    md
+}
+
+/// `gustkit compare`: the comparison report of `dirs` in `out` (written whole or not at all).
+pub fn compare(dirs: &[PathBuf], out: &Path) -> Result<()> {
+    if dirs.is_empty() {
+        bail!("gustkit compare needs at least one run folder");
+    }
+    let runs = dirs
+        .iter()
+        .map(|d| load_run(d))
+        .collect::<Result<Vec<_>>>()?;
+    let folder = super::folder::RunFolder::begin(out, false)?;
+    let dir = folder.path().to_path_buf();
+    let mut figures = vec!["convergence", "thickness", "psd"];
+    save_figure(&dir, "convergence", &convergence(&runs))?;
+    save_figure(&dir, "thickness", &thickness(&runs))?;
+    save_figure(&dir, "psd", &psd(&runs))?;
+    let gaf_fig = runs
+        .iter()
+        .find_map(|r| r.opt().cross_evaluation.as_ref().and_then(|c| gafs(r, c)));
+    if let Some(g) = gaf_fig {
+        save_figure(&dir, "gafs", &g)?;
+        figures.push("gafs");
+    }
+    let doc = CompareDoc {
+        runs: runs.iter().map(run_row).collect(),
+        cross_evaluation: runs
+            .iter()
+            .filter_map(|r| r.opt().cross_evaluation.as_ref().map(|c| cross_rows(r, c)))
+            .flatten()
+            .collect(),
+        consistency: consistency(&runs),
+    };
+    super::write_atomic(
+        &dir.join("compare.json"),
+        serde_json::to_string_pretty(&doc)?.as_bytes(),
+    )?;
+    super::write_atomic(
+        &dir.join("compare.md"),
+        markdown(&runs, &doc, &figures).as_bytes(),
+    )?;
+    folder.commit()?;
+    println!(
+        "comparison of {} runs written to {}",
+        runs.len(),
+        out.display()
+    );
+    Ok(())
+}
