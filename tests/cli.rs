@@ -629,6 +629,43 @@ fn sweep_grid_resume_report_and_errors() {
     let o = gustkit().args(["report"]).arg(&out).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(out.join("sweep.png").is_file());
+    // each Mach number with each of two fidelities (here two DLM lattices): twice the cases,
+    // labelled by fidelity; the first fidelity is the study's own, so its cases repeat the grid's
+    let mut fid = v.clone();
+    fid["name"] = "sweep_fidelities".into();
+    fid["sweep"] = serde_json::json!({
+        "parameters": [{"path": "flight.mach", "values": [0.3, 0.5]}],
+        "fidelities": [v["aero"]["fidelity"].clone(), {"dlm": {"n_chord": 3, "n_span": 4}}]
+    });
+    let fid_file = dir.join("fidelities.json");
+    std::fs::write(&fid_file, fid.to_string()).unwrap();
+    let o = sweep(&fid_file, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let fid_out = dir.join("sweep_fidelities/sweep");
+    let fr: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fid_out.join("sweep_results.json")).unwrap())
+            .unwrap();
+    let fcases = fr["cases"].as_array().unwrap();
+    let labels: Vec<&str> = fcases
+        .iter()
+        .map(|c| c["fidelity"].as_str().unwrap())
+        .collect();
+    assert_eq!(labels, ["dlm 1", "dlm 1", "dlm 2", "dlm 2"]);
+    for (c, mach) in fcases.iter().zip([0.3, 0.5, 0.3, 0.5]) {
+        assert_eq!(c["values"][0], mach);
+    }
+    for (own, mach) in fcases[..2].iter().zip([0.3, 0.5]) {
+        assert_eq!(
+            metric(own, "RMS tip_te_w"),
+            metric(case(mach, 1.0), "RMS tip_te_w")
+        );
+    }
+    assert_ne!(
+        metric(&fcases[2], "RMS tip_te_w"),
+        metric(&fcases[0], "RMS tip_te_w")
+    );
+    let csv = std::fs::read_to_string(fid_out.join("sweep.csv")).unwrap();
+    assert!(csv.starts_with("case,fidelity,flight.mach,"), "{csv}");
     // a misspelt parameter path
     let mut bad = v.clone();
     bad["sweep"]["parameters"][0]["path"] = "flight.mahc".into();

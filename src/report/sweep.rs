@@ -22,6 +22,9 @@ pub struct CaseResult {
     pub index: usize,
     /// Parameter values, in the order of `SweepResults::parameters`.
     pub values: Vec<f64>,
+    /// The case's fidelity when the sweep runs several (`sweep.fidelities`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fidelity: Option<String>,
     /// Hash of the case's study, so that `--resume` reuses a result only for the same case.
     pub study_hash: String,
     /// Mass, RMS of each output, flutter speed, optimum … (empty when the case failed).
@@ -62,12 +65,20 @@ impl SweepResults {
     fn value(c: &CaseResult, name: &str) -> Option<f64> {
         c.metrics.iter().find(|m| m.name == name).map(|m| m.value)
     }
+
+    /// Whether the cases run with several fidelities (a fidelity column and curve labels).
+    fn has_fidelities(&self) -> bool {
+        self.cases.iter().any(|c| c.fidelity.is_some())
+    }
 }
 
 /// The table as CSV (failed cases have empty metrics and their error in the last column).
 pub fn csv(r: &SweepResults) -> String {
     let names = r.metric_names();
     let mut out = String::from("case");
+    if r.has_fidelities() {
+        out += ",fidelity";
+    }
     for p in &r.parameters {
         out += &format!(",{p}");
     }
@@ -77,6 +88,9 @@ pub fn csv(r: &SweepResults) -> String {
     out += ",error\n";
     for c in &r.cases {
         out += &c.index.to_string();
+        if r.has_fidelities() {
+            out += &format!(",{}", c.fidelity.as_deref().unwrap_or(""));
+        }
         for v in &c.values {
             out += &format!(",{v}");
         }
@@ -109,6 +123,10 @@ pub fn summary(r: &SweepResults) -> String {
         failed,
         r.wall_time_s
     );
+    let fidelity_column = r.has_fidelities();
+    if fidelity_column {
+        md += " fidelity |";
+    }
     for p in &r.parameters {
         md += &format!(" {p} |");
     }
@@ -116,10 +134,16 @@ pub fn summary(r: &SweepResults) -> String {
         md += &format!(" {n} [{u}] |");
     }
     md += "\n|---:|";
+    if fidelity_column {
+        md += "---|";
+    }
     md += &"---:|".repeat(r.parameters.len() + names.len());
     md += "\n";
     for c in &r.cases {
         md += &format!("| {} |", c.index);
+        if fidelity_column {
+            md += &format!(" {} |", c.fidelity.as_deref().unwrap_or(""));
+        }
         for v in &c.values {
             md += &format!(" {v} |");
         }
@@ -166,10 +190,11 @@ impl Figure for SweepPlot<'_> {
         let r = self.results;
         let names = r.metric_names();
         let panels = area.split_evenly((names.len().max(1), 1));
-        // groups: cases sharing the values of every parameter but the first
-        let mut groups: Vec<(Vec<f64>, Vec<&CaseResult>)> = Vec::new();
+        // groups: cases sharing the fidelity and the values of every parameter but the first
+        type Key = (Option<String>, Vec<f64>);
+        let mut groups: Vec<(Key, Vec<&CaseResult>)> = Vec::new();
         for c in &r.cases {
-            let key = c.values[1..].to_vec();
+            let key = (c.fidelity.clone(), c.values[1..].to_vec());
             match groups.iter_mut().find(|g| g.0 == key) {
                 Some(g) => g.1.push(c),
                 None => groups.push((key, vec![c])),
@@ -223,10 +248,16 @@ impl Figure for SweepPlot<'_> {
                     .filter_map(|c| SweepResults::value(c, name).map(|y| (c.values[0], y)))
                     .collect();
                 pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-                let label = r.parameters[1..]
+                let label = key
+                    .0
                     .iter()
-                    .zip(key)
-                    .map(|(p, v)| format!("{p} = {v}"))
+                    .cloned()
+                    .chain(
+                        r.parameters[1..]
+                            .iter()
+                            .zip(&key.1)
+                            .map(|(p, v)| format!("{p} = {v}")),
+                    )
                     .collect::<Vec<_>>()
                     .join(", ");
                 let series = chart

@@ -43,6 +43,11 @@ fn sweep_metrics(
             let r = pk.sweep(&study.flutter_velocities()?)?;
             if let Some(v) = r.flutter_speed_m_s {
                 out.push(metric("flutter speed", "m/s", v));
+                out.push(metric(
+                    "flutter speed / flight speed",
+                    "-",
+                    v / aero.flight.velocity,
+                ));
             }
         }
         if study.spec.gust.is_some() {
@@ -101,14 +106,18 @@ pub fn sweep(study: &Study, reports: &Path, resume: bool) -> Result<crate::runne
     std::fs::create_dir_all(dir.join("cases"))
         .with_context(|| format!("cannot create the sweep folder {}", dir.display()))?;
     println!(
-        "{}: {} cases over {}",
+        "{}: {} cases over {}{}",
         study.spec.name,
         cases.len(),
         spec.parameters
             .iter()
             .map(|p| p.path.as_str())
             .collect::<Vec<_>>()
-            .join(", ")
+            .join(", "),
+        match spec.fidelities.len() {
+            0 => String::new(),
+            n => format!(", with each of {n} fidelities"),
+        }
     );
     let t0 = Instant::now();
     let bar = indicatif::ProgressBar::new(cases.len() as u64);
@@ -139,6 +148,7 @@ pub fn sweep(study: &Study, reports: &Path, resume: bool) -> Result<crate::runne
             let r = CaseResult {
                 index: case.index,
                 values: case.values.clone(),
+                fidelity: case.fidelity.clone(),
                 study_hash: hash,
                 metrics,
                 error,

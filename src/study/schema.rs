@@ -51,6 +51,10 @@ pub struct SweepSpec {
     /// Run the `optimization` section at every case instead of the analysis.
     #[serde(default)]
     pub optimize: bool,
+    /// Run every combination with each of these aerodynamic fidelities in place of the study's
+    /// own (e.g. `[{"dlm": {...}}, {"lfd": {...}}]`): one curve per fidelity in the figure.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub fidelities: Vec<crate::aero::FidelitySpec>,
 }
 
 /// One swept parameter.

@@ -13,6 +13,9 @@ pub const MAX_CASES: usize = 10_000;
 pub struct SweepCase {
     pub index: usize,
     pub values: Vec<f64>,
+    /// The fidelity's label when the sweep names `fidelities` (`dlm`, `lfd`; a repeated name
+    /// gets its position, `dlm 2`).
+    pub fidelity: Option<String>,
     pub study: Study,
 }
 
@@ -136,42 +139,93 @@ impl Study {
         base.as_object_mut()
             .expect("a study is an object")
             .remove("sweep");
-        let mut cases = Vec::with_capacity(combos.len());
-        for (index, values) in combos.into_iter().enumerate() {
-            let mut doc = base.clone();
-            for (i, (p, v)) in sweep.parameters.iter().zip(&values).enumerate() {
-                set_number(&mut doc, &p.path, *v)
-                    .map_err(|e| self.err(&format!("sweep.parameters[{i}].path"), e))?;
-            }
-            let file = self.file.with_file_name(format!(
-                "{}#case{index}",
-                self.file
-                    .file_name()
-                    .and_then(|n| n.to_str())
-                    .unwrap_or("study")
+        // each combination with each fidelity of the sweep (or the study's own)
+        let fidelities: Vec<Option<(String, Value)>> = if sweep.fidelities.is_empty() {
+            vec![None]
+        } else {
+            let names: Vec<&str> = sweep
+                .fidelities
+                .iter()
+                .map(|f| f.builder().name())
+                .collect();
+            sweep
+                .fidelities
+                .iter()
+                .enumerate()
+                .map(|(i, f)| {
+                    let name = names[i];
+                    let label = if names.iter().filter(|n| **n == name).count() > 1 {
+                        format!("{name} {}", i + 1)
+                    } else {
+                        name.to_string()
+                    };
+                    let value = serde_json::to_value(f)
+                        .map_err(|e| self.err(&format!("sweep.fidelities[{i}]"), e.to_string()))?;
+                    Ok(Some((label, value)))
+                })
+                .collect::<Result<_, StudyError>>()?
+        };
+        let n_cases = combos.len() * fidelities.len();
+        if n_cases > MAX_CASES {
+            return Err(self.err(
+                "sweep.fidelities",
+                format!("the sweep has {n_cases} cases, more than {MAX_CASES}: use fewer values"),
             ));
-            let study = Study::from_str(&file, &doc.to_string()).map_err(|e| {
-                let values: Vec<String> = sweep
-                    .parameters
-                    .iter()
-                    .zip(&values)
-                    .map(|(p, v)| format!("{} = {v}", p.path))
-                    .collect();
-                self.err(
-                    "sweep",
-                    format!(
-                        "case {index} ({}): {}: {}",
-                        values.join(", "),
-                        e.path,
-                        e.reason
-                    ),
-                )
-            })?;
-            cases.push(SweepCase {
-                index,
-                values,
-                study,
-            });
+        }
+        let mut cases = Vec::with_capacity(n_cases);
+        for (fi, fidelity) in fidelities.iter().enumerate() {
+            for values in &combos {
+                let index = cases.len();
+                let mut doc = base.clone();
+                if let Some((_, spec)) = fidelity {
+                    match doc.get_mut("aero") {
+                        Some(aero) => aero["fidelity"] = spec.clone(),
+                        None => {
+                            return Err(self.err(
+                                "sweep.fidelities",
+                                "the study has no aero section whose fidelity to replace",
+                            ))
+                        }
+                    }
+                }
+                for (i, (p, v)) in sweep.parameters.iter().zip(values).enumerate() {
+                    set_number(&mut doc, &p.path, *v)
+                        .map_err(|e| self.err(&format!("sweep.parameters[{i}].path"), e))?;
+                }
+                let file = self.file.with_file_name(format!(
+                    "{}#case{index}",
+                    self.file
+                        .file_name()
+                        .and_then(|n| n.to_str())
+                        .unwrap_or("study")
+                ));
+                let study = Study::from_str(&file, &doc.to_string()).map_err(|e| {
+                    let mut values: Vec<String> = sweep
+                        .parameters
+                        .iter()
+                        .zip(values)
+                        .map(|(p, v)| format!("{} = {v}", p.path))
+                        .collect();
+                    if let Some((label, _)) = fidelity {
+                        values.push(format!("sweep.fidelities[{fi}] ({label})"));
+                    }
+                    self.err(
+                        "sweep",
+                        format!(
+                            "case {index} ({}): {}: {}",
+                            values.join(", "),
+                            e.path,
+                            e.reason
+                        ),
+                    )
+                })?;
+                cases.push(SweepCase {
+                    index,
+                    values: values.clone(),
+                    fidelity: fidelity.as_ref().map(|(label, _)| label.clone()),
+                    study,
+                });
+            }
         }
         Ok(cases)
     }
