@@ -76,3 +76,76 @@ fn warm_start_reads_checks_and_refuses() {
     assert!(e.reason.contains("holds no finished optimization"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `warm_start.hessian`: the final BFGS approximation of the run that wrote the results.json
+/// (its checkpoint.json beside it) starts this run's, carried to this study's variable scaling:
+/// with the same bounds it is taken as it is, with narrower thickness ranges each entry is
+/// scaled by the ratios of the ranges; a missing checkpoint names the file.
+#[test]
+fn warm_start_hessian_is_carried_to_this_studys_scaling() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = std::env::temp_dir().join(format!("gustkit-warm-hessian-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let results = dir.join("results.json");
+    std::fs::copy(
+        root.join("reports/reference/agard445_dlm/results.json"),
+        &results,
+    )
+    .unwrap();
+    let mut v = flagship();
+    v["optimization"]["warm_start"] = serde_json::json!({ "from": results, "hessian": true });
+    let e = load(&v).unwrap_err();
+    assert_eq!(e.path, "optimization.warm_start.hessian", "{e}");
+    assert!(e.reason.contains("checkpoint.json"), "{e}");
+    // a checkpoint with a known symmetric Hessian
+    let n: usize = 104;
+    let h: Vec<Vec<f64>> = (0..n)
+        .map(|i| {
+            (0..n)
+                .map(|j| match i.abs_diff(j) {
+                    0 => 2.0 + i as f64,
+                    1 => 0.5,
+                    _ => 0.0,
+                })
+                .collect()
+        })
+        .collect();
+    let cp = gustkit::optim::Checkpoint {
+        problem_id: "agard445_dlm:0".into(),
+        params: gustkit::optim::SqpParams::default(),
+        iteration: 50,
+        evaluations: 108,
+        z: vec![0.5; n],
+        hessian: h.clone(),
+        penalty: 0.0,
+        history: Vec::new(),
+    };
+    std::fs::write(
+        dir.join("checkpoint.json"),
+        serde_json::to_string(&cp).unwrap(),
+    )
+    .unwrap();
+    let same = load(&v).unwrap().warm_start_hessian().unwrap().unwrap();
+    assert_eq!(same, h);
+    // wider relative thickness bounds: the ranges grow, H scales by their ratios
+    v["optimization"]["thickness_relative"] = serde_json::json!([0.4, 2.5]);
+    let s = load(&v).unwrap();
+    let scaled = s.warm_start_hessian().unwrap().unwrap();
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&results).unwrap()).unwrap();
+    let (lower, upper) = s.design_bounds().unwrap();
+    let ratio = |i: usize| {
+        (upper[i] - lower[i]) / (r["upper"][i].as_f64().unwrap() - r["lower"][i].as_f64().unwrap())
+    };
+    assert!(
+        ratio(0) > 1.01,
+        "the thickness range did grow: {}",
+        ratio(0)
+    );
+    for (i, j) in [(0, 0), (0, 1), (57, 58), (103, 103)] {
+        let want = ratio(i) * ratio(j) * h[i][j];
+        assert!((scaled[i][j] - want).abs() <= 1e-15 * want.abs(), "{i},{j}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -143,6 +143,8 @@ pub enum SqpError {
     },
     #[error("settings: {0}")]
     Params(String),
+    #[error("initial Hessian: {0}")]
+    InitialHessian(String),
     #[error("an observer failed: {0}")]
     Observer(String),
     #[error("gradients failed at iteration {iteration}: {reason}")]

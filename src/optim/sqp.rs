@@ -44,6 +44,7 @@ pub struct Executor<'a> {
     params: SqpParams,
     problem_id: String,
     resume: Option<Checkpoint>,
+    hessian: Option<Vec<Vec<f64>>>,
     observers: Vec<&'a mut dyn Observer>,
     checkpoints: Option<&'a mut dyn Checkpointing>,
 }
@@ -54,9 +55,18 @@ impl<'a> Executor<'a> {
             params,
             problem_id: problem_id.to_string(),
             resume: None,
+            hessian: None,
             observers: Vec::new(),
             checkpoints: None,
         }
+    }
+
+    /// Start the BFGS approximation from `hessian` (of the Lagrangian in the scaled variables
+    /// z = (x − lower) / (upper − lower), e.g. another run's final one) instead of the identity.
+    /// Ignored when resuming: the checkpoint holds its own.
+    pub fn initial_hessian(mut self, hessian: Option<Vec<Vec<f64>>>) -> Self {
+        self.hessian = hessian;
+        self
     }
 
     /// Continue from `checkpoint` (when given) instead of starting afresh.
@@ -167,6 +177,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
         params,
         problem_id,
         resume,
+        hessian,
         mut observers,
         mut checkpoints,
     } = ex;
@@ -233,10 +244,34 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                     }
                 })
                 .collect();
-            let eye = (0..n)
-                .map(|i| (0..n).map(|j| if i == j { 1.0 } else { 0.0 }).collect())
-                .collect();
-            (z0, eye, 0.0, Vec::new(), 0, 0)
+            let h0 = match hessian {
+                Some(h) => {
+                    let square = h.len() == n && h.iter().all(|r| r.len() == n);
+                    if !square {
+                        return Err(SqpError::InitialHessian(format!(
+                            "need {n} × {n} entries for {n} design variables (got {} rows)",
+                            h.len()
+                        )));
+                    }
+                    let symmetric = (0..n).all(|i| {
+                        (0..n).all(|j| {
+                            h[i][j].is_finite()
+                                && (h[i][j] - h[j][i]).abs()
+                                    <= 1e-10 * (h[i][i].abs() + h[j][j].abs())
+                        })
+                    });
+                    if !symmetric || (0..n).any(|i| !(h[i][i] > 0.0)) {
+                        return Err(SqpError::InitialHessian(
+                            "must be finite and symmetric with a positive diagonal".into(),
+                        ));
+                    }
+                    h
+                }
+                None => (0..n)
+                    .map(|i| (0..n).map(|j| if i == j { 1.0 } else { 0.0 }).collect())
+                    .collect(),
+            };
+            (z0, h0, 0.0, Vec::new(), 0, 0)
         }
     };
     let mut values = problem.values(&scaling.x(&z)).map_err(SqpError::Start)?;

@@ -221,6 +221,7 @@ impl Study {
         if self.spec.optimization.is_some() {
             self.design_bounds()?;
             self.warm_start_design()?;
+            self.warm_start_hessian()?;
             self.cross_evaluation_study()?;
             self.require_reverse_mode("optimization", true)?;
         }
@@ -430,6 +431,93 @@ impl Study {
             ));
         }
         Ok(Some(x))
+    }
+
+    /// The BFGS approximation to start from with `optimization.warm_start.hessian`: the final
+    /// one of the run that wrote `from` (its `checkpoint.json` beside it), carried from that
+    /// run's variable scaling, z = (x − lower) / (upper − lower), to this study's:
+    /// H'ᵢⱼ = rᵢ rⱼ Hᵢⱼ with rᵢ the ratio of this study's bound range to that run's. None
+    /// without it.
+    pub fn warm_start_hessian(&self) -> Result<Option<Vec<Vec<f64>>>, StudyError> {
+        let Some(w) = self
+            .spec
+            .optimization
+            .as_ref()
+            .and_then(|o| o.warm_start.as_ref())
+            .filter(|w| w.hessian)
+        else {
+            return Ok(None);
+        };
+        let path = "optimization.warm_start.hessian";
+        let n = self.initial_design()?.to_vec().len();
+        let file = w.from.with_file_name("checkpoint.json");
+        let text = read_text(&file).map_err(|e| {
+            self.err(
+                path,
+                format!(
+                    "cannot read {} ({e}): the run that wrote {} keeps its last checkpoint beside it; run it again, or set hessian to false",
+                    file.display(),
+                    w.from.display()
+                ),
+            )
+        })?;
+        let cp: crate::optim::Checkpoint = serde_json::from_str(&text).map_err(|e| {
+            self.err(
+                path,
+                format!("{} is not a gustkit checkpoint ({e})", file.display()),
+            )
+        })?;
+        let h = cp.hessian;
+        if h.len() != n || h.iter().any(|r| r.len() != n) {
+            return Err(self.err(
+                path,
+                format!(
+                    "{} holds a Hessian of {} variables, this study has {n}",
+                    file.display(),
+                    h.len()
+                ),
+            ));
+        }
+        // that run's bounds, from its results.json (checked by warm_start_design)
+        let results: serde_json::Value = read_text(&w.from)
+            .ok()
+            .and_then(|t| serde_json::from_str(&t).ok())
+            .unwrap_or_default();
+        let bounds = |key: &str| -> Option<Vec<f64>> {
+            results[key]
+                .as_array()?
+                .iter()
+                .map(|v| v.as_f64())
+                .collect::<Option<Vec<f64>>>()
+                .filter(|b| b.len() == n)
+        };
+        let (Some(lo), Some(hi)) = (bounds("lower"), bounds("upper")) else {
+            return Err(self.err(
+                path,
+                format!(
+                    "{} records no design bounds (lower, upper) of {n} variables",
+                    w.from.display()
+                ),
+            ));
+        };
+        let (lower, upper) = self.design_bounds()?;
+        let ratio: Vec<f64> = (0..n)
+            .map(|i| (upper[i] - lower[i]) / (hi[i] - lo[i]))
+            .collect();
+        if let Some(i) = ratio.iter().position(|r| !(r.is_finite() && *r > 0.0)) {
+            return Err(self.err(
+                path,
+                format!(
+                    "variable {i} has an empty or unbounded range in {} or in this study",
+                    w.from.display()
+                ),
+            ));
+        }
+        Ok(Some(
+            (0..n)
+                .map(|i| (0..n).map(|j| ratio[i] * ratio[j] * h[i][j]).collect())
+                .collect(),
+        ))
     }
 
     /// Bounds of the design vector from the `optimization` section (SI), checked; the initial

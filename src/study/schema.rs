@@ -134,6 +134,10 @@ pub struct WarmStartSpec {
     /// The results.json of a finished optimization, relative to the working directory (where
     /// `gustkit run` writes its run folders), e.g. "reports/agard445_dlm/results.json".
     pub from: std::path::PathBuf,
+    /// Also start the BFGS approximation from that run's final one (its `checkpoint.json`
+    /// beside results.json) instead of the identity.
+    #[serde(default)]
+    pub hessian: bool,
 }
 
 fn default_true() -> bool {

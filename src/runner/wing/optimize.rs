@@ -337,6 +337,7 @@ pub fn optimize(
     let t0 = Instant::now();
     let info = Executor::new(params, &problem_id)
         .resume(checkpoint)
+        .initial_hessian(study.warm_start_hessian()?)
         .observe(&mut observer)
         .checkpoint(&mut store)
         .run(&mut problem, x_start.as_deref().unwrap_or(&x0));
