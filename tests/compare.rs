@@ -1,4 +1,4 @@
-//! `optimization.cross_evaluation` and `gustkit compare`: a run's designs analysed with a second
+//! `aero.compare_with` and `gustkit compare`: a run's designs analysed with a second
 //! fidelity, and one report across runs rendered from their results.json files alone.
 
 use std::path::{Path, PathBuf};
@@ -79,8 +79,7 @@ fn cross_evaluation_and_compare_report() {
     b["name"] = "cmp_b".into();
     b["optimization"]["max_iterations"] = 2.into();
     b["optimization"]["warm_start"] = serde_json::json!({ "from": dir.join("cmp_a/results.json") });
-    b["optimization"]["cross_evaluation"] =
-        serde_json::json!({ "fidelity": { "dlm": { "n_chord": 5, "n_span": 7 } } });
+    b["aero"]["compare_with"] = serde_json::json!({ "dlm": { "n_chord": 5, "n_span": 7 } });
     let rb = run(&dir, &b);
     let c = &rb["cross_evaluation"];
     let designs = c["designs"].as_array().unwrap();
@@ -158,8 +157,7 @@ fn unstable_cross_evaluation_is_recorded() {
     v["optimization"]["warm_start"] = serde_json::json!({
         "from": root.join("reports/reference/agard445_dlm/results.json")
     });
-    v["optimization"]["cross_evaluation"] =
-        serde_json::json!({ "fidelity": { "dlm": { "n_chord": 4, "n_span": 6 } } });
+    v["aero"]["compare_with"] = serde_json::json!({ "dlm": { "n_chord": 4, "n_span": 6 } });
     v.as_object_mut().unwrap().remove("flutter");
     let r = run(&dir, &v);
     let start = &r["cross_evaluation"]["designs"][1];
@@ -225,5 +223,95 @@ fn compare_refuses_what_it_cannot_compare() {
         &["fidelity: missing", "run the study again"],
     );
     check(dir.join("nothing"), &["cannot read"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `aero.compare_with` in an analysis run: the initial design's GAFs, gust response and p-k
+/// sweep with the second fidelity sit beside the study's own in results.json, and are those of
+/// the same study run with that fidelity as its own (to the bit); the GAF differences per k are
+/// those of the two tables; the figures are written; a bad field of the second fidelity is
+/// named by its path.
+#[test]
+fn analysis_with_a_second_fidelity() {
+    let dir = scratch("analysis");
+    let mut v = flagship();
+    v["name"] = "cmp_analysis".into();
+    v.as_object_mut().unwrap().remove("optimization");
+    v["aero"]["fidelity"]["dlm"]["n_chord"] = 3.into();
+    v["aero"]["fidelity"]["dlm"]["n_span"] = 4.into();
+    v["structure"]["modes"] = 4.into();
+    v["gust"]["points"] = 300.into();
+    v["flutter"] =
+        serde_json::json!({"velocity_min_m_s": 100.0, "velocity_max_m_s": 400.0, "points": 20});
+    let second = serde_json::json!({ "dlm": { "n_chord": 5, "n_span": 7 } });
+    v["aero"]["compare_with"] = second.clone();
+    let r = run(&dir, &v);
+    let c = &r["comparison"];
+    assert_eq!(
+        (c["fidelity"].as_str(), c["other"].as_str()),
+        (Some("dlm"), Some("dlm"))
+    );
+    // the same study with the second fidelity as its own
+    let mut w = v.clone();
+    w["name"] = "cmp_analysis_second".into();
+    w["aero"]["fidelity"] = second;
+    w["aero"].as_object_mut().unwrap().remove("compare_with");
+    let r2 = run(&dir, &w);
+    for (i, o) in r2["gust"]["outputs"].as_array().unwrap().iter().enumerate() {
+        assert_eq!(c["rms_other"][i], o["rms"], "{}", o["name"]);
+    }
+    assert_eq!(
+        c["flutter_other"]["flutter_speed_m_s"],
+        r2["flutter"]["flutter_speed_m_s"]
+    );
+    // the stated differences are those of the two tables
+    let entry = |t: &serde_json::Value, i: usize, m: usize, n: usize| {
+        let e = &t["q_ss"][i][m][n];
+        num_complex::Complex64::new(e[0].as_f64().unwrap(), e[1].as_f64().unwrap())
+    };
+    for i in [0, 5, 10] {
+        let (mut d, mut big) = (0.0f64, 0.0f64);
+        for m in 0..4 {
+            for n in 0..4 {
+                let a = entry(&c["gafs"], i, m, n);
+                d = d.max((a - entry(&c["gafs_other"], i, m, n)).norm());
+                big = big.max(a.norm());
+            }
+        }
+        let stated = c["gaf_difference_ss"][i].as_f64().unwrap();
+        assert!(
+            (stated - d / big).abs() <= 1e-14,
+            "k[{i}]: {stated} against {}",
+            d / big
+        );
+        assert!(stated > 0.0);
+    }
+    let folder = dir.join("cmp_analysis");
+    for f in [
+        "gafs_fidelities.png",
+        "psd_fidelities.svg",
+        "flutter_vg_dlm.png",
+    ] {
+        assert!(folder.join(f).is_file(), "{f}");
+    }
+    let md = std::fs::read_to_string(folder.join("summary.md")).unwrap();
+    assert!(
+        md.contains("(aero.compare_with)") && md.contains("| k | Q_ss | Q_gs |"),
+        "{md}"
+    );
+    // a bad field of the second fidelity
+    v["aero"]["compare_with"] = serde_json::json!({ "dlm": { "n_chord": 0, "n_span": 7 } });
+    let file = dir.join("bad.json");
+    std::fs::write(&file, v.to_string()).unwrap();
+    let o = gustkit()
+        .args(["run", file.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("aero.compare_with.dlm") && stderr.contains("n_chord"),
+        "{stderr}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }

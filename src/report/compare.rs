@@ -3,13 +3,11 @@
 //! side by side (Fig. 7), the PSD of each optimum with both fidelities, the GAFs of both
 //! fidelities on the same design, and the paper's Sec. IV numbers as a table.
 
-use super::figures::{LinePlot, PsdPlot, Series, ThicknessMaps};
+use super::figures::{gaf_panels, line_plot, Panels, PsdPlot, Series, ThicknessMaps};
 use super::results::{CrossEvaluation, OptimizationResults, RunResults};
-use super::{save_figure, Figure};
+use super::save_figure;
 use crate::kind::StudyKind;
 use anyhow::{anyhow, bail, Result};
-use plotters::coord::Shift;
-use plotters::prelude::*;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -202,49 +200,6 @@ fn consistency(runs: &[ComparedRun]) -> Vec<Consistency> {
     out
 }
 
-/// Line plots in a grid of `cols` columns under one title.
-struct Panels {
-    title: String,
-    cols: usize,
-    plots: Vec<LinePlot>,
-}
-
-impl Figure for Panels {
-    fn size(&self) -> (u32, u32) {
-        let rows = self.plots.len().div_ceil(self.cols.max(1)).max(1) as u32;
-        (760 * self.cols.max(1) as u32, 40 + 430 * rows)
-    }
-
-    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()>
-    where
-        DB::ErrorType: 'static,
-    {
-        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing {}: {e}", self.title);
-        area.fill(&WHITE).map_err(err)?;
-        let body = area.titled(&self.title, ("sans-serif", 20)).map_err(err)?;
-        let rows = self.plots.len().div_ceil(self.cols.max(1)).max(1);
-        for (cell, plot) in body
-            .split_evenly((rows, self.cols.max(1)))
-            .iter()
-            .zip(&self.plots)
-        {
-            plot.draw(cell)?;
-        }
-        Ok(())
-    }
-}
-
-fn line_plot(title: String, x_label: &str, y_label: &str, series: Vec<Series>) -> LinePlot {
-    LinePlot {
-        title,
-        x_label: x_label.into(),
-        y_label: y_label.into(),
-        series,
-        log_y: false,
-        flip_y: false,
-    }
-}
-
 /// Histories of every run overlaid: mass and RMS normalized by their references, against the
 /// iteration.
 fn convergence(runs: &[ComparedRun]) -> Panels {
@@ -338,57 +293,21 @@ fn psd(runs: &[ComparedRun]) -> PsdPlot {
     }
 }
 
-/// One GAF entry of a table at the i-th reduced frequency.
-type GafEntry = Box<dyn Fn(&gustkit_core::GafTable, usize) -> num_complex::Complex64>;
-
-/// The GAFs of both fidelities on one design (the first cross-evaluated run's final design):
-/// Q_ss diagonal and main couplings of the first two modes, and Q_gs of the first two.
+/// The GAFs of both fidelities on one design (the first cross-evaluated run's final design).
 fn gafs(r: &ComparedRun, c: &CrossEvaluation) -> Option<Panels> {
     let d = c.designs.iter().find(|d| d.design == "final")?;
-    let n = d.evaluations.first()?.gafs.q_gs.first()?.len();
-    let mut entries: Vec<(String, GafEntry)> = Vec::new();
-    for (m, l) in [(0, 0), (1, 1), (0, 1), (1, 0)] {
-        if m < n && l < n {
-            entries.push((
-                format!("Q_ss[{}][{}]", m + 1, l + 1),
-                Box::new(move |t: &gustkit_core::GafTable, i| t.q_ss[i][m][l]),
-            ));
-        }
-    }
-    for m in 0..n.min(2) {
-        entries.push((
-            format!("Q_gs[{}]", m + 1),
-            Box::new(move |t: &gustkit_core::GafTable, i| t.q_gs[i][m]),
-        ));
-    }
-    let plots = entries
+    let tables: Vec<(String, &gustkit_core::GafTable)> = d
+        .evaluations
         .iter()
-        .map(|(name, get)| {
-            let mut series = Vec::new();
-            for e in &d.evaluations {
-                let t = &e.gafs;
-                let pts = |part: &dyn Fn(num_complex::Complex64) -> f64| -> Vec<(f64, f64)> {
-                    (0..t.k.len()).map(|i| (t.k[i], part(get(t, i)))).collect()
-                };
-                series.push((format!("Re, {}", e.fidelity), pts(&|v| v.re)));
-                series.push((format!("Im, {}", e.fidelity), pts(&|v| v.im)));
-            }
-            line_plot(
-                name.clone(),
-                "reduced frequency k",
-                "GAF (mass-normalized modes)",
-                series,
-            )
-        })
+        .map(|e| (e.fidelity.clone(), &e.gafs))
         .collect();
-    Some(Panels {
-        title: format!(
+    Some(gaf_panels(
+        format!(
             "GAFs of both fidelities on the optimum of {} (modes of that design)",
             r.label
         ),
-        cols: 2,
-        plots,
-    })
+        &tables,
+    ))
 }
 
 fn opt_f(v: Option<f64>, digits: usize) -> String {

@@ -648,3 +648,97 @@ impl Figure for LinePlot {
         Ok(())
     }
 }
+
+/// Line plots in a grid of `cols` columns under one title.
+pub struct Panels {
+    pub title: String,
+    pub cols: usize,
+    pub plots: Vec<LinePlot>,
+}
+
+impl Figure for Panels {
+    fn size(&self) -> (u32, u32) {
+        let rows = self.plots.len().div_ceil(self.cols.max(1)).max(1) as u32;
+        (760 * self.cols.max(1) as u32, 40 + 430 * rows)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing {}: {e}", self.title);
+        area.fill(&WHITE).map_err(err)?;
+        let body = area.titled(&self.title, ("sans-serif", 20)).map_err(err)?;
+        let rows = self.plots.len().div_ceil(self.cols.max(1)).max(1);
+        for (cell, plot) in body
+            .split_evenly((rows, self.cols.max(1)))
+            .iter()
+            .zip(&self.plots)
+        {
+            plot.draw(cell)?;
+        }
+        Ok(())
+    }
+}
+
+pub fn line_plot(title: String, x_label: &str, y_label: &str, series: Vec<Series>) -> LinePlot {
+    LinePlot {
+        title,
+        x_label: x_label.into(),
+        y_label: y_label.into(),
+        series,
+        log_y: false,
+        flip_y: false,
+    }
+}
+
+/// One GAF entry of a table at the i-th reduced frequency.
+type GafEntry = Box<dyn Fn(&gustkit_core::GafTable, usize) -> num_complex::Complex64>;
+
+/// GAFs of several tables of the same modes against k: the Q_ss diagonal and main couplings of
+/// the first two modes and Q_gs of the first two, real and imaginary parts of each table.
+pub fn gaf_panels(title: String, tables: &[(String, &gustkit_core::GafTable)]) -> Panels {
+    let n = tables
+        .first()
+        .and_then(|t| t.1.q_gs.first())
+        .map_or(0, |g| g.len());
+    let mut entries: Vec<(String, GafEntry)> = Vec::new();
+    for (m, l) in [(0, 0), (1, 1), (0, 1), (1, 0)] {
+        if m < n && l < n {
+            entries.push((
+                format!("Q_ss[{}][{}]", m + 1, l + 1),
+                Box::new(move |t: &gustkit_core::GafTable, i| t.q_ss[i][m][l]),
+            ));
+        }
+    }
+    for m in 0..n.min(2) {
+        entries.push((
+            format!("Q_gs[{}]", m + 1),
+            Box::new(move |t: &gustkit_core::GafTable, i| t.q_gs[i][m]),
+        ));
+    }
+    let plots = entries
+        .iter()
+        .map(|(name, get)| {
+            let mut series = Vec::new();
+            for (label, t) in tables {
+                let pts = |part: &dyn Fn(num_complex::Complex64) -> f64| -> Vec<(f64, f64)> {
+                    (0..t.k.len()).map(|i| (t.k[i], part(get(t, i)))).collect()
+                };
+                series.push((format!("Re, {label}"), pts(&|v| v.re)));
+                series.push((format!("Im, {label}"), pts(&|v| v.im)));
+            }
+            line_plot(
+                name.clone(),
+                "reduced frequency k",
+                "GAF (mass-normalized modes)",
+                series,
+            )
+        })
+        .collect();
+    Panels {
+        title,
+        cols: 2,
+        plots,
+    }
+}

@@ -161,7 +161,7 @@ pub struct OptimizationResults {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub timing: Option<Timing>,
     /// The initial, starting and final designs analysed with this run's fidelity and the one of
-    /// `optimization.cross_evaluation` (absent without it).
+    /// `aero.compare_with` (absent without it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cross_evaluation: Option<CrossEvaluation>,
 }
@@ -255,7 +255,7 @@ pub struct CrossDesign {
     pub evaluations: Vec<FidelityEvaluation>,
 }
 
-/// The optimization's designs analysed with both fidelities (`optimization.cross_evaluation`):
+/// The optimization's designs analysed with both fidelities (`aero.compare_with`):
 /// RMS, flutter and GAFs of each design from each, for the comparison report.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct CrossEvaluation {
@@ -323,7 +323,66 @@ pub struct RunResults {
     pub flutter: Option<FlutterSummary>,
     #[serde(default, skip_serializing_if = "Option::is_none", flatten)]
     pub optimization: Option<OptimizationResults>,
+    /// The analysis repeated with `aero.compare_with` (absent without it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub comparison: Option<FidelityComparison>,
     pub run_time_s: f64,
+}
+
+/// The study's analysis at its initial design with its own fidelity and with the one of
+/// `aero.compare_with`: GAF tables, gust response and p-k sweep of the second beside the first.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct FidelityComparison {
+    /// The study's own fidelity and the second one.
+    pub fidelity: String,
+    pub other: String,
+    pub gafs: gustkit_core::GafTable,
+    pub gafs_other: gustkit_core::GafTable,
+    /// Per reduced frequency: the largest difference of a Q_ss entry over the largest |Q_ss|
+    /// of the own table, and the same for Q_gs.
+    pub gaf_difference_ss: Vec<f64>,
+    pub gaf_difference_gs: Vec<f64>,
+    /// The second fidelity's RMS of every gust output (SI), or why there is none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rms_other: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub psd_other: Vec<PsdSeries>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unstable_other: Option<String>,
+    /// The second fidelity's p-k sweep over the study's flutter speeds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flutter_other: Option<FlutterResult>,
+}
+
+impl FidelityComparison {
+    /// Per k, the largest entry difference of two tables over the largest entry of `own` (Q_ss
+    /// and Q_gs apart).
+    pub fn differences(
+        own: &gustkit_core::GafTable,
+        other: &gustkit_core::GafTable,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let rel =
+            |a: &mut dyn Iterator<Item = (num_complex::Complex64, num_complex::Complex64)>| {
+                let (d, m) = a.fold((0.0f64, 0.0f64), |(d, m), (x, y)| {
+                    (d.max((x - y).norm()), m.max(x.norm()))
+                });
+                d / m.max(f64::MIN_POSITIVE)
+            };
+        (0..own.k.len())
+            .map(|i| {
+                let ss = rel(&mut own.q_ss[i]
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .zip(other.q_ss[i].iter().flatten().copied()));
+                let gs = rel(&mut own.q_gs[i]
+                    .iter()
+                    .copied()
+                    .zip(other.q_gs[i].iter().copied()));
+                (ss, gs)
+            })
+            .unzip()
+    }
 }
 
 /// Mode shapes on the planform: one panel a mode, each element coloured by its mean deflection

@@ -2,8 +2,8 @@
 //! it alone: `gustkit run` and `gustkit report RUN_DIR` call the same [`render`], so a report can
 //! be re-drawn without re-running anything.
 
-use super::figures::{Convergence, PsdPlot, ThicknessMaps, VgVf};
-use super::results::{ModeRow, RunResults};
+use super::figures::{gaf_panels, Convergence, PsdPlot, ThicknessMaps, VgVf};
+use super::results::{FidelityComparison, FlutterSummary, GustResults, ModeRow, RunResults};
 use super::{from_json, save_figure};
 use crate::flutter::FlutterResult;
 use anyhow::Result;
@@ -211,7 +211,76 @@ pub fn summary(r: &RunResults) -> String {
             n
         );
     }
+    if let Some(c) = &r.comparison {
+        md += &comparison_text(c, r.gust.as_ref(), r.flutter.as_ref());
+        md += "\n![GAFs of both fidelities](gafs_fidelities.png)\n";
+        if !c.psd_other.is_empty() {
+            md += "\n![PSD with both fidelities](psd_fidelities.png)\n";
+        }
+        if c.flutter_other.is_some() {
+            md += &format!(
+                "\n![V-g, V-f with the {}](flutter_vg_{}.png)\n",
+                c.other, c.other
+            );
+        }
+    }
     md += &format!("\nRun time {:.2} s.\n", r.run_time_s);
+    md
+}
+
+/// The markdown section of `aero.compare_with`: gust RMS and flutter speed of both fidelities,
+/// and how far apart their GAF tables are at each reduced frequency.
+pub fn comparison_text(
+    c: &FidelityComparison,
+    gust: Option<&GustResults>,
+    flutter: Option<&FlutterSummary>,
+) -> String {
+    let (a, b) = (&c.fidelity, &c.other);
+    let mut md = format!("\n## The {a} beside the {b} (aero.compare_with)\n\nThe initial design analysed with both fidelities.\n");
+    if let Some(g) = gust {
+        match &c.rms_other {
+            Some(rms) => {
+                md += &format!(
+                    "\n| output | RMS, {a} | RMS, {b} | {a} / {b} − 1 | unit |\n|---|---:|---:|---:|---|\n"
+                );
+                for (o, other) in g.outputs.iter().zip(rms) {
+                    md += &format!(
+                        "| {} | {:.6e} | {:.6e} | {:+.1} % | {} |\n",
+                        o.name,
+                        o.rms,
+                        other,
+                        100.0 * (o.rms / other - 1.0),
+                        o.unit
+                    );
+                }
+            }
+            None => {
+                md += &format!(
+                    "\nThe {b} gives no gust response: {}\n",
+                    c.unstable_other.as_deref().unwrap_or("")
+                )
+            }
+        }
+    }
+    if let (Some(f), Some(other)) = (flutter, &c.flutter_other) {
+        md += &format!(
+            "\nFlutter (p-k, M = {}, ρ = {} kg/m³): {a} {}; {b} {}.\n",
+            f.mach,
+            f.density_kg_m3,
+            flutter_point(&f.result),
+            flutter_point(other)
+        );
+    }
+    md += &format!(
+        "\nGAF tables: the largest difference of an entry over the largest entry of the {a} table, per reduced frequency.\n\n| k | Q_ss | Q_gs |\n|---:|---:|---:|\n"
+    );
+    for (i, k) in c.gafs.k.iter().enumerate() {
+        md += &format!(
+            "| {k} | {:.1} % | {:.1} % |\n",
+            100.0 * c.gaf_difference_ss[i],
+            100.0 * c.gaf_difference_gs[i]
+        );
+    }
     md
 }
 
@@ -276,6 +345,56 @@ pub fn render(dir: &Path, r: &RunResults) -> Result<()> {
                 ],
             },
         )?;
+    }
+    if let Some(c) = &r.comparison {
+        save_figure(
+            dir,
+            "gafs_fidelities",
+            &gaf_panels(
+                format!(
+                    "{}: GAFs of the {} and the {}",
+                    r.study, c.fidelity, c.other
+                ),
+                &[
+                    (c.fidelity.clone(), &c.gafs),
+                    (c.other.clone(), &c.gafs_other),
+                ],
+            ),
+        )?;
+        if let Some(g) = r.gust.as_ref().filter(|_| !c.psd_other.is_empty()) {
+            let panels = g
+                .psd
+                .iter()
+                .zip(&c.psd_other)
+                .map(|(own, other)| {
+                    let (mut own, mut other) = (own.clone(), other.clone());
+                    own.label = format!("{}, {}", own.label, c.fidelity);
+                    other.label = format!("{}, {}", other.label, c.other);
+                    vec![own, other]
+                })
+                .collect();
+            save_figure(
+                dir,
+                "psd_fidelities",
+                &PsdPlot {
+                    title: format!("{}: gust response PSD with both fidelities", r.study),
+                    panels,
+                },
+            )?;
+        }
+        if let (Some(f), Some(other)) = (&r.flutter, &c.flutter_other) {
+            save_figure(
+                dir,
+                &format!("flutter_vg_{}", c.other),
+                &VgVf {
+                    result: other,
+                    title: format!(
+                        "{}: p-k with the {}, M = {}, rho = {} kg/m3",
+                        r.study, c.other, f.mach, f.density_kg_m3
+                    ),
+                },
+            )?;
+        }
     }
     crate::report::write_results(dir, r, &summary(r))
 }

@@ -11,7 +11,6 @@ pub(crate) mod schema;
 pub mod sweep;
 
 pub use crate::aero::{dlm::DlmSpec, FidelitySpec};
-pub use schema::CrossEvaluationSpec;
 pub use schema::{
     AeroSpec, AirfoilSpec, ClampSpec, FlightSpec, FlutterSpec, GustSpec, LengthUnit, MaterialSpec,
     MeshSpec, OptimizationSpec, OutputSpec, ReferenceSpec, StructureSpec, StudyFile, SweepCombine,
@@ -211,6 +210,7 @@ impl Study {
                     cache_dir: None,
                 })
                 .map_err(|e| self.fidelity_err(&e))?;
+            self.compare_study()?;
         }
         if self.spec.gust.is_some() {
             self.gust_settings()?;
@@ -222,7 +222,6 @@ impl Study {
             self.design_bounds()?;
             self.warm_start_design()?;
             self.warm_start_hessian()?;
-            self.cross_evaluation_study()?;
             self.require_reverse_mode("optimization", true)?;
         }
         Ok(())
@@ -289,19 +288,19 @@ impl Study {
         .map_err(|e| self.fidelity_err(&e))
     }
 
-    /// This study with the fidelity of `optimization.cross_evaluation` in place of its own (the
-    /// same wing, flight, gust and reduced frequencies), checked as the fidelity checks a study;
-    /// None without a cross-evaluation.
-    pub fn cross_evaluation_study(&self) -> Result<Option<Study>, StudyError> {
-        let Some(c) = self
+    /// This study with the fidelity of `aero.compare_with` in place of its own (the same wing,
+    /// flight, gust and reduced frequencies), checked as the fidelity checks a study; None
+    /// without one.
+    pub fn compare_study(&self) -> Result<Option<Study>, StudyError> {
+        let Some(spec) = self
             .spec
-            .optimization
+            .aero
             .as_ref()
-            .and_then(|o| o.cross_evaluation.as_ref())
+            .and_then(|a| a.compare_with.as_ref())
         else {
             return Ok(None);
         };
-        let builder = c.fidelity.builder();
+        let builder = spec.builder();
         let flight = self.flight_condition()?;
         builder
             .validate(&crate::aero::WingContext {
@@ -312,16 +311,14 @@ impl Study {
             })
             .map_err(|e| {
                 self.err(
-                    &e.path_in(&format!(
-                        "optimization.cross_evaluation.fidelity.{}",
-                        builder.name()
-                    )),
+                    &e.path_in(&format!("aero.compare_with.{}", builder.name())),
                     e.reason.clone(),
                 )
             })?;
         let mut other = self.clone();
         if let Some(aero) = other.spec.aero.as_mut() {
-            aero.fidelity = c.fidelity.clone();
+            aero.fidelity = spec.clone();
+            aero.compare_with = None;
         }
         Ok(Some(other))
     }

@@ -110,21 +110,10 @@ pub struct OptimizationSpec {
     /// initial design.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub warm_start: Option<WarmStartSpec>,
-    /// Another fidelity that analyses the initial, starting and final designs after the run
-    /// (RMS, flutter, GAFs) for `gustkit compare`; the optimization never uses it.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub cross_evaluation: Option<CrossEvaluationSpec>,
     #[serde(default = "default_max_iterations")]
     pub max_iterations: usize,
     #[serde(default = "default_tolerance")]
     pub tolerance: f64,
-}
-
-/// `optimization.cross_evaluation`: the other fidelity, e.g. `{"fidelity": {"dlm": {...}}}`.
-#[derive(Clone, Debug, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct CrossEvaluationSpec {
-    pub fidelity: crate::aero::FidelitySpec,
 }
 
 /// `optimization.warm_start`: where the starting design comes from.
@@ -271,6 +260,11 @@ pub struct AeroSpec {
     /// Streamwise station of zero gust phase (length unit); default the root leading edge.
     #[serde(default)]
     pub gust_x_ref: f64,
+    /// A second fidelity beside the study's own, e.g. `{"dlm": {...}}`: `gustkit run` repeats
+    /// the analysis with it (GAFs, gust response, flutter) and analyses an optimization's
+    /// initial, starting and final designs with it; it never drives the optimization.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub compare_with: Option<crate::aero::FidelitySpec>,
 }
 
 /// Free-stream condition (SI).

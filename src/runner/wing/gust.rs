@@ -22,8 +22,8 @@ pub(crate) fn psd_series(ev: &crate::pipeline::Evaluation, i: usize) -> PsdSerie
     }
 }
 
-/// The gust response part of the results at the study's design.
-pub(crate) fn gust_results(study: &Study) -> Result<GustResults> {
+/// The gust response part of the results at the study's design, with the evaluation it came from.
+pub(crate) fn gust_results(study: &Study) -> Result<(GustResults, crate::pipeline::Evaluation)> {
     let settings = study.gust_settings()?;
     let x = study.initial_design()?.to_vec();
     let ev = crate::pipeline::evaluate(study, &settings, &x)
@@ -83,7 +83,7 @@ pub(crate) fn gust_results(study: &Study) -> Result<GustResults> {
         }
         None => None,
     };
-    Ok(GustResults {
+    let results = GustResults {
         mach: f.mach,
         velocity_m_s: f.velocity,
         density_kg_m3: f.density,
@@ -94,5 +94,6 @@ pub(crate) fn gust_results(study: &Study) -> Result<GustResults> {
         psd: (0..outputs.len()).map(|i| psd_series(&ev, i)).collect(),
         outputs,
         calibration,
-    })
+    };
+    Ok((results, ev))
 }

@@ -2,6 +2,7 @@
 //! flutter, the gust-constrained optimization and the gradient check, each in its own module;
 //! [`run`] does every analysis a study defines and writes its report.
 
+mod fidelities;
 pub mod flutter;
 pub mod gradient;
 pub mod gust;
@@ -127,9 +128,12 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
     );
     write_atomic(&dir.join("modes.vtk"), vtk.as_bytes())?;
     println!("{}", frequency_table(&summary.modes));
-    let gust = match study.spec.gust {
-        Some(_) => Some(gust::gust_results(&study)?),
-        None => None,
+    let (gust, gust_evaluation) = match study.spec.gust {
+        Some(_) => {
+            let (g, ev) = gust::gust_results(&study)?;
+            (Some(g), Some(ev))
+        }
+        None => (None, None),
     };
     let flutter = match study.spec.flutter {
         Some(_) => {
@@ -143,6 +147,18 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
         }
         None => None,
     };
+    let comparison = match study.compare_study()? {
+        Some(other) => {
+            let c = fidelities::compare_fidelities(&study, &other, gust_evaluation.as_ref())?;
+            print!(
+                "{}",
+                report::run::comparison_text(&c, gust.as_ref(), flutter.as_ref())
+            );
+            Some(c)
+        }
+        None => None,
+    };
+    drop(gust_evaluation);
     let optimization = match study.spec.optimization {
         Some(_) => Some(optimize::optimize(&study, &dir, resume, false)?),
         None => None,
@@ -166,6 +182,7 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
         gust,
         flutter,
         optimization,
+        comparison,
         run_time_s: t0.elapsed().as_secs_f64(),
     };
     report::run::render(&dir, &results)?;

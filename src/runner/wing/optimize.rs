@@ -127,13 +127,12 @@ fn defining_spec(study: &Study) -> Result<serde_json::Value> {
         for key in ["description", "flutter", "sweep"] {
             m.remove(key);
         }
+        // the second fidelity only analyses the designs the optimization reaches
+        if let Some(a) = m.get_mut("aero").and_then(|a| a.as_object_mut()) {
+            a.remove("compare_with");
+        }
         if let Some(o) = m.get_mut("optimization").and_then(|o| o.as_object_mut()) {
-            for key in [
-                "max_iterations",
-                "tolerance",
-                "reference",
-                "cross_evaluation",
-            ] {
+            for key in ["max_iterations", "tolerance", "reference"] {
                 o.remove(key);
             }
         }
@@ -292,7 +291,7 @@ pub fn optimize(
                 None => "the checkpoint belongs to another problem".to_string(),
             };
             anyhow::bail!(
-                "{}: --resume: {what}; only the description, the reference, max_iterations, tolerance, the cross-evaluation, the flutter sweep and the sweep section may change between a run and its resumption. Run without --resume to start over",
+                "{}: --resume: {what}; only the description, the reference, max_iterations, tolerance, aero.compare_with, the flutter sweep and the sweep section may change between a run and its resumption. Run without --resume to start over",
                 study.file.display()
             );
         }
@@ -414,7 +413,7 @@ pub fn optimize(
         ev.rms_m[output] * unit_scale
     );
     }
-    let cross_evaluation = match study.cross_evaluation_study()? {
+    let cross_evaluation = match study.compare_study()? {
         Some(other) => {
             let mut designs = vec![("initial", x0.clone(), Some((&ev0, t_ev0)))];
             if let Some(x) = &x_start {
