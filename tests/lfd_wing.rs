@@ -345,3 +345,73 @@ fn lfd_flutter_margin_gradient_matches_differences() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `amplitude_fields_k`: `gustkit run` of a small LFD wing study writes the amplitude fields of
+/// every mode and the gust at that reduced frequency (a VTK file each with the real and
+/// imaginary parts of pressure, C_p and velocity on every cell, all finite, not all zero); a
+/// value that is not one of the study's reduced frequencies is refused at load with its path.
+#[test]
+fn amplitude_fields_are_written() {
+    let dir = std::env::temp_dir().join(format!("gustkit-lfd-fields-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut v = flagship();
+    v["name"] = "lfd_fields".into();
+    v.as_object_mut().unwrap().remove("optimization");
+    v.as_object_mut().unwrap().remove("flutter");
+    v["structure"]["modes"] = 3.into();
+    v["gust"]["points"] = 200.into();
+    v["aero"]["reduced_frequencies"] = serde_json::json!([0.0, 0.1, 0.3, 1.0, 2.0]);
+    v["aero"]["fidelity"] = serde_json::json!({"lfd": {"amplitude_fields_k": 0.3, "mesh_sizes": {
+        "n_around": 16, "n_radial": 6, "n_span": 4, "n_outboard": 2, "first_spacing_chords": 0.02
+    }}});
+    let file = dir.join("fields.json");
+    std::fs::write(&file, v.to_string()).unwrap();
+    let run = |f: &Path| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_gustkit"))
+            .args(["run", f.to_str().unwrap(), "--reports"])
+            .arg(&dir)
+            .output()
+            .unwrap()
+    };
+    let o = run(&file);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let folder = dir.join("lfd_fields");
+    for stem in [
+        "lfd_mode1_k0.3",
+        "lfd_mode2_k0.3",
+        "lfd_mode3_k0.3",
+        "lfd_gust_k0.3",
+    ] {
+        let text = std::fs::read_to_string(folder.join(format!("{stem}.vtk"))).unwrap();
+        let cells: usize = text
+            .lines()
+            .find_map(|l| l.strip_prefix("CELL_DATA "))
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert_eq!(cells, 16 * 6 * 6, "{stem}");
+        for name in ["pressure_re", "cp_im", "velocity_re", "velocity_im"] {
+            assert!(text.contains(name), "{stem}: {name}");
+        }
+        let start = text.find("SCALARS cp_re").unwrap();
+        let values: Vec<f64> = text[start..]
+            .lines()
+            .skip(2)
+            .take(cells)
+            .map(|l| l.parse().unwrap())
+            .collect();
+        assert!(values.iter().all(|v| v.is_finite()), "{stem}");
+        assert!(values.iter().any(|v| v.abs() > 1e-6), "{stem}: all zero");
+    }
+    v["aero"]["fidelity"]["lfd"]["amplitude_fields_k"] = 0.5.into();
+    std::fs::write(&file, v.to_string()).unwrap();
+    let o = run(&file);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("aero.fidelity.lfd.amplitude_fields_k") && stderr.contains("0.5"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -314,6 +314,12 @@ pub struct LfdWingSpec {
     /// The most memory the model may take, GB (refused before anything is allocated).
     #[serde(default = "default_memory_limit")]
     pub memory_limit_gb: f64,
+    /// `gustkit run` writes the LFD amplitudes at this reduced frequency (one of
+    /// `aero.reduced_frequencies`) of every mode and the gust at the initial design for
+    /// ParaView: `lfd_mode<i>_k<k>.vtk`, `lfd_gust_k<k>.vtk` (pressure, C_p and velocity, real
+    /// and imaginary parts).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub amplitude_fields_k: Option<f64>,
 }
 
 fn default_gmres_tolerance() -> f64 {

@@ -210,6 +210,21 @@ impl Study {
                     cache_dir: None,
                 })
                 .map_err(|e| self.fidelity_err(&e))?;
+            if let Some(k) = self.amplitude_fields_k() {
+                if !aero
+                    .reduced_frequencies
+                    .iter()
+                    .any(|kk| (kk - k).abs() <= 1e-12 * k.abs().max(1.0))
+                {
+                    return Err(self.err(
+                        "aero.fidelity.lfd.amplitude_fields_k",
+                        format!(
+                            "{k} is not one of aero.reduced_frequencies ({:?}): the fields are those of the GAF table",
+                            aero.reduced_frequencies
+                        ),
+                    ));
+                }
+            }
             self.compare_study()?;
         }
         if self.spec.gust.is_some() {
@@ -286,6 +301,14 @@ impl Study {
             self.cache_dir.as_deref(),
         )
         .map_err(|e| self.fidelity_err(&e))
+    }
+
+    /// The reduced frequency at which the run writes the LFD amplitude fields, if any.
+    pub fn amplitude_fields_k(&self) -> Option<f64> {
+        match self.spec.aero.as_ref().map(|a| &a.fidelity) {
+            Some(FidelitySpec::Lfd(l)) => l.amplitude_fields_k,
+            _ => None,
+        }
     }
 
     /// This study with the fidelity of `aero.compare_with` in place of its own (the same wing,

@@ -413,6 +413,45 @@ impl Aerodynamics for Lfd {
         Some(self)
     }
 
+    fn amplitude_fields(&self, k: f64, title: &str) -> Vec<(String, String)> {
+        let cache = self.last_forward.lock().unwrap_or_else(|e| e.into_inner());
+        let Some(c) = cache.as_ref() else {
+            return Vec::new();
+        };
+        let Some(i) =
+            c.k.iter()
+                .position(|kk| (kk - k).abs() <= 1e-12 * k.abs().max(1.0))
+        else {
+            return Vec::new();
+        };
+        let n = c.solutions[i].len();
+        c.solutions[i]
+            .iter()
+            .enumerate()
+            .map(|(j, (q_hat, _))| {
+                let (stem, what) = if j + 1 == n {
+                    (
+                        format!("lfd_gust_k{k}"),
+                        "the unit gust w_g/U = 1".to_string(),
+                    )
+                } else {
+                    (
+                        format!("lfd_mode{}_k{k}", j + 1),
+                        format!("mode {} at unit modal coordinate", j + 1),
+                    )
+                };
+                let text = crate::vtk::amplitude_vtk(
+                    &self.lfd.euler.mesh,
+                    &self.lfd.q0,
+                    q_hat,
+                    self.mach,
+                    &format!("{title}: LFD amplitudes of {what}, k = {k} (rho_inf = a_inf = 1)"),
+                );
+                (stem, text)
+            })
+            .collect()
+    }
+
     fn linearization_checks(&self) -> Vec<gustkit_core::LinearizationCheck> {
         crate::adjoint::linearization_table(&self.lfd, self.reverse_tapes(), &self.deform, 7)
     }

@@ -358,6 +358,13 @@ pub trait Aerodynamics: Send + Sync {
     fn linearization_checks(&self) -> Vec<LinearizationCheck> {
         Vec::new()
     }
+    /// Flow-field amplitudes of the last GAF table at reduced frequency `k` for a field viewer:
+    /// (file stem, legacy-VTK text) per mode column and the gust (the default: none; a model
+    /// without a flow field has none to show).
+    fn amplitude_fields(&self, k: f64, title: &str) -> Vec<(String, String)> {
+        let _ = (k, title);
+        Vec::new()
+    }
 }
 
 /// The reverse mode of an [`Aerodynamics`] model.

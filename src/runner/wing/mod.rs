@@ -147,6 +147,26 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
         }
         None => None,
     };
+    if let Some(k) = study.amplitude_fields_k() {
+        let title = format!("gustkit {}", study.spec.name);
+        let fields = match &gust_evaluation {
+            Some(ev) => ev.aero.fidelity.amplitude_fields(k, &title),
+            None => {
+                let x = study.initial_design()?.to_vec();
+                crate::pipeline::aeroelastic(&study, &x)?
+                    .aero
+                    .fidelity
+                    .amplitude_fields(k, &title)
+            }
+        };
+        for (stem, text) in &fields {
+            write_atomic(&dir.join(format!("{stem}.vtk")), text.as_bytes())?;
+        }
+        println!(
+            "LFD amplitude fields at k = {k}: {} VTK files (every mode and the gust)",
+            fields.len()
+        );
+    }
     let comparison = match study.compare_study()? {
         Some(other) => {
             let c = fidelities::compare_fidelities(&study, &other, gust_evaluation.as_ref())?;
