@@ -593,9 +593,25 @@ impl WingBuilder for LfdWingSpec {
             Some(q) => q,
             None => {
                 let free_stream = || vec![e.q_inf; e.mesh.n_cells];
-                // from the previous design's state, and from the free stream should that fail
-                let warm = previous_state(&e, cache.as_deref())
-                    .and_then(|q| e.solve_steady(q, &params).ok());
+                // from the previous design's state, and from the free stream should that fail;
+                // the pseudo-time step starts where switched evolution relaxation would have
+                // taken it by the time the residual fell from the free stream's to the guess's
+                let norm = |q: &[gustkit_cfd::residual::State<f64>]| -> f64 {
+                    e.residual(q)
+                        .iter()
+                        .flatten()
+                        .map(|v| v * v)
+                        .sum::<f64>()
+                        .sqrt()
+                };
+                let warm = previous_state(&e, cache.as_deref()).and_then(|q| {
+                    let ratio = norm(&free_stream()) / norm(&q);
+                    let warm_params = SteadyParams {
+                        cfl0: (params.cfl0 * ratio).clamp(params.cfl0, params.cfl_max),
+                        ..params.clone()
+                    };
+                    e.solve_steady(q, &warm_params).ok()
+                });
                 let (q, _) = match warm {
                     Some(solved) => solved,
                     None => e
