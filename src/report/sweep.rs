@@ -43,6 +43,10 @@ pub struct CaseResult {
 pub struct SweepResults {
     pub study: String,
     pub parameters: Vec<String>,
+    /// How the parameter values combined: with "zip" the curves join every case of a fidelity
+    /// (the other parameters move with the first), with "grid" the cases that share the others.
+    #[serde(default)]
+    pub combine: crate::study::SweepCombine,
     pub optimize: bool,
     pub cases: Vec<CaseResult>,
     pub wall_time_s: f64,
@@ -193,8 +197,10 @@ impl Figure for SweepPlot<'_> {
         // groups: cases sharing the fidelity and the values of every parameter but the first
         type Key = (Option<String>, Vec<f64>);
         let mut groups: Vec<(Key, Vec<&CaseResult>)> = Vec::new();
+        let zip = r.combine == crate::study::SweepCombine::Zip;
         for c in &r.cases {
-            let key = (c.fidelity.clone(), c.values[1..].to_vec());
+            let others = if zip { Vec::new() } else { c.values[1..].to_vec() };
+            let key = (c.fidelity.clone(), others);
             match groups.iter_mut().find(|g| g.0 == key) {
                 Some(g) => g.1.push(c),
                 None => groups.push((key, vec![c])),
@@ -260,6 +266,11 @@ impl Figure for SweepPlot<'_> {
                     )
                     .collect::<Vec<_>>()
                     .join(", ");
+                let label = if label.is_empty() && zip && r.parameters.len() > 1 {
+                    format!("{} with {}", r.parameters[0], r.parameters[1..].join(", "))
+                } else {
+                    label
+                };
                 let series = chart
                     .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
                     .map_err(err)?;

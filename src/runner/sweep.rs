@@ -166,6 +166,7 @@ pub fn sweep(study: &Study, reports: &Path, resume: bool) -> Result<crate::runne
     let r = SweepResults {
         study: study.spec.name.clone(),
         parameters: spec.parameters.iter().map(|p| p.path.clone()).collect(),
+        combine: spec.combine,
         optimize: spec.optimize,
         cases,
         wall_time_s: t0.elapsed().as_secs_f64(),
