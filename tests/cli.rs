@@ -1,17 +1,12 @@
 //! The command line as users run it: outputs, files, and errors on bad input.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-fn gustkit() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_gustkit"))
-}
+mod common;
+use common::gustkit;
 
 fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("gustkit-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::scratch("cli", name)
 }
 
 fn study() -> PathBuf {

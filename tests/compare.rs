@@ -2,17 +2,13 @@
 //! fidelity, and one report across runs rendered from their results.json files alone.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn gustkit() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_gustkit"))
-}
+mod common;
+use common::gustkit;
 
 fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("gustkit-compare-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::scratch("compare", name)
 }
 
 fn flagship() -> serde_json::Value {

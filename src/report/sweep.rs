@@ -199,7 +199,11 @@ impl Figure for SweepPlot<'_> {
         let mut groups: Vec<(Key, Vec<&CaseResult>)> = Vec::new();
         let zip = r.combine == crate::study::SweepCombine::Zip;
         for c in &r.cases {
-            let others = if zip { Vec::new() } else { c.values[1..].to_vec() };
+            let others = if zip {
+                Vec::new()
+            } else {
+                c.values[1..].to_vec()
+            };
             let key = (c.fidelity.clone(), others);
             match groups.iter_mut().find(|g| g.0 == key) {
                 Some(g) => g.1.push(c),

@@ -66,3 +66,16 @@ pub fn agard_plate(refine: usize, clamp: Clamp) -> PlateModel {
     )
     .unwrap()
 }
+
+/// The gustkit binary of this build.
+pub fn gustkit() -> std::process::Command {
+    std::process::Command::new(env!("CARGO_BIN_EXE_gustkit"))
+}
+
+/// An empty scratch folder `gustkit-<suite>-<name>-<pid>` in the temporary folder.
+pub fn scratch(suite: &str, name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("gustkit-{suite}-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
