@@ -369,7 +369,11 @@ fn markdown(runs: &[ComparedRun], doc: &CompareDoc, figures: &[&str]) -> String 
         }
     }
     if !doc.cross_evaluation.is_empty() {
-        md += "\n## Cross-evaluation\n\nEach design analysed with both fidelities at the flight condition of its study: RMS of the constrained output and the p-k flutter speed (searched up to twice the flight speed; V/V_flight in brackets).\n\n| run | design | fidelity | mass [kg] | RMS | flutter speed [m/s] |\n|---|---|---|---:|---:|---:|\n";
+        let unit = runs
+            .iter()
+            .find_map(|r| r.opt().cross_evaluation.as_ref().map(|c| c.unit.clone()))
+            .unwrap_or_default();
+        md += &format!("\n## Cross-evaluation\n\nEach design analysed with both fidelities at the flight condition of its study: RMS of the constrained output and the p-k flutter speed (searched up to twice the flight speed; V/V_flight in brackets).\n\n| run | design | fidelity | mass [kg] | RMS [{unit}] | flutter speed [m/s] |\n|---|---|---|---:|---:|---:|\n");
         for c in &doc.cross_evaluation {
             md += &format!(
                 "| {} | {} | {} | {:.4} | {} | {} |\n",
