@@ -66,6 +66,30 @@ impl SweepResults {
         names
     }
 
+    /// The metrics worth a panel of the figure: those that vary between cases (a Mach sweep
+    /// does not change the mass); all of them when none varies.
+    fn plotted_metrics(&self) -> Vec<(String, String)> {
+        let names = self.metric_names();
+        let varies = |n: &str| {
+            let v: Vec<f64> = self
+                .cases
+                .iter()
+                .filter_map(|c| Self::value(c, n))
+                .collect();
+            let (lo, hi) = v
+                .iter()
+                .fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(*x), b.max(*x)));
+            hi - lo > 1e-12 * hi.abs().max(lo.abs())
+        };
+        let varying: Vec<(String, String)> =
+            names.iter().filter(|(n, _)| varies(n)).cloned().collect();
+        if varying.is_empty() {
+            names
+        } else {
+            varying
+        }
+    }
+
     fn value(c: &CaseResult, name: &str) -> Option<f64> {
         c.metrics.iter().find(|m| m.name == name).map(|m| m.value)
     }
@@ -170,7 +194,7 @@ pub fn summary(r: &SweepResults) -> String {
     for c in r.cases.iter().filter(|c| c.error.is_some()) {
         md += &format!("\nCase {}: {}\n", c.index, c.error.as_deref().unwrap_or(""));
     }
-    md += "\n![sweep](sweep.png)\n\nTable: `sweep.csv`.\n";
+    md += "\n![sweep](sweep.png)\n\nThe figure leaves out the results that are the same in every case. Table: `sweep.csv`.\n";
     md
 }
 
@@ -181,7 +205,7 @@ pub struct SweepPlot<'a> {
 
 impl Figure for SweepPlot<'_> {
     fn size(&self) -> (u32, u32) {
-        let n = self.results.metric_names().len().max(1) as u32;
+        let n = self.results.plotted_metrics().len().max(1) as u32;
         (1000, 340 * n)
     }
 
@@ -192,7 +216,7 @@ impl Figure for SweepPlot<'_> {
         let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing sweep: {e}");
         area.fill(&WHITE).map_err(err)?;
         let r = self.results;
-        let names = r.metric_names();
+        let names = r.plotted_metrics();
         let panels = area.split_evenly((names.len().max(1), 1));
         // groups: cases sharing the fidelity and the values of every parameter but the first
         type Key = (Option<String>, Vec<f64>);
