@@ -104,6 +104,9 @@ pub struct Iterate {
     /// Trial points of that line search that could not be evaluated.
     #[serde(default)]
     pub failed_trials: usize,
+    /// Why the last of them could not be (e.g. the design flutters at the flight condition).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trial_failure: Option<String>,
 }
 
 /// How a run ended.

@@ -341,6 +341,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
             evaluations,
             alpha: 0.0,
             failed_trials: 0,
+            trial_failure: None,
         };
         history.push(record);
         let finish =
@@ -453,6 +454,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
         if let Some(last) = history.last_mut() {
             last.alpha = if accepted.is_some() { alpha } else { 0.0 };
             last.failed_trials = failed;
+            last.trial_failure = last_failure.clone();
         }
         let record = history.last().expect("pushed above").clone();
         let Some((z_new, v_new)) = accepted else {

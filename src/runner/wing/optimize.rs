@@ -80,7 +80,18 @@ impl crate::optim::Observer for RunObserver {
             it.kkt,
             it.alpha,
             if it.failed_trials > 0 {
-                format!(" ({} trial points failed)", it.failed_trials)
+                // the reason's first line, shortened: the progress line stays one line
+                let reason: String = it
+                    .trial_failure
+                    .as_deref()
+                    .unwrap_or("")
+                    .lines()
+                    .next()
+                    .unwrap_or("")
+                    .chars()
+                    .take(160)
+                    .collect();
+                format!(" ({} trial points failed; the last: {reason})", it.failed_trials)
             } else {
                 String::new()
             }
