@@ -34,6 +34,14 @@ fn warm_start_reads_checks_and_refuses() {
         .map(|d| d.as_f64().unwrap())
         .collect();
     assert_eq!(x, want);
+    // the study as a checkpoint records it: the new optional fields left out when unset (a
+    // checkpoint of an earlier run keeps resuming)
+    let spec = serde_json::to_value(&s.spec).unwrap();
+    assert_eq!(
+        spec["optimization"]["warm_start"],
+        serde_json::json!({ "from": reference })
+    );
+    assert!(spec["aero"].get("compare_with").is_none());
     // missing: the path and the command that writes it
     v["optimization"]["warm_start"] =
         serde_json::json!({ "from": "no/such/agard445_dlm/results.json" });

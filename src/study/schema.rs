@@ -124,9 +124,14 @@ pub struct WarmStartSpec {
     /// `gustkit run` writes its run folders), e.g. "reports/agard445_dlm/results.json".
     pub from: std::path::PathBuf,
     /// Also start the BFGS approximation from that run's final one (its `checkpoint.json`
-    /// beside results.json) instead of the identity.
-    #[serde(default)]
+    /// beside results.json) instead of the identity. Left out of the serialized study when
+    /// false, so checkpoints of runs from before this field still resume.
+    #[serde(default, skip_serializing_if = "is_false")]
     pub hessian: bool,
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
 }
 
 fn default_true() -> bool {
