@@ -36,6 +36,7 @@ pub trait Scalar:
     fn sin(self) -> Self;
     fn cos(self) -> Self;
     /// (sin, cos) in one call.
+    #[inline]
     fn sin_cos(self) -> (Self, Self) {
         (self.sin(), self.cos())
     }
@@ -45,6 +46,7 @@ pub trait Scalar:
     fn exp(self) -> Self;
     fn ln(self) -> Self;
     fn atan(self) -> Self;
+    #[inline]
     fn abs(self) -> Self {
         if self.re() < 0.0 {
             -self
@@ -52,9 +54,11 @@ pub trait Scalar:
             self
         }
     }
+    #[inline]
     fn zero() -> Self {
         Self::cst(0.0)
     }
+    #[inline]
     fn one() -> Self {
         Self::cst(1.0)
     }
@@ -140,6 +144,7 @@ impl<const N: usize> Dual<N> {
 }
 
 impl<const N: usize> PartialOrd for Dual<N> {
+    #[inline]
     fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
         self.v.partial_cmp(&other.v)
     }
@@ -256,20 +261,25 @@ impl<const N: usize> Scalar for Dual<N> {
     fn re(self) -> f64 {
         self.v
     }
+    #[inline]
     fn sqrt(self) -> Self {
         let s = self.v.sqrt();
         self.chain(s, 0.5 / s)
     }
+    #[inline]
     fn sin(self) -> Self {
         self.chain(self.v.sin(), self.v.cos())
     }
+    #[inline]
     fn cos(self) -> Self {
         self.chain(self.v.cos(), -self.v.sin())
     }
+    #[inline]
     fn tan(self) -> Self {
         let t = self.v.tan();
         self.chain(t, 1.0 + t * t)
     }
+    #[inline]
     fn atan2(self, x: Self) -> Self {
         let r2 = self.v * self.v + x.v * x.v;
         let mut d = [0.0; N];
@@ -281,6 +291,7 @@ impl<const N: usize> Scalar for Dual<N> {
             d,
         }
     }
+    #[inline]
     fn powi(self, n: i32) -> Self {
         let p = self.v.powi(n);
         let dp = if n == 0 {
@@ -290,13 +301,16 @@ impl<const N: usize> Scalar for Dual<N> {
         };
         self.chain(p, dp)
     }
+    #[inline]
     fn exp(self) -> Self {
         let e = self.v.exp();
         self.chain(e, e)
     }
+    #[inline]
     fn ln(self) -> Self {
         self.chain(self.v.ln(), 1.0 / self.v)
     }
+    #[inline]
     fn atan(self) -> Self {
         self.chain(self.v.atan(), 1.0 / (1.0 + self.v * self.v))
     }
@@ -321,6 +335,7 @@ impl CStep {
 }
 
 impl PartialOrd for CStep {
+    #[inline]
     fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
         self.0.re.partial_cmp(&other.0.re)
     }
@@ -375,39 +390,50 @@ impl Neg for CStep {
 }
 
 impl Scalar for CStep {
+    #[inline]
     fn cst(v: f64) -> Self {
         Self::new(v, 0.0)
     }
+    #[inline]
     fn re(self) -> f64 {
         self.0.re
     }
+    #[inline]
     fn sqrt(self) -> Self {
         Self(self.0.sqrt())
     }
+    #[inline]
     fn sin(self) -> Self {
         Self(self.0.sin())
     }
+    #[inline]
     fn cos(self) -> Self {
         Self(self.0.cos())
     }
+    #[inline]
     fn tan(self) -> Self {
         Self(self.0.tan())
     }
+    #[inline]
     fn atan2(self, x: Self) -> Self {
         // value from the real parts, first-order imaginary part from the derivative
         let (y, x) = (self.0, x.0);
         let r2 = y.re * y.re + x.re * x.re;
         Self::new(y.re.atan2(x.re), (x.re * y.im - y.re * x.im) / r2)
     }
+    #[inline]
     fn powi(self, n: i32) -> Self {
         Self(self.0.powi(n))
     }
+    #[inline]
     fn exp(self) -> Self {
         Self(self.0.exp())
     }
+    #[inline]
     fn ln(self) -> Self {
         Self(self.0.ln())
     }
+    #[inline]
     fn atan(self) -> Self {
         // num-complex's atan goes through ln(1 ± i z), which loses an imaginary part of 1e-30
         Self::new(self.0.re.atan(), self.0.im / (1.0 + self.0.re * self.0.re))
@@ -421,6 +447,7 @@ mod tests {
     /// Complex step (h = 1e-30) and dual numbers give the same derivative of a composite function
     /// to round-off (1e-14 relative): neither has a truncation or cancellation error.
     #[test]
+    #[inline]
     fn complex_step_matches_dual() {
         fn f<S: Scalar>(x: S, y: S) -> S {
             (x * y).sin() / (x.powi(3) + y.sqrt()) - x.atan2(y) * x.tan()
@@ -449,6 +476,7 @@ mod tests {
 
     /// The dual derivative of a composite function equals its analytic derivative.
     #[test]
+    #[inline]
     fn dual_matches_analytic_derivative() {
         let f = |x: Dual<2>, y: Dual<2>| {
             (x * y).sin() / (x.powi(3) + y.sqrt()) - x.atan2(y) * x.tan()

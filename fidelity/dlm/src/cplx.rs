@@ -12,26 +12,32 @@ pub struct Cplx<S> {
 }
 
 impl<S: Scalar> Cplx<S> {
+    #[inline]
     pub fn new(re: S, im: S) -> Self {
         Self { re, im }
     }
+    #[inline]
     pub fn real(re: S) -> Self {
         Self { re, im: S::zero() }
     }
+    #[inline]
     pub fn zero() -> Self {
         Self::real(S::zero())
     }
     /// exp(-i θ) for real θ.
+    #[inline]
     pub fn expi_neg(theta: S) -> Self {
         let (s, c) = theta.sin_cos();
         Self { re: c, im: -s }
     }
+    #[inline]
     pub fn scale(self, s: S) -> Self {
         Self {
             re: self.re * s,
             im: self.im * s,
         }
     }
+    #[inline]
     pub fn scale_f(self, s: f64) -> Self {
         Self {
             re: self.re * s,
@@ -39,6 +45,7 @@ impl<S: Scalar> Cplx<S> {
         }
     }
     /// The value part as a `Complex64`.
+    #[inline]
     pub fn value(self) -> Complex64 {
         Complex64::new(self.re.re(), self.im.re())
     }
@@ -46,18 +53,21 @@ impl<S: Scalar> Cplx<S> {
 
 impl<S: Scalar> Add for Cplx<S> {
     type Output = Self;
+    #[inline]
     fn add(self, o: Self) -> Self {
         Self::new(self.re + o.re, self.im + o.im)
     }
 }
 impl<S: Scalar> Sub for Cplx<S> {
     type Output = Self;
+    #[inline]
     fn sub(self, o: Self) -> Self {
         Self::new(self.re - o.re, self.im - o.im)
     }
 }
 impl<S: Scalar> Mul for Cplx<S> {
     type Output = Self;
+    #[inline]
     fn mul(self, o: Self) -> Self {
         Self::new(
             self.re * o.re - self.im * o.im,
@@ -67,6 +77,7 @@ impl<S: Scalar> Mul for Cplx<S> {
 }
 impl<S: Scalar> Neg for Cplx<S> {
     type Output = Self;
+    #[inline]
     fn neg(self) -> Self {
         Self::new(-self.re, -self.im)
     }

@@ -102,16 +102,24 @@ pub fn oscillatory_influences<S: Scalar>(
             *o = Cplx::zero();
             continue;
         }
-        let mut p1 = [Cplx::<S>::zero(); 5];
-        let mut p2 = [Cplx::<S>::zero(); 5];
-        for (i, pt) in points.iter().enumerate() {
-            let (a, b) = pt.numerators(kd);
-            p1[i] = a;
-            p2[i] = b;
-        }
-        *o = weights
-            .integrate(&quartic_fit(&p1, e), &quartic_fit(&p2, e), yb, zb, e)
-            .scale(s.chord);
+        let q2 = if weights.planar {
+            // a planar pair's integral has no P2 term: neither I2 nor K2 is formed
+            let p1 = std::array::from_fn(|i| points[i].numerator_p1(kd));
+            *o = weights
+                .integrate_planar(&quartic_fit(&p1, e), yb, zb, e)
+                .scale(s.chord);
+            continue;
+        } else {
+            let mut p1 = [Cplx::<S>::zero(); 5];
+            let mut p2 = [Cplx::<S>::zero(); 5];
+            for (i, pt) in points.iter().enumerate() {
+                let (a, b) = pt.numerators(kd);
+                p1[i] = a;
+                p2[i] = b;
+            }
+            (quartic_fit(&p1, e), quartic_fit(&p2, e))
+        };
+        *o = weights.integrate(&q2.0, &q2.1, yb, zb, e).scale(s.chord);
     }
 }
 
@@ -169,10 +177,20 @@ impl<S: Scalar> QuarticWeights<S> {
 
     /// The integrals of [`integrate_quartics`] with these weights.
     pub fn integrate(&self, q1: &Quartic<S>, q2: &Quartic<S>, yb: S, zb: S, e: S) -> Cplx<S> {
+        let total = self.integrate_planar(q1, yb, zb, e);
+        if self.planar {
+            total
+        } else {
+            total + nonplanar_part(q2, yb, zb, e, self.f, self.lg)
+        }
+    }
+
+    /// The P1 part of [`Self::integrate`] alone: the whole integral of a planar pair.
+    pub fn integrate_planar(&self, q1: &Quartic<S>, yb: S, zb: S, e: S) -> Cplx<S> {
         let y2 = yb * yb;
         let z2 = zb * zb;
         let e2 = e * e;
-        let (f, lg, planar) = (self.f, self.lg, self.planar);
+        let (f, lg) = (self.f, self.lg);
         let (a1, b1, c1, d1, e1) = *q1;
         let y4 = y2 * y2;
         let z4 = z2 * z2;
@@ -188,11 +206,7 @@ impl<S: Scalar> QuarticWeights<S> {
                 + e1.scale(yb * (y2 - z2) * 2.0))
             .scale(lg)
             + (a1 + d1.scale(yb * 2.0) + e1.scale(y2 * 3.0 - z2 + e2 / 3.0)).scale(e * 2.0);
-        let mut total = planar_part.scale_f(1.0 / (8.0 * PI));
-        if !planar {
-            total = total + nonplanar_part(q2, yb, zb, e, f, lg);
-        }
-        total
+        planar_part.scale_f(1.0 / (8.0 * PI))
     }
 }
 

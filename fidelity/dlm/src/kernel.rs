@@ -35,78 +35,118 @@ const DESMARAIS_A: [f64; 12] = [
 ];
 const DESMARAIS_B: f64 = 0.009054814793;
 
-/// The Desmarais sums i0 = Σ aₙ e^{−pₙu1}/(pₙ + i k1) and its second moment j0 at u1 ≥ 0, and,
-/// if asked, the same at u1 = 0 (the terms 1/(pₙ² + k1²) are shared: upstream points need both).
-fn desmarais_sums<S: Scalar>(u1: S, k1: S, with_zero: bool) -> [(Cplx<S>, Cplx<S>); 2] {
-    // e^{−p_n u1} for p_n = 2ⁿ b by repeated squaring of e^{−2 b u1}
-    let mut q = (u1 * (-2.0 * DESMARAIS_B)).exp();
+/// The exponentials e^{−pₙ u} (n = 1 … 12) of the Desmarais terms at u ≥ 0, by repeated squaring
+/// of e^{−2 b u}: they depend on the point only, so a table of frequencies computes them once.
+fn desmarais_exponentials<S: Scalar>(u: S) -> [S; 12] {
+    let mut q = [S::zero(); 12];
+    q[0] = (u * (-2.0 * DESMARAIS_B)).exp();
+    for n in 1..12 {
+        q[n] = q[n - 1] * q[n - 1];
+    }
+    q
+}
+
+/// The Desmarais sums i0 = Σ aₙ e^{−pₙu}/(pₙ + i k1) and (when `P2`, for I2) its second moment
+/// j0 at u ≥ 0 from the exponentials `q` of [`desmarais_exponentials`], and, if asked, the same
+/// at u = 0 (the terms 1/(pₙ² + k1²) are shared: upstream points need both). Without `P2` the
+/// second moments are left zero: a planar pair never uses them.
+fn desmarais_sums<S: Scalar, const P2: bool>(
+    u: S,
+    k1: S,
+    q: &[S; 12],
+    with_zero: bool,
+) -> [(Cplx<S>, Cplx<S>); 2] {
     let k2 = k1 * k1;
     let (mut i0, mut j0) = (Cplx::<S>::zero(), Cplx::<S>::zero());
     let (mut z0, mut zj) = (Cplx::<S>::zero(), Cplx::<S>::zero());
     let mut p = 2.0 * DESMARAIS_B;
-    for a in DESMARAIS_A {
+    for (&a, &qn) in DESMARAIS_A.iter().zip(q) {
         let den = k2 + p * p;
         let inv = S::one() / den;
         let ainv = inv * a;
-        let w = q * ainv;
-        // ∫ e^{−(p + i k1) u} = e^{−(p+ik1)u1}/(p + i k1): (p − i k1)/(p² + k1²)
+        let w = qn * ainv;
+        // ∫ e^{−(p + i k1) u} = e^{−(p+ik1)u}/(p + i k1): (p − i k1)/(p² + k1²)
         i0 = i0 + Cplx::new(w * p, -(w * k1));
-        // second moment for I2
-        let wd = w * inv;
-        j0 = j0
-            + Cplx::new(
-                wd * (S::cst(p * p) - k2 + u1 * den * p),
-                -(wd * k1 * (S::cst(2.0 * p) + u1 * den)),
-            );
+        if P2 {
+            let wd = w * inv;
+            j0 = j0
+                + Cplx::new(
+                    wd * (S::cst(p * p) - k2 + u * den * p),
+                    -(wd * k1 * (S::cst(2.0 * p) + u * den)),
+                );
+        }
         if with_zero {
             z0 = z0 + Cplx::new(ainv * p, -(ainv * k1));
-            let wz = ainv * inv;
-            zj = zj + Cplx::new(wz * (S::cst(p * p) - k2), -(wz * k1 * (2.0 * p)));
+            if P2 {
+                let wz = ainv * inv;
+                zj = zj + Cplx::new(wz * (S::cst(p * p) - k2), -(wz * k1 * (2.0 * p)));
+            }
         }
-        q = q * q;
         p *= 2.0;
     }
     [(i0, j0), (z0, zj)]
 }
 
-/// I1 and I2 at u1 ≥ 0 from the Desmarais sums, and the phase e^{−i k1 u1}.
-fn assemble<S: Scalar>(u1: S, k1: S, i0: Cplx<S>, j0: Cplx<S>) -> (Cplx<S>, Cplx<S>, Cplx<S>) {
-    let k2 = k1 * k1;
-    let s = (u1 * u1 + 1.0).sqrt();
-    let g = S::one() - u1 / s;
-    let e = Cplx::expi_neg(k1 * u1);
+/// I1 and (when `P2`) I2 at u ≥ 0 from the Desmarais sums, without their common phase:
+/// I = e^{−i k1 u} × bracket, so that the caller can merge that phase with another one.
+fn brackets<S: Scalar, const P2: bool>(
+    u: S,
+    k1: S,
+    i0: Cplx<S>,
+    j0: Cplx<S>,
+) -> (Cplx<S>, Cplx<S>) {
+    let s = (u * u + 1.0).sqrt();
+    let g = S::one() - u / s;
     let ik1 = Cplx::new(S::zero(), k1);
-    let i1 = e * (Cplx::real(g) - ik1 * i0);
-    let two_plus = Cplx::new(S::cst(2.0), k1 * u1);
-    let i2 = e
-        * (two_plus * Cplx::real(g) - Cplx::real(u1 / (s * s * s)) - ik1 * i0 + j0.scale(k2))
-            .scale_f(1.0 / 3.0);
-    (i1, i2, e)
+    let b1 = Cplx::real(g) - ik1 * i0;
+    let b2 = if P2 {
+        let two_plus = Cplx::new(S::cst(2.0), k1 * u);
+        (two_plus * Cplx::real(g) - Cplx::real(u / (s * s * s)) - ik1 * i0 + j0.scale(k1 * k1))
+            .scale_f(1.0 / 3.0)
+    } else {
+        Cplx::zero()
+    };
+    (b1, b2)
 }
 
 /// I1(u1, k1) and I2(u1, k1) for any u1.
 pub fn integrals<S: Scalar>(u1: S, k1: S) -> (Cplx<S>, Cplx<S>) {
-    let (i1, i2, _) = integrals_and_phase(u1, k1);
+    let q = desmarais_exponentials(u1.abs());
+    let (i1, i2, _) = integrals_and_phase::<S, true>(u1, k1, &q);
     (i1, i2)
 }
 
-/// I1(u1, k1), I2(u1, k1) and the phase e^{−i k1 u1} the kernel needs with them.
-fn integrals_and_phase<S: Scalar>(u1: S, k1: S) -> (Cplx<S>, Cplx<S>, Cplx<S>) {
+/// I1(u1, k1), I2(u1, k1) (zero unless `P2`) and the phase e^{−i k1 u1} the kernel needs with
+/// them; `q` are the Desmarais exponentials at |u1|.
+fn integrals_and_phase<S: Scalar, const P2: bool>(
+    u1: S,
+    k1: S,
+    q: &[S; 12],
+) -> (Cplx<S>, Cplx<S>, Cplx<S>) {
     if u1.re() >= 0.0 {
-        let [(i0, j0), _] = desmarais_sums(u1, k1, false);
-        assemble(u1, k1, i0, j0)
+        let [(i0, j0), _] = desmarais_sums::<S, P2>(u1, k1, q, false);
+        let (b1, b2) = brackets::<S, P2>(u1, k1, i0, j0);
+        let e = Cplx::expi_neg(k1 * u1);
+        (e * b1, e * b2, e)
     } else {
         // u1 < 0: Re I(u1) = 2 Re I(0) − Re I(−u1), Im I(u1) = Im I(−u1)
         let neg = -u1;
-        let [(i0, j0), (z0, zj)] = desmarais_sums(neg, k1, true);
-        let (b1, b2, e_neg) = assemble(neg, k1, i0, j0);
+        let [(i0, j0), (z0, zj)] = desmarais_sums::<S, P2>(neg, k1, q, true);
+        let (b1, b2) = brackets::<S, P2>(neg, k1, i0, j0);
+        let e_neg = Cplx::expi_neg(k1 * neg);
+        let (b1, b2) = (e_neg * b1, e_neg * b2);
         // at u1 = 0: e = 1, g = 1, u1/s³ = 0
         let ik1 = Cplx::new(S::zero(), k1);
         let a1 = Cplx::real(S::one()) - ik1 * z0;
-        let a2 = (Cplx::real(S::cst(2.0)) - ik1 * z0 + zj.scale(k1 * k1)).scale_f(1.0 / 3.0);
+        let i2 = if P2 {
+            let a2 = (Cplx::real(S::cst(2.0)) - ik1 * z0 + zj.scale(k1 * k1)).scale_f(1.0 / 3.0);
+            Cplx::new(a2.re * 2.0 - b2.re, b2.im)
+        } else {
+            Cplx::zero()
+        };
         (
             Cplx::new(a1.re * 2.0 - b1.re, b1.im),
-            Cplx::new(a2.re * 2.0 - b2.re, b2.im),
+            i2,
             // e^{−i k1 u1} = conj(e^{−i k1 (−u1)})
             Cplx::new(e_neg.re, -e_neg.im),
         )
@@ -114,7 +154,8 @@ fn integrals_and_phase<S: Scalar>(u1: S, k1: S) -> (Cplx<S>, Cplx<S>, Cplx<S>) {
 }
 
 /// The frequency-independent part of the incremental kernel at one point of a doublet line, so
-/// that a table of frequencies reuses the geometry (square roots, u1, the steady kernels).
+/// that a table of frequencies reuses the geometry (square roots, u1, the steady kernels, the
+/// Desmarais exponentials).
 #[derive(Clone, Copy, Debug)]
 pub struct KernelPoint<S> {
     x0: S,
@@ -135,6 +176,10 @@ enum PointKind<S> {
         br: S,
         k10: S,
         k20: S,
+        /// x0 + r1 u1: e^{−i ω x0/U} e^{−i k1 u1} = e^{−i (ω/U) (x0 + r1 u1)}.
+        xi: S,
+        /// e^{−pₙ |u1|}.
+        q: [S; 12],
     },
 }
 
@@ -164,6 +209,8 @@ impl<S: Scalar> KernelPoint<S> {
                 br,
                 k10: -xr - 1.0,
                 k20: xr * (br + 2.0) + 2.0,
+                xi: x0 + r1 * u1,
+                q: desmarais_exponentials(u1.abs()),
             }
         };
         Self {
@@ -176,14 +223,26 @@ impl<S: Scalar> KernelPoint<S> {
 
     /// Numerators (P1, P2) at ω/U = `kd`.
     pub fn numerators(&self, kd: f64) -> (Cplx<S>, Cplx<S>) {
-        let e = Cplx::expi_neg(self.x0 * kd);
-        let (k1v, k2v, k10, k20) = match self.kind {
-            PointKind::Axis { downstream: true } => (
-                Cplx::real(S::cst(-2.0)),
-                Cplx::real(S::cst(4.0)),
-                S::cst(-2.0),
-                S::cst(4.0),
-            ),
+        self.numerators_with::<true>(kd)
+    }
+
+    /// P1 alone at ω/U = `kd` (P2 returned as zero), for a planar pair: the quartic integrals
+    /// of a planar pair never use P2, so neither I2 nor K2 is formed.
+    pub fn numerator_p1(&self, kd: f64) -> Cplx<S> {
+        self.numerators_with::<false>(kd).0
+    }
+
+    fn numerators_with<const P2: bool>(&self, kd: f64) -> (Cplx<S>, Cplx<S>) {
+        let (k1v_e, k2v_e, k10, k20) = match self.kind {
+            PointKind::Axis { downstream: true } => {
+                let e = Cplx::expi_neg(self.x0 * kd);
+                (
+                    e.scale_f(-2.0),
+                    e.scale_f(4.0),
+                    S::cst(-2.0),
+                    S::cst(4.0),
+                )
+            }
             PointKind::Axis { downstream: false } => {
                 (Cplx::zero(), Cplx::zero(), S::zero(), S::zero())
             }
@@ -195,18 +254,46 @@ impl<S: Scalar> KernelPoint<S> {
                 br,
                 k10,
                 k20,
+                xi,
+                ref q,
             } => {
                 let k1 = r1 * kd;
-                let (i1, i2, ek) = integrals_and_phase(u1, k1);
-                let k1v = -i1 - ek.scale(mr_r / su);
-                let k2v = i2.scale_f(3.0)
-                    + (ek * Cplx::new(S::zero(), k1)).scale(mr_r * mr_r / su)
-                    + ek.scale(mr_r * ((u1 * u1 + 1.0) * br + 2.0 + mr_r * u1) / (su * su * su));
-                (k1v, k2v, k10, k20)
+                // K2's own terms over the common phase e^{−i k1 u1}
+                let k2_rest = || {
+                    Cplx::new(S::zero(), k1).scale(mr_r * mr_r / su)
+                        + Cplx::real(mr_r * ((u1 * u1 + 1.0) * br + 2.0 + mr_r * u1) / (su * su * su))
+                };
+                if u1.re() >= 0.0 {
+                    // every term carries e^{−i k1 u1}: one phase with e^{−i ω x0/U}
+                    let [(i0, j0), _] = desmarais_sums::<S, P2>(u1, k1, q, false);
+                    let (b1, b2) = brackets::<S, P2>(u1, k1, i0, j0);
+                    let phase = Cplx::expi_neg(xi * kd);
+                    let k1v = phase * (-b1 - Cplx::real(mr_r / su));
+                    let k2v = if P2 {
+                        phase * (b2.scale_f(3.0) + k2_rest())
+                    } else {
+                        Cplx::zero()
+                    };
+                    (k1v, k2v, k10, k20)
+                } else {
+                    let e = Cplx::expi_neg(self.x0 * kd);
+                    let (i1, i2, ek) = integrals_and_phase::<S, P2>(u1, k1, q);
+                    let k1v = (-i1 - ek.scale(mr_r / su)) * e;
+                    let k2v = if P2 {
+                        (i2.scale_f(3.0) + ek * k2_rest()) * e
+                    } else {
+                        Cplx::zero()
+                    };
+                    (k1v, k2v, k10, k20)
+                }
             }
         };
-        let p1 = -(k1v * e - Cplx::real(k10)).scale(self.cos_rs);
-        let p2 = -(k2v * e - Cplx::real(k20)).scale(self.t2);
+        let p1 = -(k1v_e - Cplx::real(k10)).scale(self.cos_rs);
+        let p2 = if P2 {
+            -(k2v_e - Cplx::real(k20)).scale(self.t2)
+        } else {
+            Cplx::zero()
+        };
         (p1, p2)
     }
 }
