@@ -256,12 +256,7 @@ mod tests {
     }
 
     fn problem(t: &GafTable) -> PkProblem<'_> {
-        PkProblem {
-            omega_n: vec![60.0, 150.0, 260.0],
-            damping_ratio: 0.02,
-            table: t,
-            density: 1.2,
-        }
+        PkProblem::from_parts(vec![60.0, 150.0, 260.0], 0.02, t, 1.2)
     }
 
     #[test]
@@ -327,12 +322,7 @@ mod tests {
                     .zip(&d_om2)
                     .map(|(w, d)| (w * w + h * d).sqrt())
                     .collect();
-                let p = PkProblem {
-                    omega_n: om,
-                    damping_ratio: pk.damping_ratio,
-                    table: &tt,
-                    density: pk.density,
-                };
+                let p = PkProblem::from_parts(om, pk.damping_ratio, &tt, pk.density);
                 p.roots_up_to(v, 12)
                     .unwrap()
                     .into_iter()

@@ -14,7 +14,7 @@
 //! secant method. Beyond the table's largest k the GAFs are held at that k (only low speeds reach
 //! it, where q is small) and the curve point is flagged.
 
-use crate::gust::interp::SplineWeights;
+use crate::gust::interp::SplineBasis;
 use faer::Mat;
 use gustkit_core::GafTable;
 use num_complex::Complex64;
@@ -75,6 +75,8 @@ pub struct PkProblem<'a> {
     pub damping_ratio: f64,
     pub table: &'a GafTable,
     pub density: f64,
+    /// The table's spline, built at the first query and shared by every p-k iteration after.
+    spline: std::sync::OnceLock<Result<SplineBasis, String>>,
 }
 
 /// Reduced frequency below which the Q_I/k damping term is held at its value at this k.
@@ -94,6 +96,19 @@ pub(crate) fn damping_of(p: Complex64, v: f64, b_ref: f64) -> f64 {
         2.0 * b_ref * p.re / v
     } else {
         2.0 * p.re / p.im
+    }
+}
+
+/// The eigenvalues of a small dense real matrix (a p-k state matrix, 2 × modes): nalgebra's
+/// real Schur form, about 2.5 times faster than faer's general solver at this size (12 × 12:
+/// 7 µs against 17 µs here), with faer's as the fallback should the QR iteration not converge
+/// in 100 n sweeps.
+pub(crate) fn eigenvalues(a: &Mat<f64>) -> Option<Vec<Complex64>> {
+    let n = a.nrows();
+    let m = nalgebra::DMatrix::from_fn(n, n, |i, j| a[(i, j)]);
+    match nalgebra::linalg::Schur::try_new(m, f64::EPSILON, 100 * n) {
+        Some(schur) => Some(schur.complex_eigenvalues().iter().copied().collect()),
+        None => a.eigenvalues().ok(),
     }
 }
 
@@ -134,11 +149,23 @@ struct Root {
 impl<'a> PkProblem<'a> {
     /// The p-k problem of a modal model with the GAF table of its modes, at air density `density`.
     pub fn new(modes: &crate::structure::Modes, table: &'a GafTable, density: f64) -> Self {
+        Self::from_parts(modes.omega(), modes.damping_ratio, table, density)
+    }
+
+    /// The p-k problem of natural circular frequencies `omega_n` (rad/s) with modal damping ratio
+    /// `damping_ratio`, GAF table `table` and air density `density`.
+    pub fn from_parts(
+        omega_n: Vec<f64>,
+        damping_ratio: f64,
+        table: &'a GafTable,
+        density: f64,
+    ) -> Self {
         Self {
-            omega_n: modes.omega(),
-            damping_ratio: modes.damping_ratio,
+            omega_n,
+            damping_ratio,
             table,
             density,
+            spline: std::sync::OnceLock::new(),
         }
     }
 }
@@ -197,14 +224,20 @@ impl PkProblem<'_> {
     fn spline_at(&self, k: f64) -> Result<(Vec<f64>, Vec<f64>), FlutterError> {
         let kmax = *self.table.k.last().expect("table has k");
         let kk = k.clamp(self.table.k[0], kmax);
-        let (w, dw) =
-            SplineWeights::with_slope(&self.table.k, &[kk]).map_err(FlutterError::Input)?;
-        let slope = if kk == k {
-            dw.weights[0].clone()
-        } else {
-            vec![0.0; w.weights[0].len()]
-        };
-        Ok((w.weights[0].clone(), slope))
+        let basis = self
+            .spline
+            .get_or_init(|| SplineBasis::new(&self.table.k))
+            .as_ref()
+            .map_err(|e| FlutterError::Input(e.clone()))?;
+        let n = self.table.k.len();
+        let (mut w, mut dw) = (vec![0.0; n], vec![0.0; n]);
+        basis
+            .weights_at(kk, &mut w, &mut dw)
+            .map_err(FlutterError::Input)?;
+        if kk != k {
+            dw.fill(0.0);
+        }
+        Ok((w, dw))
     }
 
     /// The first-order state matrix of the p-k equation at speed `v` with the aerodynamics at `k`,
@@ -238,10 +271,7 @@ impl PkProblem<'_> {
 
     /// Roots p of the p-k equation at speed `v` with the aerodynamics evaluated at `k`.
     fn roots(&self, v: f64, k: f64) -> Result<Vec<Complex64>, FlutterError> {
-        self.state_matrix(v, k)?
-            .0
-            .eigenvalues()
-            .map_err(|_| FlutterError::Eigen { velocity: v })
+        eigenvalues(&self.state_matrix(v, k)?.0).ok_or(FlutterError::Eigen { velocity: v })
     }
 
     /// Converges mode `mode`'s root at speed `v` from the roots `refs` of every mode at the

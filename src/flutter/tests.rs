@@ -134,12 +134,7 @@ fn section_table(s: &AirfoilShape) -> (GafTable, [f64; 2]) {
 
 /// The section's p-k problem: no structural damping, ρ = 1.
 fn section_problem(t: &GafTable, wn: [f64; 2]) -> PkProblem<'_> {
-    PkProblem {
-        omega_n: wn.to_vec(),
-        damping_ratio: 0.0,
-        table: t,
-        density: 1.0,
-    }
+    PkProblem::from_parts(wn.to_vec(), 0.0, t, 1.0)
 }
 
 /// The p-k flutter speed and frequency equal the k-method's at the neutral point (both methods are

@@ -22,6 +22,33 @@ impl SplineWeights {
 
     /// The weights and the weights of the spline's slope dQ/dk at the same queries.
     pub fn with_slope(nodes: &[f64], queries: &[f64]) -> Result<(Self, Self), String> {
+        let basis = SplineBasis::new(nodes)?;
+        let n = nodes.len();
+        let mut weights = Vec::with_capacity(queries.len());
+        let mut slopes = Vec::with_capacity(queries.len());
+        for &k in queries {
+            let (mut w, mut dw) = (vec![0.0; n], vec![0.0; n]);
+            basis.weights_at(k, &mut w, &mut dw)?;
+            weights.push(w);
+            slopes.push(dw);
+        }
+        Ok((Self { weights }, Self { weights: slopes }))
+    }
+}
+
+/// The not-a-knot spline of one node set, with the map from values to second derivatives
+/// (M = B f) solved once, so that weights at many single queries (a p-k iteration's) cost
+/// O(n) each.
+#[derive(Clone, Debug)]
+pub struct SplineBasis {
+    nodes: Vec<f64>,
+    h: Vec<f64>,
+    b: Mat<f64>,
+}
+
+impl SplineBasis {
+    /// The spline through `nodes` (strictly increasing, at least 4).
+    pub fn new(nodes: &[f64]) -> Result<Self, String> {
         let n = nodes.len();
         if n < 4 {
             return Err(format!(
@@ -50,39 +77,45 @@ impl SplineWeights {
             r[(i, i - 1)] += 6.0 / h[i - 1];
         }
         let b = a.partial_piv_lu().solve(&r); // M = B f
+        Ok(Self {
+            nodes: nodes.to_vec(),
+            h,
+            b,
+        })
+    }
+
+    /// Writes the weights of the nodes in the value at `k` into `w` and in the slope dQ/dk into
+    /// `dw` (both of the node count); `k` outside the nodes' range is an error naming it.
+    pub fn weights_at(&self, k: f64, w: &mut [f64], dw: &mut [f64]) -> Result<(), String> {
+        let (nodes, h, b) = (&self.nodes, &self.h, &self.b);
+        let n = nodes.len();
         let (lo, hi) = (nodes[0], nodes[n - 1]);
-        let mut weights = Vec::with_capacity(queries.len());
-        let mut slopes = Vec::with_capacity(queries.len());
-        for &k in queries {
-            if !(k >= lo - 1e-12 * hi.abs() && k <= hi * (1.0 + 1e-12)) {
-                return Err(format!(
-                    "k = {k} lies outside the GAF table [{lo}, {hi}]: extend the reduced frequencies or narrow the frequency grid"
-                ));
-            }
-            let i = nodes.partition_point(|&x| x <= k).clamp(1, n - 1) - 1;
-            let (hh, t) = (h[i], k - nodes[i]);
-            let s = hh - t;
-            let (ca, cb) = (s / hh, t / hh);
-            let cm0 = s * s * s / (6.0 * hh) - hh * s / 6.0;
-            let cm1 = t * t * t / (6.0 * hh) - hh * t / 6.0;
-            // d/dk: ds/dk = −1, dt/dk = 1
-            let (dca, dcb) = (-1.0 / hh, 1.0 / hh);
-            let dcm0 = -s * s / (2.0 * hh) + hh / 6.0;
-            let dcm1 = t * t / (2.0 * hh) - hh / 6.0;
-            let mut w = vec![0.0; n];
-            let mut dw = vec![0.0; n];
-            w[i] += ca;
-            w[i + 1] += cb;
-            dw[i] += dca;
-            dw[i + 1] += dcb;
-            for j in 0..n {
-                w[j] += cm0 * b[(i, j)] + cm1 * b[(i + 1, j)];
-                dw[j] += dcm0 * b[(i, j)] + dcm1 * b[(i + 1, j)];
-            }
-            weights.push(w);
-            slopes.push(dw);
+        if !(k >= lo - 1e-12 * hi.abs() && k <= hi * (1.0 + 1e-12)) {
+            return Err(format!(
+                "k = {k} lies outside the GAF table [{lo}, {hi}]: extend the reduced frequencies or narrow the frequency grid"
+            ));
         }
-        Ok((Self { weights }, Self { weights: slopes }))
+        let i = nodes.partition_point(|&x| x <= k).clamp(1, n - 1) - 1;
+        let (hh, t) = (h[i], k - nodes[i]);
+        let s = hh - t;
+        let (ca, cb) = (s / hh, t / hh);
+        let cm0 = s * s * s / (6.0 * hh) - hh * s / 6.0;
+        let cm1 = t * t * t / (6.0 * hh) - hh * t / 6.0;
+        // d/dk: ds/dk = −1, dt/dk = 1
+        let (dca, dcb) = (-1.0 / hh, 1.0 / hh);
+        let dcm0 = -s * s / (2.0 * hh) + hh / 6.0;
+        let dcm1 = t * t / (2.0 * hh) - hh / 6.0;
+        w.fill(0.0);
+        dw.fill(0.0);
+        w[i] += ca;
+        w[i + 1] += cb;
+        dw[i] += dca;
+        dw[i + 1] += dcb;
+        for j in 0..n {
+            w[j] += cm0 * b[(i, j)] + cm1 * b[(i + 1, j)];
+            dw[j] += dcm0 * b[(i, j)] + dcm1 * b[(i + 1, j)];
+        }
+        Ok(())
     }
 }
 

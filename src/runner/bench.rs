@@ -168,10 +168,18 @@ pub fn bench(study: &Study, repeat: usize, optimization: bool) -> Result<()> {
             "{}",
             p.function.line("function (modes, GAFs, stability, RMS)")
         );
+        println!("{}", p.aeroelastic.line("  plate, modes, GAFs"));
+        println!("{}", p.stability.line("  stability check (p-k, 12 speeds)"));
+        println!("{}", p.response.line("  stability check + gust response"));
         if let Some(m) = &p.margin {
             println!("{}", m.line("flutter margin (p-k roots up to the margin)"));
         }
         println!("{}", p.gradient.line("gradient (one reverse sweep)"));
+        if let (Some(f), Some(g)) = (&p.design_function, &p.design_gradient) {
+            println!("design problem (what the SQP asks for at each point):");
+            println!("{}", f.line("function (the above and the flutter margin)"));
+            println!("{}", g.line("gradient (objective and every constraint)"));
+        }
     }
     if optimization {
         if study.spec.optimization.is_none() {
@@ -345,14 +353,26 @@ pub struct PipelineTimings {
     /// One function evaluation: modes, GAFs (the influence matrices rebuilt, as when the planform
     /// changes), the stability check and every RMS.
     pub function: Stats,
+    /// Its parts: the aeroelastic model (plate, modes, GAFs) …
+    pub aeroelastic: Stats,
+    /// … the stability check at the flight condition (p-k at 12 speeds) …
+    pub stability: Stats,
+    /// … and the gust response (Eqs. 16–18, every RMS; the stability check included).
+    pub response: Stats,
     /// The flutter-margin constraint's p-k roots, when the study's optimization has one.
     pub margin: Option<Stats>,
     /// One gradient of every output (one reverse sweep).
     pub gradient: Stats,
+    /// When the study has an optimization: one function as the optimizer asks for it (the above
+    /// and the flutter margin) and one gradient of the objective and every constraint.
+    pub design_function: Option<Stats>,
+    pub design_gradient: Option<Stats>,
 }
 
-/// Times one function evaluation, the flutter margin and one gradient of the gust pipeline.
+/// Times one function evaluation, its parts, the flutter margin and one gradient of the gust
+/// pipeline, and the design problem's function and gradient.
 pub fn bench_pipeline(study: &Study, repeat: usize) -> Result<PipelineTimings> {
+    use crate::optim::Problem;
     let settings = study.gust_settings()?;
     let x = study.initial_design()?.to_vec();
     let margin = study
@@ -364,17 +384,43 @@ pub fn bench_pipeline(study: &Study, repeat: usize) -> Result<PipelineTimings> {
             speed_factor: m.speed_factor,
             damping_max: m.damping_max,
         });
-    let function = measure(repeat, || {
+    let timed = |f: &mut dyn FnMut() -> Result<()>| -> Result<f64> {
         let t = Instant::now();
-        std::hint::black_box(crate::pipeline::evaluate(study, &settings, &x)?);
+        f()?;
         Ok(t.elapsed().as_secs_f64())
+    };
+    let function = measure(repeat, || {
+        timed(&mut || {
+            std::hint::black_box(crate::pipeline::evaluate(study, &settings, &x)?);
+            Ok(())
+        })
+    })?;
+    let aeroelastic = measure(repeat, || {
+        timed(&mut || {
+            std::hint::black_box(crate::pipeline::aeroelastic(study, &x)?);
+            Ok(())
+        })
     })?;
     let ev = crate::pipeline::evaluate(study, &settings, &x)?;
+    let stability = measure(repeat, || {
+        timed(&mut || crate::flutter::check_stability(&ev.modes, &ev.table, &ev.aero.flight))
+    })?;
+    let mut response = Vec::new();
+    for rep in 0..WARMUP + repeat.max(1) {
+        let a = crate::pipeline::aeroelastic(study, &x)?;
+        let t = Instant::now();
+        std::hint::black_box(crate::pipeline::respond(a, &settings)?);
+        let t = t.elapsed().as_secs_f64();
+        if rep >= WARMUP {
+            response.push(t);
+        }
+    }
     let margin = match &margin {
         Some(m) => Some(measure(repeat, || {
-            let t = Instant::now();
-            std::hint::black_box(ev.flutter_damping(m)?);
-            Ok(t.elapsed().as_secs_f64())
+            timed(&mut || {
+                std::hint::black_box(ev.flutter_damping(m)?);
+                Ok(())
+            })
         })?),
         None => None,
     };
@@ -385,13 +431,38 @@ pub fn bench_pipeline(study: &Study, repeat: usize) -> Result<PipelineTimings> {
         damping: None,
     };
     let gradient = measure(repeat, || {
-        let t = Instant::now();
-        std::hint::black_box(crate::pipeline::gradient(&ev, &seeds)?);
-        Ok(t.elapsed().as_secs_f64())
+        timed(&mut || {
+            std::hint::black_box(crate::pipeline::gradient(&ev, &seeds)?);
+            Ok(())
+        })
     })?;
+    let (mut design_function, mut design_gradient) = (None, None);
+    if study.spec.optimization.is_some() {
+        let (lower, upper) = study.design_bounds()?;
+        let spec = crate::runner::wing::optimize::design_spec(study, &settings, &ev, lower, upper);
+        let mut problem = crate::problem::DesignProblem::new(study, settings.clone(), spec);
+        design_function = Some(measure(repeat, || {
+            timed(&mut || {
+                problem.values(&x).map_err(anyhow::Error::msg)?;
+                Ok(())
+            })
+        })?);
+        // the gradient at the point just evaluated, as the SQP asks for it
+        design_gradient = Some(measure(repeat, || {
+            timed(&mut || {
+                problem.gradients(&x).map_err(anyhow::Error::msg)?;
+                Ok(())
+            })
+        })?);
+    }
     Ok(PipelineTimings {
         function,
+        aeroelastic,
+        stability,
+        response: Stats::of(response),
         margin,
         gradient,
+        design_function,
+        design_gradient,
     })
 }

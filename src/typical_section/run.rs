@@ -101,12 +101,7 @@ fn analyze(
                 + (f.velocity_max_m_s - f.velocity_min_m_s) * i as f64 / (f.velocities - 1) as f64
         })
         .collect();
-    let pk = PkProblem {
-        omega_n: omega_n.to_vec(),
-        damping_ratio: st.damping_ratio,
-        table: &table,
-        density: flight.density,
-    };
+    let pk = PkProblem::from_parts(omega_n.to_vec(), st.damping_ratio, &table, flight.density);
     let flutter = pk
         .sweep(&velocities)
         .map_err(|e| anyhow::anyhow!("{name}: flutter: {e}"))?;

@@ -236,12 +236,7 @@ impl<S: Scalar> KernelPoint<S> {
         let (k1v_e, k2v_e, k10, k20) = match self.kind {
             PointKind::Axis { downstream: true } => {
                 let e = Cplx::expi_neg(self.x0 * kd);
-                (
-                    e.scale_f(-2.0),
-                    e.scale_f(4.0),
-                    S::cst(-2.0),
-                    S::cst(4.0),
-                )
+                (e.scale_f(-2.0), e.scale_f(4.0), S::cst(-2.0), S::cst(4.0))
             }
             PointKind::Axis { downstream: false } => {
                 (Cplx::zero(), Cplx::zero(), S::zero(), S::zero())
@@ -261,7 +256,9 @@ impl<S: Scalar> KernelPoint<S> {
                 // K2's own terms over the common phase e^{−i k1 u1}
                 let k2_rest = || {
                     Cplx::new(S::zero(), k1).scale(mr_r * mr_r / su)
-                        + Cplx::real(mr_r * ((u1 * u1 + 1.0) * br + 2.0 + mr_r * u1) / (su * su * su))
+                        + Cplx::real(
+                            mr_r * ((u1 * u1 + 1.0) * br + 2.0 + mr_r * u1) / (su * su * su),
+                        )
                 };
                 if u1.re() >= 0.0 {
                     // every term carries e^{−i k1 u1}: one phase with e^{−i ω x0/U}

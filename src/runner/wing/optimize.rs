@@ -212,20 +212,17 @@ fn snapshot(
     }
 }
 
-/// The gust-constrained mass minimization of a study (the `optimization` section).
-pub fn optimize(
+/// The design problem of the study's `optimization` section (which the caller has checked):
+/// bounds `lower`/`upper`, the constrained output and its limit in SI, the flutter margin, and
+/// the initial design's evaluation `ev0` as the reference of mass and area.
+pub(crate) fn design_spec(
     study: &Study,
-    dir: &Path,
-    resume: bool,
-    quiet: bool,
-) -> Result<OptimizationResults> {
-    use crate::problem::{DesignProblem, DesignSpec};
+    settings: &crate::gust::GustSettings,
+    ev0: &crate::pipeline::Evaluation,
+    lower: Vec<f64>,
+    upper: Vec<f64>,
+) -> crate::problem::DesignSpec {
     let o = study.spec.optimization.as_ref().expect("caller checked");
-    let settings = study.gust_settings()?;
-    let (lower, upper) = study.design_bounds()?;
-    let x0 = study.initial_design()?.to_vec();
-    // a warm start begins at another run's final design; mass and area stay relative to x0
-    let x_start = study.warm_start_design()?;
     let output = settings
         .outputs
         .iter()
@@ -236,21 +233,11 @@ pub fn optimize(
         crate::gust::Quantity::Displacement { .. }
     );
     let to_m = study.spec.length_unit.to_m();
-    // the report shows a displacement RMS in the study's own length unit
-    let (unit_scale, unit) = if is_disp {
-        (1.0 / to_m, unit_label(study))
-    } else {
-        (1.0, "N m")
-    };
-    let rms_limit = if is_disp { o.rms_max * to_m } else { o.rms_max };
-    let t_ev0 = Instant::now();
-    let ev0 = crate::pipeline::evaluate(study, &settings, &x0).context("initial design")?;
-    let t_ev0 = t_ev0.elapsed().as_secs_f64();
-    let spec = DesignSpec {
+    crate::problem::DesignSpec {
         lower,
         upper,
         output,
-        rms_limit,
+        rms_limit: if is_disp { o.rms_max * to_m } else { o.rms_max },
         mass0: ev0.mass_kg,
         area0: ev0.area_m2,
         fix_area: o.fix_area,
@@ -261,6 +248,38 @@ pub fn optimize(
                 speed_factor: m.speed_factor,
                 damping_max: m.damping_max,
             }),
+    }
+}
+
+/// The gust-constrained mass minimization of a study (the `optimization` section).
+pub fn optimize(
+    study: &Study,
+    dir: &Path,
+    resume: bool,
+    quiet: bool,
+) -> Result<OptimizationResults> {
+    use crate::problem::DesignProblem;
+    let o = study.spec.optimization.as_ref().expect("caller checked");
+    let settings = study.gust_settings()?;
+    let (lower, upper) = study.design_bounds()?;
+    let x0 = study.initial_design()?.to_vec();
+    // a warm start begins at another run's final design; mass and area stay relative to x0
+    let x_start = study.warm_start_design()?;
+    let t_ev0 = Instant::now();
+    let ev0 = crate::pipeline::evaluate(study, &settings, &x0).context("initial design")?;
+    let t_ev0 = t_ev0.elapsed().as_secs_f64();
+    let spec = design_spec(study, &settings, &ev0, lower, upper);
+    let (output, rms_limit) = (spec.output, spec.rms_limit);
+    let is_disp = matches!(
+        settings.outputs[output].quantity,
+        crate::gust::Quantity::Displacement { .. }
+    );
+    let to_m = study.spec.length_unit.to_m();
+    // the report shows a displacement RMS in the study's own length unit
+    let (unit_scale, unit) = if is_disp {
+        (1.0 / to_m, unit_label(study))
+    } else {
+        (1.0, "N m")
     };
     let params = crate::optim::SqpParams {
         max_iterations: o.max_iterations,
