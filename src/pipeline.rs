@@ -137,9 +137,20 @@ pub fn aeroelastic(study: &Study, x: &[f64]) -> Result<Aeroelastic> {
         .model_at(DesignVector::from_slice(x))
         .map_err(|e: StudyError| anyhow::anyhow!("design: {}", e.reason))?;
     let st = &study.spec.structure;
-    let modes = modal::solve(&plate, st.modes, st.damping_ratio, &study.mode_fields())
-        .context("modal analysis")?;
-    let aero = study.aero_model(&plate)?;
+    // the aerodynamic model and what of it does not need the modes (a DLM's influence matrices)
+    // run beside the modal analysis
+    let (modes, aero) = rayon::join(
+        || {
+            modal::solve(&plate, st.modes, st.damping_ratio, &study.mode_fields())
+                .context("modal analysis")
+        },
+        || {
+            let aero = study.aero_model(&plate)?;
+            aero.fidelity.prepare(&aero.flight, &aero.k);
+            anyhow::Ok(aero)
+        },
+    );
+    let (modes, aero) = (modes?, aero?);
     let table = aero
         .gafs(&plate, &modes)
         .map_err(|e| anyhow::anyhow!("aerodynamics: {e}"))?;

@@ -349,6 +349,12 @@ pub trait Aerodynamics: Send + Sync {
         modes: &ModalSurface,
         k: &[f64],
     ) -> Result<GafTable, AeroError>;
+    /// Does ahead what the GAFs at (`flight`, `k`) need but the modes do not (a DLM's influence
+    /// matrices), so that a caller can run it beside the modal analysis; [`Aerodynamics::gafs`]
+    /// then reuses it. The default: nothing. Errors are left to `gafs`, which checks its inputs.
+    fn prepare(&self, flight: &FlightCondition, k: &[f64]) {
+        let _ = (flight, k);
+    }
     /// The model's reverse mode, if it has one (the default: none).
     fn reverse(&self) -> Option<&dyn AerodynamicsReverse> {
         None

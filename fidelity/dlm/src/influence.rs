@@ -7,7 +7,7 @@
 
 use crate::cplx::Cplx;
 use crate::geometry::AeroBox;
-use crate::kernel::KernelPoint;
+use crate::kernel::{KernelPoint, KernelScalar};
 use gustkit_core::scalar::Scalar;
 use std::f64::consts::PI;
 
@@ -69,7 +69,7 @@ pub fn steady_influence<S: Scalar>(r: &AeroBox<S>, s: &AeroBox<S>, mach: f64) ->
 /// Oscillatory increments of `s` at the control point of `r` for several kd = ω/U at once (the
 /// geometry, the kernel's frequency-independent parts and the quartic integrals' weights are
 /// computed once); kd = 0 gives zero.
-pub fn oscillatory_influences<S: Scalar>(
+pub fn oscillatory_influences<S: KernelScalar>(
     r: &AeroBox<S>,
     s: &AeroBox<S>,
     mach: f64,

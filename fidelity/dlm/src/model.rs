@@ -12,6 +12,7 @@ use crate::geometry::{
     SURFACE_PARAMS,
 };
 use crate::influence::{oscillatory_influences, steady_influence};
+use crate::kernel::KernelScalar;
 use faer::linalg::solvers::Solve;
 use faer::{c64, Mat};
 use gustkit_core::scalar::{Dual, Scalar};
@@ -133,7 +134,7 @@ impl Dlm {
 
     /// Influence matrix D (row: receiving control point, column: sending box) at Mach `mach` and
     /// ω/U = `kd`, for boxes of any scalar type.
-    pub fn influence_matrix<S: Scalar>(
+    pub fn influence_matrix<S: KernelScalar>(
         &self,
         boxes: &[AeroBox<S>],
         mach: f64,
@@ -146,7 +147,7 @@ impl Dlm {
 
     /// Influence matrices at several ω/U at once, `[k][r n + s]`: the steady lattice and the
     /// frequency-independent kernel geometry are computed once per box pair, rows in parallel.
-    pub fn influence_matrices<S: Scalar>(
+    pub fn influence_matrices<S: KernelScalar>(
         &self,
         boxes: &[AeroBox<S>],
         mach: f64,
@@ -174,7 +175,7 @@ impl Dlm {
     }
 
     /// Calls `sink(s, k, D_rs(k))` for every sending box s and frequency k of receiving box r.
-    fn influence_row<S: Scalar>(
+    fn influence_row<S: KernelScalar>(
         &self,
         boxes: &[AeroBox<S>],
         r: usize,
@@ -523,6 +524,13 @@ impl Aerodynamics for Dlm {
             })
             .collect::<Result<_, AeroError>>()?;
         Ok(GafTable::from_parts(flight, k, per_k))
+    }
+
+    /// The influence matrices at every k (the cache `gafs` and the reverse mode read).
+    fn prepare(&self, flight: &FlightCondition, k: &[f64]) {
+        if flight.mach < 1.0 && flight.b_ref > 0.0 && k.iter().all(|v| v.is_finite()) {
+            self.matrices(flight, k);
+        }
     }
 
     fn reverse(&self) -> Option<&dyn AerodynamicsReverse> {
