@@ -271,7 +271,21 @@ impl PkProblem<'_> {
 
     /// Roots p of the p-k equation at speed `v` with the aerodynamics evaluated at `k`.
     fn roots(&self, v: f64, k: f64) -> Result<Vec<Complex64>, FlutterError> {
-        eigenvalues(&self.state_matrix(v, k)?.0).ok_or(FlutterError::Eigen { velocity: v })
+        let (mut a, _) = self.state_matrix(v, k)?;
+        // the similarity D⁻¹ A D with D = diag(I, s I), s the largest natural frequency, brings
+        // the stiffness block (ω², up to 1e6 and more) and the identity block to one scale: the
+        // eigenvalues are the same, their rounding errors those of a balanced matrix
+        let n = self.omega_n.len();
+        let s = self.omega_n.iter().copied().fold(0.0, f64::max);
+        if s > 0.0 && s.is_finite() {
+            for i in 0..n {
+                for j in 0..n {
+                    a[(i, n + j)] *= s;
+                    a[(n + i, j)] /= s;
+                }
+            }
+        }
+        eigenvalues(&a).ok_or(FlutterError::Eigen { velocity: v })
     }
 
     /// Converges mode `mode`'s root at speed `v` from the roots `refs` of every mode at the
