@@ -460,6 +460,77 @@ mod tests {
         }
     }
 
+    /// The Desmarais sums on plain numbers with hand-chained partials (desmarais_i0) give the
+    /// values of the dual-number sums bit for bit and their derivatives with respect to u and
+    /// k1 to 1e-13 of their size (both are exact; only the order of the roundings differs).
+    #[test]
+    fn lifted_sums_match_dual_sums() {
+        for &u in &[0.0, 0.03, 0.7, 4.0, 40.0] {
+            for &k in &[0.05, 0.9, 6.0] {
+                let ud = Dual::<2>::new(u, [1.0, 0.0]);
+                let kd = Dual::<2>::new(k, [0.0, 1.0]);
+                let q = desmarais_exponentials(u);
+                let [i0, z0] = desmarais_i0(ud, kd, &q, true);
+                let qd: [Dual<2>; 12] = {
+                    let mut qd = [Dual::<2>::cst(0.0); 12];
+                    qd[0] = (ud * (-2.0 * DESMARAIS_B)).exp();
+                    for n in 1..12 {
+                        qd[n] = qd[n - 1] * qd[n - 1];
+                    }
+                    qd
+                };
+                let [(j0, _), (zz, _)] = desmarais_sums::<Dual<2>, true>(ud, kd, &qd, true);
+                for (a, b) in [
+                    (i0.re, j0.re),
+                    (i0.im, j0.im),
+                    (z0.re, zz.re),
+                    (z0.im, zz.im),
+                ] {
+                    assert_eq!(a.v, b.v, "u {u} k {k}");
+                    let scale = b.d[0].abs().max(b.d[1].abs()).max(1e-300);
+                    for d in 0..2 {
+                        assert!(
+                            (a.d[d] - b.d[d]).abs() <= 1e-13 * scale,
+                            "u {u} k {k} direction {d}: {} vs {}",
+                            a.d[d],
+                            b.d[d]
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// P1 alone (the planar path) equals the P1 of the full numerators, for points upstream,
+    /// downstream and on the axis, in values and in dual derivatives.
+    #[test]
+    fn p1_alone_matches_full_numerators() {
+        for (x0, y0) in [
+            (0.3, 0.2),
+            (-0.5, 0.1),
+            (0.7, 0.0),
+            (-0.2, 0.0),
+            (2.0, -0.4),
+        ] {
+            let p = KernelPoint::new(
+                Dual::<1>::new(x0, [1.0]),
+                Dual::<1>::new(y0, [0.5]),
+                Dual::<1>::cst(0.0),
+                Dual::<1>::cst(1.0),
+                Dual::<1>::cst(0.0),
+                0.5,
+            );
+            for kd in [0.1, 1.3, 7.0] {
+                let a = p.numerator_p1(kd);
+                let (b, _) = p.numerators(kd);
+                for (x, y) in [(a.re, b.re), (a.im, b.im)] {
+                    assert!((x.v - y.v).abs() <= 1e-14 * y.v.abs().max(1e-3));
+                    assert!((x.d[0] - y.d[0]).abs() <= 1e-12 * y.d[0].abs().max(1e-3));
+                }
+            }
+        }
+    }
+
     /// The incremental kernel vanishes at ω = 0 (the steady part belongs to the vortex lattice).
     #[test]
     fn increment_vanishes_when_steady() {
