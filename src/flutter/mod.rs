@@ -298,6 +298,8 @@ impl PkProblem<'_> {
         let mut k = refs[mode].im.max(0.0) * b / v;
         let mut history = vec![k];
         let mut last_step = f64::INFINITY;
+        // the previous iterate and its residual φ(k) − k, for the secant step
+        let mut previous: Option<(f64, f64)> = None;
         for _ in 0..200 {
             let roots: Vec<Complex64> = self
                 .roots(v, k)?
@@ -324,7 +326,19 @@ impl PkProblem<'_> {
                     extrapolated: k_new > kmax,
                 });
             }
-            k = k_new;
+            // the fixed point k = φ(k) by the secant method on φ(k) − k, which converges
+            // superlinearly where the plain iteration shrinks the error by |φ'| a step; a secant
+            // step further from φ(k) than the plain step itself is not taken
+            let residual = k_new - k;
+            let mut next = k_new;
+            if let Some((k_prev, r_prev)) = previous.filter(|_| !is_aperiodic(p)) {
+                let secant = k - residual * (k - k_prev) / (residual - r_prev);
+                if secant.is_finite() && secant > 0.0 && (secant - k_new).abs() <= step {
+                    next = secant;
+                }
+            }
+            previous = Some((k, residual));
+            k = next;
             last_step = step;
         }
         Err(FlutterError::NoConvergence {
