@@ -66,6 +66,18 @@ pub fn steady_influence<S: Scalar>(r: &AeroBox<S>, s: &AeroBox<S>, mach: f64) ->
     (v[0] * n[0] + v[1] * n[1] + v[2] * n[2]) * s.chord * 0.5
 }
 
+/// P1 at one end of a doublet line, handed from one box pair to the next: spanwise neighbours in
+/// a chordwise row of one surface share a line end (the same point, computed the same way), so
+/// its kernel is evaluated once for both.
+pub struct SharedEnd<'a, S> {
+    /// P1 at every kd: read at `given` (when set) and overwritten with this pair's P1 at `kept`.
+    pub p1: &'a mut [Cplx<S>],
+    /// The point (0: η = −e, 4: η = +e) whose P1 the previous pair left, if any.
+    pub given: Option<usize>,
+    /// The point whose P1 this pair leaves for the next.
+    pub kept: usize,
+}
+
 /// Oscillatory increments of `s` at the control point of `r` for several kd = ω/U at once (the
 /// geometry, the kernel's frequency-independent parts and the quartic integrals' weights are
 /// computed once); kd = 0 gives zero.
@@ -76,50 +88,94 @@ pub fn oscillatory_influences<S: KernelScalar>(
     kds: &[f64],
     out: &mut [Cplx<S>],
 ) {
+    oscillatory_influences_shared(r, s, mach, kds, out, None);
+}
+
+/// [`oscillatory_influences`] with one line end's P1 taken from the previous pair and another's
+/// left for the next (see [`SharedEnd`]; a planar pair takes it, any pair leaves it).
+pub fn oscillatory_influences_shared<S: KernelScalar>(
+    r: &AeroBox<S>,
+    s: &AeroBox<S>,
+    mach: f64,
+    kds: &[f64],
+    out: &mut [Cplx<S>],
+    mut shared: Option<SharedEnd<'_, S>>,
+) {
     // receiving point relative to the doublet line's mid-point, in the sending box's frame
     let mid = [
         (s.line_a[0] + s.line_b[0]) * 0.5,
         (s.line_a[1] + s.line_b[1]) * 0.5,
         (s.line_a[2] + s.line_b[2]) * 0.5,
     ];
-    let xs = r.cp[0] - mid[0];
-    let ys = r.cp[1] - mid[1];
-    let zs = r.cp[2] - mid[2];
-    let yb = ys * s.cos_g + zs * s.sin_g;
-    let zb = zs * s.cos_g - ys * s.sin_g;
+    let frame = |p: [S; 3]| {
+        let (xs, ys, zs) = (r.cp[0] - p[0], r.cp[1] - p[1], r.cp[2] - p[2]);
+        (xs, ys * s.cos_g + zs * s.sin_g, zs * s.cos_g - ys * s.sin_g)
+    };
+    let (xs, yb, zb) = frame(mid);
     // relative dihedral γr − γs
     let cos_rs = r.cos_g * s.cos_g + r.sin_g * s.sin_g;
     let sin_rs = r.sin_g * s.cos_g - r.cos_g * s.sin_g;
     let e = s.e;
-    let etas = [-1.0, -0.5, 0.0, 0.5, 1.0];
-    let points: [KernelPoint<S>; 5] = std::array::from_fn(|i| {
-        let eta = e * etas[i];
-        KernelPoint::new(xs - eta * s.tan_sweep, yb - eta, zb, cos_rs, sin_rs, mach)
-    });
     let weights = QuarticWeights::new(yb, zb, e);
-    for (o, &kd) in out.iter_mut().zip(kds) {
+    let given = shared
+        .as_ref()
+        .and_then(|sh| sh.given)
+        .filter(|_| weights.planar);
+    let etas = [-1.0, -0.5, 0.0, 0.5, 1.0];
+    let points: [Option<KernelPoint<S>>; 5] = std::array::from_fn(|i| {
+        if given == Some(i) {
+            return None;
+        }
+        // the ends from the line's end points themselves, so that neighbours sharing an end
+        // see the same numbers
+        let (x0, y0, z0) = match i {
+            0 => frame(s.line_a),
+            4 => frame(s.line_b),
+            _ => {
+                let eta = e * etas[i];
+                (xs - eta * s.tan_sweep, yb - eta, zb)
+            }
+        };
+        Some(KernelPoint::new(x0, y0, z0, cos_rs, sin_rs, mach))
+    });
+    for (ik, (o, &kd)) in out.iter_mut().zip(kds).enumerate() {
         if kd == 0.0 {
             *o = Cplx::zero();
+            if let Some(sh) = shared.as_mut() {
+                sh.p1[ik] = Cplx::zero();
+            }
             continue;
         }
-        let q2 = if weights.planar {
+        if weights.planar {
             // a planar pair's integral has no P2 term: neither I2 nor K2 is formed
-            let p1 = std::array::from_fn(|i| points[i].numerator_p1(kd));
+            let p1: [Cplx<S>; 5] = std::array::from_fn(|i| match &points[i] {
+                Some(pt) => pt.numerator_p1(kd),
+                None => shared.as_ref().expect("a given end is shared").p1[ik],
+            });
+            if let Some(sh) = shared.as_mut() {
+                sh.p1[ik] = p1[sh.kept];
+            }
             *o = weights
                 .integrate_planar(&quartic_fit(&p1, e), yb, zb, e)
                 .scale(s.chord);
-            continue;
         } else {
             let mut p1 = [Cplx::<S>::zero(); 5];
             let mut p2 = [Cplx::<S>::zero(); 5];
             for (i, pt) in points.iter().enumerate() {
-                let (a, b) = pt.numerators(kd);
+                let (a, b) = pt
+                    .as_ref()
+                    .expect("every point of a non-planar pair")
+                    .numerators(kd);
                 p1[i] = a;
                 p2[i] = b;
             }
-            (quartic_fit(&p1, e), quartic_fit(&p2, e))
-        };
-        *o = weights.integrate(&q2.0, &q2.1, yb, zb, e).scale(s.chord);
+            if let Some(sh) = shared.as_mut() {
+                sh.p1[ik] = p1[sh.kept];
+            }
+            *o = weights
+                .integrate(&quartic_fit(&p1, e), &quartic_fit(&p2, e), yb, zb, e)
+                .scale(s.chord);
+        }
     }
 }
 

@@ -11,7 +11,7 @@ use crate::geometry::{
     box_parametric_points, check_strip_alignment, surface_boxes, AeroBox, SurfaceSpec,
     SURFACE_PARAMS,
 };
-use crate::influence::{oscillatory_influences, steady_influence};
+use crate::influence::{oscillatory_influences_shared, steady_influence, SharedEnd};
 use crate::kernel::KernelScalar;
 use faer::linalg::solvers::Solve;
 use faer::{c64, Mat};
@@ -175,6 +175,8 @@ impl Dlm {
     }
 
     /// Calls `sink(s, k, D_rs(k))` for every sending box s and frequency k of receiving box r.
+    /// The sending boxes are visited strip by strip along each chordwise row, so that the kernel
+    /// at the line end two spanwise neighbours share is evaluated once ([`SharedEnd`]).
     fn influence_row<S: KernelScalar>(
         &self,
         boxes: &[AeroBox<S>],
@@ -185,23 +187,61 @@ impl Dlm {
     ) {
         let sign = self.symmetry.sign();
         let rb = &boxes[r];
-        let mut osc = vec![Cplx::<S>::zero(); kds.len()];
-        let mut osc_img = vec![Cplx::<S>::zero(); kds.len()];
-        for (s, sb) in boxes.iter().enumerate() {
-            let mut steady = steady_influence(rb, sb, mach);
-            oscillatory_influences(rb, sb, mach, kds, &mut osc);
-            if let Some(sg) = sign {
-                let img = sb.mirrored();
-                steady += steady_influence(rb, &img, mach) * sg;
-                oscillatory_influences(rb, &img, mach, kds, &mut osc_img);
-                for (o, i) in osc.iter_mut().zip(&osc_img) {
-                    *o = *o + i.scale_f(sg);
+        let nk = kds.len();
+        let mut osc = vec![Cplx::<S>::zero(); nk];
+        let mut osc_img = vec![Cplx::<S>::zero(); nk];
+        let mut end = vec![Cplx::<S>::zero(); nk];
+        let mut end_img = vec![Cplx::<S>::zero(); nk];
+        let mut offset = 0;
+        for spec in &self.surfaces {
+            let (nc, ns) = (spec.n_chord, spec.n_span);
+            for i in 0..nc {
+                for j in 0..ns {
+                    let s = offset + j * nc + i;
+                    let sb = &boxes[s];
+                    // the inboard end of strip j is the outboard end of strip j − 1
+                    let mut steady = steady_influence(rb, sb, mach);
+                    oscillatory_influences_shared(
+                        rb,
+                        sb,
+                        mach,
+                        kds,
+                        &mut osc,
+                        Some(SharedEnd {
+                            p1: &mut end,
+                            given: (j > 0).then_some(0),
+                            kept: 4,
+                        }),
+                    );
+                    if let Some(sg) = sign {
+                        // the image runs the other way: its outboard end (η = +e) is the
+                        // previous image's inboard one
+                        let img = sb.mirrored();
+                        steady += steady_influence(rb, &img, mach) * sg;
+                        oscillatory_influences_shared(
+                            rb,
+                            &img,
+                            mach,
+                            kds,
+                            &mut osc_img,
+                            Some(SharedEnd {
+                                p1: &mut end_img,
+                                given: (j > 0).then_some(4),
+                                kept: 0,
+                            }),
+                        );
+                        for (o, im) in osc.iter_mut().zip(&osc_img) {
+                            *o = *o + im.scale_f(sg);
+                        }
+                    }
+                    for (k, o) in osc.iter().enumerate() {
+                        sink(s, k, Cplx::real(steady) + *o);
+                    }
                 }
             }
-            for (k, o) in osc.iter().enumerate() {
-                sink(s, k, Cplx::real(steady) + *o);
-            }
+            offset += nc * ns;
         }
+        debug_assert_eq!(offset, boxes.len());
     }
 
     fn check_inputs(
