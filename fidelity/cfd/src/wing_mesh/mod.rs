@@ -239,7 +239,10 @@ impl WingMesh {
                 let sign = if 2 * i < n { 1.0 } else { -1.0 };
                 let bx = x_le + chord * self.x_c[i];
                 let by = chord * (sign * scale * self.half_thickness[i]);
-                let theta = 2.0 * std::f64::consts::PI * (i as f64 + 0.5) / n as f64;
+                // the far-field point at the contour point's own angle: node n − i mirrors node
+                // i, so the mesh is symmetric top to bottom (a half-spacing offset here once gave
+                // the symmetric section C_L = −6.5e-4 at α = 0 on the coarse mesh)
+                let theta = 2.0 * std::f64::consts::PI * i as f64 / n as f64;
                 let fx = x_center + far * theta.cos();
                 let fy = far * theta.sin();
                 let r = self.radial[j];
