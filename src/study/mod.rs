@@ -200,15 +200,7 @@ impl Study {
             gustkit_core::check_reduced_frequencies(&aero.reduced_frequencies)
                 .map_err(|e| self.err("aero.reduced_frequencies", e.to_string()))?;
             // the fidelity's own checks, cheap: no model is built to validate a file
-            let flight = self.flight_condition()?;
-            aero.fidelity
-                .builder()
-                .validate(&crate::aero::WingContext {
-                    planform: &self.planform()?,
-                    airfoil: &self.airfoil()?,
-                    flight: &flight,
-                    cache_dir: None,
-                })
+            self.with_wing_context(|wing| aero.fidelity.builder().validate(wing))?
                 .map_err(|e| self.fidelity_err(&e))?;
             if let Some(k) = self.amplitude_fields_k() {
                 if !aero
@@ -260,15 +252,25 @@ impl Study {
             caps.require_reverse(builder.name(), what)
         }
         .map_err(|reason| self.err(&path, reason))?;
-        let flight = self.flight_condition()?;
-        builder
-            .validate_gradients(&crate::aero::WingContext {
-                planform: &self.planform()?,
-                airfoil: &self.airfoil()?,
-                flight: &flight,
-                cache_dir: None,
-            })
+        self.with_wing_context(|wing| builder.validate_gradients(wing))?
             .map_err(|e| self.fidelity_err(&e))
+    }
+
+    /// Calls `f` with the study's wing as the fidelity builders' checks take it (planform,
+    /// airfoil, flight condition; no cache folder), or the error of the first of them that is
+    /// invalid.
+    fn with_wing_context<T>(
+        &self,
+        f: impl FnOnce(&crate::aero::WingContext) -> T,
+    ) -> Result<T, StudyError> {
+        let flight = self.flight_condition()?;
+        let (planform, airfoil) = (self.planform()?, self.airfoil()?);
+        Ok(f(&crate::aero::WingContext {
+            planform: &planform,
+            airfoil: &airfoil,
+            flight: &flight,
+            cache_dir: None,
+        }))
     }
 
     /// A fidelity builder's error, with the JSON path of the field in this study.
@@ -324,14 +326,7 @@ impl Study {
             return Ok(None);
         };
         let builder = spec.builder();
-        let flight = self.flight_condition()?;
-        builder
-            .validate(&crate::aero::WingContext {
-                planform: &self.planform()?,
-                airfoil: &self.airfoil()?,
-                flight: &flight,
-                cache_dir: None,
-            })
+        self.with_wing_context(|wing| builder.validate(wing))?
             .map_err(|e| {
                 self.err(
                     &e.path_in(&format!("aero.compare_with.{}", builder.name())),
