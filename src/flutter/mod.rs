@@ -139,11 +139,138 @@ fn assign_roots(refs: &[Complex64], roots: &[Complex64]) -> Vec<usize> {
     of_mode
 }
 
-struct Root {
+pub(crate) struct Root {
     g: f64,
     p: Complex64,
     k: f64,
     extrapolated: bool,
+}
+
+/// The root among `roots` with Im p ≥ 0 (or aperiodic) nearest `q`.
+fn nearest_root(roots: &[Complex64], q: Complex64) -> Option<Complex64> {
+    roots
+        .iter()
+        .filter(|p| p.im > 0.0 || is_aperiodic(**p))
+        .min_by(|a, c| (**a - q).norm().total_cmp(&(**c - q).norm()))
+        .copied()
+}
+
+/// Iterations of the all-modes assignment after which a mode that has not converged follows its
+/// own branch by continuity instead ([`track_root`]).
+const FREEZE_AFTER: usize = 30;
+
+/// Converges mode `mode`'s p-k root at speed `v` (reference semichord `b`, table's largest k
+/// `kmax`) from the roots `refs` of every mode at the previous speed; `roots_at(k)` gives the
+/// eigenvalues at reduced frequency k.
+///
+/// At each k the roots are assigned to all modes at once ([`assign_roots`]) and `mode` follows
+/// its own, so modes that coalesce in frequency stay apart by their damping and no two modes share
+/// a root. The fixed point k = φ(k) is found by safeguarded secant steps. Where two roots trade
+/// places in that assignment as k moves (φ jumps between two branches and the iteration cycles
+/// between them), after [`FREEZE_AFTER`] iterations the mode keeps the branch it is on, followed
+/// by continuity in k (marched in small steps from one iterate to the next): a continuous φ,
+/// whose fixed point is bracketed and found by secant steps kept inside the bracket (bisection
+/// where a step leaves it).
+pub(crate) fn track_root(
+    mode: usize,
+    v: f64,
+    b: f64,
+    kmax: f64,
+    refs: &[Complex64],
+    mut roots_at: impl FnMut(f64) -> Result<Vec<Complex64>, FlutterError>,
+) -> Result<Root, FlutterError> {
+    let mut k = refs[mode].im.max(0.0) * b / v;
+    let mut history = vec![k];
+    let mut last_step = f64::INFINITY;
+    // the previous iterate and its residual φ(k) − k, for the secant step
+    let mut previous: Option<(f64, f64)> = None;
+    // the previous iterate's k and root; after FREEZE_AFTER iterations, the branch followed
+    let mut followed: Option<(f64, Complex64)> = None;
+    // once frozen: the largest k with φ(k) > k and the smallest with φ(k) < k seen since
+    let (mut below, mut above) = (f64::NEG_INFINITY, f64::INFINITY);
+    for iteration in 0..200 {
+        let frozen = iteration >= FREEZE_AFTER;
+        if iteration == FREEZE_AFTER {
+            previous = None;
+            last_step = f64::INFINITY;
+        }
+        let p = match followed.filter(|_| frozen) {
+            // the branch marched from the k of its last root to this k in small steps, each
+            // step's root the nearest to the one before: continuity even where k jumps
+            Some((k_from, mut q)) => {
+                let h = 2e-3 * k.max(k_from).max(0.05);
+                let steps = ((k - k_from).abs() / h).ceil().clamp(1.0, 400.0) as usize;
+                for s in 1..=steps {
+                    let ks = k_from + (k - k_from) * s as f64 / steps as f64;
+                    match nearest_root(&roots_at(ks)?, q) {
+                        Some(r) => q = r,
+                        None => break,
+                    }
+                }
+                q
+            }
+            None => {
+                let roots: Vec<Complex64> = roots_at(k)?
+                    .into_iter()
+                    .filter(|p| p.im > 0.0 || is_aperiodic(*p))
+                    .collect();
+                if roots.is_empty() {
+                    break;
+                }
+                roots[assign_roots(refs, &roots)[mode]]
+            }
+        };
+        followed = Some((k, p));
+        let k_new = if is_aperiodic(p) { 0.0 } else { p.im * b / v };
+        history.push(k_new);
+        // converged to round-off, or at the eigensolver's noise floor (the step has stopped
+        // shrinking once below 1e-10): the damping derivatives need the root that tight. The
+        // noise of Im p scales with |p| (a heavily damped root has |p| ≫ Im p), so does the
+        // tolerance
+        let step = (k_new - k).abs();
+        let scale = k.max(p.norm() * b / v).max(1e-8);
+        if step <= 1e-13 * scale || (step <= 1e-10 * scale && step >= last_step) {
+            return Ok(Root {
+                g: damping_of(p, v, b),
+                p,
+                k: k_new,
+                extrapolated: k_new > kmax,
+            });
+        }
+        // the fixed point k = φ(k) by the secant method on φ(k) − k, which converges
+        // superlinearly where the plain iteration shrinks the error by |φ'| a step; a secant
+        // step further from φ(k) than the plain step itself is not taken
+        let residual = k_new - k;
+        let mut next = k_new;
+        let secant = previous
+            .filter(|_| !is_aperiodic(p))
+            .map(|(k_prev, r_prev)| k - residual * (k - k_prev) / (residual - r_prev))
+            .filter(|s| s.is_finite() && *s > 0.0);
+        if frozen {
+            // on one branch φ is continuous: keep the root bracketed
+            if residual > 0.0 {
+                below = below.max(k);
+            } else {
+                above = above.min(k);
+            }
+            let inside = |x: f64| x > below && x < above;
+            next = match secant {
+                Some(s) if inside(s) => s,
+                _ if inside(k_new) => k_new,
+                _ => 0.5 * (below + above),
+            };
+        } else if let Some(s) = secant.filter(|s| (s - k_new).abs() <= step) {
+            next = s;
+        }
+        previous = Some((k, residual));
+        k = next;
+        last_step = step;
+    }
+    Err(FlutterError::NoConvergence {
+        mode: mode + 1,
+        velocity: v,
+        history,
+    })
 }
 
 impl<'a> PkProblem<'a> {
@@ -289,63 +416,11 @@ impl PkProblem<'_> {
     }
 
     /// Converges mode `mode`'s root at speed `v` from the roots `refs` of every mode at the
-    /// previous speed: at each k the roots are assigned to all modes at once
-    /// ([`assign_roots`]), and `mode` follows its own, so modes that coalesce in frequency stay
-    /// apart by their damping and no two modes share a root.
+    /// previous speed ([`track_root`] on this problem's eigenvalues).
     fn track(&self, mode: usize, v: f64, refs: &[Complex64]) -> Result<Root, FlutterError> {
         let b = self.table.b_ref;
         let kmax = *self.table.k.last().expect("table has k");
-        let mut k = refs[mode].im.max(0.0) * b / v;
-        let mut history = vec![k];
-        let mut last_step = f64::INFINITY;
-        // the previous iterate and its residual φ(k) − k, for the secant step
-        let mut previous: Option<(f64, f64)> = None;
-        for _ in 0..200 {
-            let roots: Vec<Complex64> = self
-                .roots(v, k)?
-                .into_iter()
-                .filter(|p| p.im > 0.0 || is_aperiodic(*p))
-                .collect();
-            if roots.is_empty() {
-                break;
-            }
-            let p = roots[assign_roots(refs, &roots)[mode]];
-            let k_new = if is_aperiodic(p) { 0.0 } else { p.im * b / v };
-            history.push(k_new);
-            // converged to round-off, or at the eigensolver's noise floor (the step has stopped
-            // shrinking once below 1e-10): the damping derivatives need the root that tight. The
-            // noise of Im p scales with |p| (a heavily damped root has |p| ≫ Im p), so does the
-            // tolerance
-            let step = (k_new - k).abs();
-            let scale = k.max(p.norm() * b / v).max(1e-8);
-            if step <= 1e-13 * scale || (step <= 1e-10 * scale && step >= last_step) {
-                return Ok(Root {
-                    g: damping_of(p, v, b),
-                    p,
-                    k: k_new,
-                    extrapolated: k_new > kmax,
-                });
-            }
-            // the fixed point k = φ(k) by the secant method on φ(k) − k, which converges
-            // superlinearly where the plain iteration shrinks the error by |φ'| a step; a secant
-            // step further from φ(k) than the plain step itself is not taken
-            let residual = k_new - k;
-            let mut next = k_new;
-            if let Some((k_prev, r_prev)) = previous.filter(|_| !is_aperiodic(p)) {
-                let secant = k - residual * (k - k_prev) / (residual - r_prev);
-                if secant.is_finite() && secant > 0.0 && (secant - k_new).abs() <= step {
-                    next = secant;
-                }
-            }
-            previous = Some((k, residual));
-            k = next;
-            last_step = step;
-        }
-        Err(FlutterError::NoConvergence {
-            mode: mode + 1,
-            velocity: v,
-            history,
-        })
+        track_root(mode, v, b, kmax, refs, |k| self.roots(v, k))
     }
 
     /// The largest damping g over every consistent p-k root at speed `v`: for each k at which a

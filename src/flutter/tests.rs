@@ -194,3 +194,62 @@ fn branches_never_share_a_root() {
     assert!((v_div - u_d).abs() < 1e-3 * u_d, "{v_div} vs {u_d}");
     assert_eq!(bend.frequency_hz[iv], 0.0);
 }
+
+/// Two roots that trade places in the all-modes assignment as k crosses 1.14: below it the root
+/// of frequency ≈ 1.162 is nearer the previous speed's root, above it the one of ≈ 1.12, so
+/// φ(k) jumps across the diagonal and the assigned-root iteration cycles (the failure met in the
+/// LFD optimization, mode 6 cycling between k 1.12 and 1.162). After FREEZE_AFTER iterations the
+/// mode keeps its branch, and the fixed point of that branch is found to round-off.
+#[test]
+fn a_mode_cycling_between_two_branches_settles_on_one() {
+    // b = v = 1, so k = Im p. Branch A: Im p = 1.12 + 0.3 (k − 1.14), fixed point 0.778/0.7;
+    // branch B: Im p = 1.162 − 0.2 (k − 1.14), fixed point 1.162 + 0.228 … (1.39 / 1.2)
+    let k_a = (1.12 - 0.3 * 1.14) / 0.7;
+    let k_b = (1.162 + 0.2 * 1.14) / 1.2;
+    let branches = |k: f64| {
+        let d = k - 1.14;
+        vec![
+            Complex64::new(-0.05 + 2.0 * d, 1.12 + 0.3 * d),
+            Complex64::new(-0.05 - 2.0 * d, 1.162 - 0.2 * d),
+        ]
+    };
+    let refs = [Complex64::new(0.0, 1.14)];
+    // the branch assignment does jump: below 1.14 B is nearer the reference, above it A
+    let nearest = |k: f64| assign_roots(&refs, &branches(k))[0];
+    assert_eq!((nearest(1.12), nearest(1.16)), (1, 0));
+    let mut calls = 0;
+    let root = track_root(0, 1.0, 1.0, 2.0, &refs, |k| {
+        calls += 1;
+        Ok(branches(k))
+    })
+    .expect("the frozen branch converges");
+    assert!(
+        calls > FREEZE_AFTER,
+        "the assigned-root iteration cannot converge on this φ, yet it stopped after {calls}"
+    );
+    // a consistent root: its own k is the k it was computed at, on one of the two branches
+    let on_a = (root.k - k_a).abs();
+    let on_b = (root.k - k_b).abs();
+    assert!(
+        on_a.min(on_b) <= 1e-12,
+        "k = {} (branch fixed points {k_a}, {k_b})",
+        root.k
+    );
+    assert!((root.p.im - root.k).abs() <= 1e-12);
+    assert_eq!(root.g, 2.0 * root.p.re / root.p.im);
+}
+
+/// A mode whose assignment never changes converges before the fallback: the same φ's branch A
+/// alone, as the ordinary case.
+#[test]
+fn a_single_branch_converges_before_the_fallback() {
+    let refs = [Complex64::new(0.0, 1.14)];
+    let mut calls = 0;
+    let root = track_root(0, 1.0, 1.0, 2.0, &refs, |k| {
+        calls += 1;
+        Ok(vec![Complex64::new(-0.05, 1.12 + 0.3 * (k - 1.14))])
+    })
+    .unwrap();
+    assert!(calls < 10, "{calls} eigenvalue solves");
+    assert!((root.k - (1.12 - 0.3 * 1.14) / 0.7).abs() <= 1e-13);
+}
