@@ -49,6 +49,12 @@ pub fn sound_speed<S: Scalar>(w: &Primitive<S>) -> S {
     (w.p * GAMMA / w.rho).sqrt()
 }
 
+/// Pressure coefficient C_p = (p − p∞)/(½ ρ∞ V∞²) of a state in the solver's free-stream units
+/// (ρ∞ = 1, a∞ = 1, so p∞ = 1/γ and ½ ρ∞ V∞² = ½ M²).
+pub fn pressure_coefficient(q: &[f64; NVAR], mach: f64) -> f64 {
+    (primitive(q).p - 1.0 / GAMMA) / (0.5 * mach * mach)
+}
+
 /// Physical (Euler) flux through a face with area vector `nv` (|nv| = area) moving with normal
 /// speed `vg` (grid velocity · nv, the ALE face flux of volume): F = (u·nv − vg) q + p [0, nv, u·nv].
 pub fn physical_flux<S: Scalar>(q: &[S; NVAR], nv: [S; 3], vg: S) -> [S; NVAR] {

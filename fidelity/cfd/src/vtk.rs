@@ -2,7 +2,7 @@
 //! velocity, pressure, Mach number and pressure coefficient as cell data.
 
 use crate::gas::NVAR;
-use crate::gas::{primitive, sound_speed, GAMMA};
+use crate::gas::{pressure_coefficient, primitive, sound_speed, GAMMA};
 use crate::mesh::Mesh;
 use crate::residual::State;
 use num_complex::Complex64 as C64;
@@ -98,7 +98,6 @@ pub fn amplitude_vtk(
 pub fn flow_vtk(mesh: &Mesh, q: &[State<f64>], mach: f64, title: &str) -> String {
     let mut s = String::new();
     let hexes = grid(&mut s, mesh, title);
-    let q_dyn = 0.5 * mach * mach;
     let scalar = |s: &mut String, name: &str, f: &dyn Fn(usize) -> f64| {
         let _ = writeln!(s, "SCALARS {name} double 1\nLOOKUP_TABLE default");
         for &c in &hexes {
@@ -107,9 +106,7 @@ pub fn flow_vtk(mesh: &Mesh, q: &[State<f64>], mach: f64, title: &str) -> String
     };
     scalar(&mut s, "density", &|c| q[c][0]);
     scalar(&mut s, "pressure", &|c| primitive(&q[c]).p);
-    scalar(&mut s, "cp", &|c| {
-        (primitive(&q[c]).p - 1.0 / GAMMA) / q_dyn
-    });
+    scalar(&mut s, "cp", &|c| pressure_coefficient(&q[c], mach));
     scalar(&mut s, "mach", &|c| {
         let w = primitive(&q[c]);
         w.vel.iter().map(|v| v * v).sum::<f64>().sqrt() / sound_speed(&w)

@@ -133,17 +133,16 @@ fn desmarais_i0<S: KernelScalar>(u: S, k1: S, q: &[f64; 12], with_zero: bool) ->
     ]
 }
 
-/// The Desmarais sums i0 = Σ aₙ e^{−pₙu}/(pₙ + i k1) and (when `P2`, for I2) its second moment
-/// j0 at u ≥ 0 from the exponentials `q` of [`desmarais_exponentials`], and, if asked, the same
-/// at u = 0 (the terms 1/(pₙ² + k1²) are shared: upstream points need both). Without `P2` the
-/// second moments are left zero: a planar pair never uses them.
-fn desmarais_sums<S: Scalar, const P2: bool>(
+/// The Desmarais sums i0 = Σ aₙ e^{−pₙu}/(pₙ + i k1) and its second moment j0 (for I2) at
+/// u ≥ 0 from the exponentials `q` of [`desmarais_exponentials`], and, if asked, the same at u = 0
+/// (the terms 1/(pₙ² + k1²) are shared: upstream points need both). A planar pair, which needs no
+/// second moments, uses [`desmarais_i0`] instead.
+fn desmarais_sums<S: Scalar>(
     u: S,
     k1: S,
     q: &[S; 12],
     with_zero: bool,
 ) -> [(Cplx<S>, Cplx<S>); 2] {
-    debug_assert!(P2, "the sums without second moments are desmarais_i0");
     let k2 = k1 * k1;
     let (mut i0, mut j0) = (Cplx::<S>::zero(), Cplx::<S>::zero());
     let (mut z0, mut zj) = (Cplx::<S>::zero(), Cplx::<S>::zero());
@@ -155,20 +154,16 @@ fn desmarais_sums<S: Scalar, const P2: bool>(
         let w = qn * ainv;
         // ∫ e^{−(p + i k1) u} = e^{−(p+ik1)u}/(p + i k1): (p − i k1)/(p² + k1²)
         i0 = i0 + Cplx::new(w * p, -(w * k1));
-        if P2 {
-            let wd = w * inv;
-            j0 = j0
-                + Cplx::new(
-                    wd * (S::cst(p * p) - k2 + u * den * p),
-                    -(wd * k1 * (S::cst(2.0 * p) + u * den)),
-                );
-        }
+        let wd = w * inv;
+        j0 = j0
+            + Cplx::new(
+                wd * (S::cst(p * p) - k2 + u * den * p),
+                -(wd * k1 * (S::cst(2.0 * p) + u * den)),
+            );
         if with_zero {
             z0 = z0 + Cplx::new(ainv * p, -(ainv * k1));
-            if P2 {
-                let wz = ainv * inv;
-                zj = zj + Cplx::new(wz * (S::cst(p * p) - k2), -(wz * k1 * (2.0 * p)));
-            }
+            let wz = ainv * inv;
+            zj = zj + Cplx::new(wz * (S::cst(p * p) - k2), -(wz * k1 * (2.0 * p)));
         }
         p *= 2.0;
     }
@@ -184,7 +179,7 @@ fn sums<S: KernelScalar, const P2: bool>(
     with_zero: bool,
 ) -> [(Cplx<S>, Cplx<S>); 2] {
     if P2 {
-        desmarais_sums::<S, true>(u, k1, &exponentials_as(u, q), with_zero)
+        desmarais_sums(u, k1, &exponentials_as(u, q), with_zero)
     } else {
         let [i0, z0] = desmarais_i0(u, k1, q, with_zero);
         [(i0, Cplx::zero()), (z0, Cplx::zero())]
@@ -479,7 +474,7 @@ mod tests {
                     }
                     qd
                 };
-                let [(j0, _), (zz, _)] = desmarais_sums::<Dual<2>, true>(ud, kd, &qd, true);
+                let [(j0, _), (zz, _)] = desmarais_sums::<Dual<2>>(ud, kd, &qd, true);
                 for (a, b) in [
                     (i0.re, j0.re),
                     (i0.im, j0.im),

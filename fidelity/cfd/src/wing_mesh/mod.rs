@@ -143,6 +143,16 @@ pub struct WingMesh {
     node_index: Vec<[usize; 3]>,
 }
 
+/// A wall cell of a chordwise section (see [`WingMesh::wall_section`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SectionCell {
+    /// Chord fraction of the middle of the cell's wall face.
+    pub x_c: f64,
+    /// On the upper surface (y > 0 of the section)?
+    pub upper: bool,
+    pub cell: usize,
+}
+
 /// Quality figures of a mesh.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshQuality {
@@ -261,6 +271,27 @@ impl WingMesh {
             1.0
         };
         [self.x_c[i], eta]
+    }
+
+    /// The wall cells of the spanwise strip whose middle lies nearest the span fraction `eta`
+    /// (on the wing: the tip's collapsed planes are not wall), as the strip's mid-station η and,
+    /// around the contour from the trailing edge over the upper surface, each wall cell with the
+    /// x/c of its face's middle and whether it is on the upper side.
+    pub fn wall_section(&self, eta: f64) -> (f64, Vec<SectionCell>) {
+        let mid = |s: usize| 0.5 * (self.stations[s] + self.stations[s + 1]);
+        let s = (0..self.spec.n_span)
+            .min_by(|&a, &b| (mid(a) - eta).abs().total_cmp(&(mid(b) - eta).abs()))
+            .expect("the wing has spanwise strips");
+        let n = self.spec.n_around;
+        let cells = (0..n)
+            .map(|i| SectionCell {
+                x_c: 0.5 * (self.x_c[i] + self.x_c[(i + 1) % n]),
+                upper: 2 * i < n,
+                // the cell numbering of `topology`: ring 0 of plane strip s
+                cell: s * self.spec.n_radial * n + i,
+            })
+            .collect();
+        (mid(s), cells)
     }
 
     /// Quality figures (cell volumes, aspect ratios, non-orthogonality).

@@ -403,3 +403,39 @@ fn geometric_distribution_derivatives() {
         }
     }
 }
+
+/// The cells of a chordwise section are the wall cells of one spanwise strip: each has a wall
+/// face whose middle lies at the strip's mid-station (to the spanwise cell size), at the stated
+/// chord fraction of the local chord (to round-off: the face is the ruled surface between two
+/// contour points at the same x/c on either plane) and on the stated side of the section.
+#[test]
+fn section_cells_are_the_wall_cells_of_one_strip() {
+    let p = agard();
+    let [span, sweep, cr, ct] = p;
+    let w = WingMesh::new(p, &section, &small());
+    let tan_le = sweep.tan() + (cr - ct) / (4.0 * span);
+    for eta in [0.05, 0.5, 0.95] {
+        let (eta_mid, cells) = w.wall_section(eta);
+        assert_eq!(cells.len(), w.spec.n_around);
+        assert!((eta_mid - eta).abs() < 0.5, "{eta_mid}");
+        for c in &cells {
+            let face = w
+                .mesh
+                .faces
+                .iter()
+                .find(|f| f.left == c.cell && f.right == Side::Boundary(Boundary::Wall))
+                .expect("a wall face");
+            let mean = |k: usize| {
+                face.nodes.iter().map(|&n| w.mesh.nodes[n][k]).sum::<f64>() / 4.0
+            };
+            let (x, y, z) = (mean(0), mean(1), mean(2));
+            assert!((z / span - eta_mid).abs() < 1e-12, "η {} against {eta_mid}", z / span);
+            // the face is bilinear between two planes at equal x/c: its middle is at the middle
+            // x/c on the middle chord
+            let chord = cr + (ct - cr) * eta_mid;
+            let x_c = (x - z * tan_le) / chord;
+            assert!((x_c - c.x_c).abs() < 1e-12, "x/c {x_c} against {}", c.x_c);
+            assert_eq!(y > 0.0, c.upper, "side at x/c {x_c}");
+        }
+    }
+}
