@@ -16,7 +16,7 @@ use gustkit_cfd::mesh_sensitivity::MeshTangent;
 use gustkit_cfd::residual::{free_stream, Euler, Limiter, Order};
 use gustkit_cfd::steady::NewtonLinearSolver;
 use gustkit_cfd::steady::SteadyParams;
-use gustkit_cfd::wing_mesh::{WingMesh, WingMeshSpec};
+use gustkit_cfd::wing_mesh::{SectionCell, WingMesh, WingMeshSpec};
 use gustkit_core::scalar::Dual;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -476,6 +476,79 @@ fn save_state(file: &Path, q: &[gustkit_cfd::residual::State<f64>]) -> std::io::
     Ok(())
 }
 
+/// Span fractions of the C_p sections: root, mid-span and tip (inboard of the tip closure).
+pub const CP_SECTIONS: [f64; 3] = [0.0, 0.5, 0.9];
+
+/// The stem of the C_p section figure and CSV written beside the steady state.
+pub const CP_SECTIONS_STEM: &str = "steady_cp_sections";
+
+/// C_p of the wall cells of the chordwise sections at [`CP_SECTIONS`] (each the strip whose
+/// middle lies nearest): (η of the strip's middle, [(wall cell, C_p)] around the contour).
+pub fn cp_sections(
+    mesh: &WingMesh,
+    q: &[gustkit_cfd::residual::State<f64>],
+    mach: f64,
+) -> Vec<(f64, Vec<(SectionCell, f64)>)> {
+    CP_SECTIONS
+        .iter()
+        .map(|&eta| {
+            let (eta_mid, cells) = mesh.wall_section(eta);
+            let cp = cells
+                .iter()
+                .map(|&c| (c, gustkit_cfd::gas::pressure_coefficient(&q[c.cell], mach)))
+                .collect();
+            (eta_mid, cp)
+        })
+        .collect()
+}
+
+/// Writes [`cp_sections`] into `dir` as a figure (upper and lower surface against x/c, C_p axis
+/// downwards, one panel a section) and a CSV (eta, x_c, side, cp).
+fn write_cp_sections(
+    mesh: &WingMesh,
+    q: &[gustkit_cfd::residual::State<f64>],
+    mach: f64,
+    dir: &Path,
+) -> Result<()> {
+    use crate::report::figures::{line_plot, Panels};
+    let sections = cp_sections(mesh, q, mach);
+    let mut csv = String::from("eta,x_c,side,cp\n");
+    let mut plots = Vec::new();
+    for (eta, cells) in &sections {
+        for (c, cp) in cells {
+            let side = if c.upper { "upper" } else { "lower" };
+            csv.push_str(&format!("{eta:.6},{:.6},{side},{cp:.8e}\n", c.x_c));
+        }
+        let side = |want: bool| -> Vec<(f64, f64)> {
+            let mut pts: Vec<(f64, f64)> = cells
+                .iter()
+                .filter(|c| c.0.upper == want)
+                .map(|c| (c.0.x_c, c.1))
+                .collect();
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            pts
+        };
+        let mut plot = line_plot(
+            format!("η = {eta:.3} (wall cells)"),
+            "x/c",
+            "C_p",
+            vec![("upper".into(), side(true)), ("lower".into(), side(false))],
+        );
+        plot.flip_y = true;
+        plots.push(plot);
+    }
+    crate::atomic::write(&dir.join(format!("{CP_SECTIONS_STEM}.csv")), csv.as_bytes())?;
+    crate::report::save_figure(
+        dir,
+        CP_SECTIONS_STEM,
+        &Panels {
+            title: format!("Steady Euler C_p at M = {mach}: root, mid-span and tip sections"),
+            cols: 3,
+            plots,
+        },
+    )
+}
+
 /// File-name prefix of the cached steady states (`steady_lfd_<hash>.bin`).
 pub const STEADY_PREFIX: &str = "steady_lfd_";
 
@@ -632,6 +705,10 @@ impl WingBuilder for LfdWingSpec {
                         ),
                     );
                     let _ = crate::atomic::write(&f.with_file_name(STEADY_VTK), vtk.as_bytes());
+                    // and C_p at the root, mid-span and tip sections (figure and CSV)
+                    if let Some(dir) = f.parent() {
+                        let _ = write_cp_sections(&mesh, &q, wing.flight.mach, dir);
+                    }
                 }
                 q
             }

@@ -137,12 +137,7 @@ fn desmarais_i0<S: KernelScalar>(u: S, k1: S, q: &[f64; 12], with_zero: bool) ->
 /// u ≥ 0 from the exponentials `q` of [`desmarais_exponentials`], and, if asked, the same at u = 0
 /// (the terms 1/(pₙ² + k1²) are shared: upstream points need both). A planar pair, which needs no
 /// second moments, uses [`desmarais_i0`] instead.
-fn desmarais_sums<S: Scalar>(
-    u: S,
-    k1: S,
-    q: &[S; 12],
-    with_zero: bool,
-) -> [(Cplx<S>, Cplx<S>); 2] {
+fn desmarais_sums<S: Scalar>(u: S, k1: S, q: &[S; 12], with_zero: bool) -> [(Cplx<S>, Cplx<S>); 2] {
     let k2 = k1 * k1;
     let (mut i0, mut j0) = (Cplx::<S>::zero(), Cplx::<S>::zero());
     let (mut z0, mut zj) = (Cplx::<S>::zero(), Cplx::<S>::zero());

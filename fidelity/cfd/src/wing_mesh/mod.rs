@@ -148,6 +148,8 @@ pub struct WingMesh {
 pub struct SectionCell {
     /// Chord fraction of the middle of the cell's wall face.
     pub x_c: f64,
+    /// The face's extent in x/c (for integrals over the chord).
+    pub width: f64,
     /// On the upper surface (y > 0 of the section)?
     pub upper: bool,
     pub cell: usize,
@@ -286,6 +288,7 @@ impl WingMesh {
         let cells = (0..n)
             .map(|i| SectionCell {
                 x_c: 0.5 * (self.x_c[i] + self.x_c[(i + 1) % n]),
+                width: (self.x_c[(i + 1) % n] - self.x_c[i]).abs(),
                 upper: 2 * i < n,
                 // the cell numbering of `topology`: ring 0 of plane strip s
                 cell: s * self.spec.n_radial * n + i,

@@ -417,6 +417,15 @@ fn section_cells_are_the_wall_cells_of_one_strip() {
     for eta in [0.05, 0.5, 0.95] {
         let (eta_mid, cells) = w.wall_section(eta);
         assert_eq!(cells.len(), w.spec.n_around);
+        // each side's faces cover the chord once
+        for side in [true, false] {
+            let covered: f64 = cells
+                .iter()
+                .filter(|c| c.upper == side)
+                .map(|c| c.width)
+                .sum();
+            assert!((covered - 1.0).abs() < 1e-14, "{covered}");
+        }
         assert!((eta_mid - eta).abs() < 0.5, "{eta_mid}");
         for c in &cells {
             let face = w
@@ -425,11 +434,13 @@ fn section_cells_are_the_wall_cells_of_one_strip() {
                 .iter()
                 .find(|f| f.left == c.cell && f.right == Side::Boundary(Boundary::Wall))
                 .expect("a wall face");
-            let mean = |k: usize| {
-                face.nodes.iter().map(|&n| w.mesh.nodes[n][k]).sum::<f64>() / 4.0
-            };
+            let mean = |k: usize| face.nodes.iter().map(|&n| w.mesh.nodes[n][k]).sum::<f64>() / 4.0;
             let (x, y, z) = (mean(0), mean(1), mean(2));
-            assert!((z / span - eta_mid).abs() < 1e-12, "η {} against {eta_mid}", z / span);
+            assert!(
+                (z / span - eta_mid).abs() < 1e-12,
+                "η {} against {eta_mid}",
+                z / span
+            );
             // the face is bilinear between two planes at equal x/c: its middle is at the middle
             // x/c on the middle chord
             let chord = cr + (ct - cr) * eta_mid;
