@@ -62,9 +62,38 @@ impl<'a> DesignProblem<'a> {
     }
 }
 
+/// The records a [`DesignProblem`] keeps with each checkpoint, so that a resumed run reports the
+/// damping peaks and evaluation times of the whole run without evaluating again.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct Records {
+    damping_peaks: Vec<(Vec<f64>, f64)>,
+    function_times: Vec<f64>,
+    gradient_times: Vec<f64>,
+}
+
 impl Problem for DesignProblem<'_> {
     fn lower(&self) -> Vec<f64> {
         self.spec.lower.clone()
+    }
+    fn state(&self) -> serde_json::Value {
+        serde_json::to_value(Records {
+            damping_peaks: self.damping_peaks.clone(),
+            function_times: self.function_times.clone(),
+            gradient_times: self.gradient_times.clone(),
+        })
+        .unwrap_or(serde_json::Value::Null)
+    }
+    fn restore(&mut self, state: &serde_json::Value) -> Result<(), String> {
+        // a checkpoint of an older revision has no records: the report evaluates what it needs
+        if state.is_null() {
+            return Ok(());
+        }
+        let r: Records = serde_json::from_value(state.clone()).map_err(|e| e.to_string())?;
+        // the records of the earlier sessions come first, in the order they were made
+        self.damping_peaks.splice(0..0, r.damping_peaks);
+        self.function_times.splice(0..0, r.function_times);
+        self.gradient_times.splice(0..0, r.gradient_times);
+        Ok(())
     }
     fn upper(&self) -> Vec<f64> {
         self.spec.upper.clone()

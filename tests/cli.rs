@@ -494,12 +494,37 @@ fn run_optimization_and_resume() {
     short["optimization"]["max_iterations"] = 4.into();
     std::fs::write(&file, short.to_string()).unwrap();
     let o = run(&[]);
-    assert_eq!(results()["iterations"], 4);
-    finished(&o, &results());
+    let first = results();
+    assert_eq!(first["iterations"], 4);
+    finished(&o, &first);
     std::fs::write(&file, v.to_string()).unwrap();
     let o = run(&["--resume"]);
     let resumed = results();
     finished(&o, &resumed);
+    // the first session's records travel with the checkpoint: the evaluation times of both
+    // sessions (the resumed session evaluates its starting point once more), the wall time of
+    // both, every iterate's damping peak without evaluating again
+    let reps =
+        |r: &serde_json::Value, what: &str| r["timing"][what]["repetitions"].as_u64().unwrap();
+    eprintln!(
+        "function evaluations timed: uninterrupted {}, resumed {}; gradients {} and {}",
+        reps(&r, "function"),
+        reps(&resumed, "function"),
+        reps(&r, "gradient"),
+        reps(&resumed, "gradient")
+    );
+    assert_eq!(reps(&resumed, "function"), reps(&r, "function") + 1);
+    assert_eq!(reps(&resumed, "gradient"), reps(&r, "gradient") + 1);
+    assert!(resumed["wall_time_s"].as_f64().unwrap() > first["wall_time_s"].as_f64().unwrap());
+    let peaks = |r: &serde_json::Value| -> Vec<f64> {
+        r["history"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|h| h["flutter_damping_peak"].as_f64().unwrap())
+            .collect()
+    };
+    assert_eq!(peaks(&resumed), peaks(&r));
     assert_eq!(
         resumed["final"]["design_variables"],
         r["final"]["design_variables"]

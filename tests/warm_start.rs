@@ -128,6 +128,8 @@ fn warm_start_hessian_is_carried_to_this_studys_scaling() {
         hessian: h.clone(),
         penalty: 0.0,
         history: Vec::new(),
+        elapsed_s: 0.0,
+        problem_state: serde_json::Value::Null,
     };
     std::fs::write(
         dir.join("checkpoint.json"),

@@ -35,6 +35,15 @@ pub trait Problem {
     fn values(&mut self, x: &[f64]) -> Result<Values, String>;
     /// Gradients at the point of the last successful `values` call with the same x.
     fn gradients(&mut self, x: &[f64]) -> Result<Gradients, String>;
+    /// What the problem keeps with every checkpoint (its own records, e.g. evaluation times),
+    /// handed back by [`Problem::restore`] when a run resumes; nothing by default.
+    fn state(&self) -> serde_json::Value {
+        serde_json::Value::Null
+    }
+    /// Takes back the [`Problem::state`] of a checkpoint when a run resumes.
+    fn restore(&mut self, _state: &serde_json::Value) -> Result<(), String> {
+        Ok(())
+    }
 }
 
 /// Settings of the SQP.
@@ -119,6 +128,10 @@ pub struct SqpInfo {
     pub x: Vec<f64>,
     pub values: Values,
     pub history: Vec<Iterate>,
+    /// Wall time of the run, s, over every session that worked on it (a resumed run adds the
+    /// time its checkpoint had recorded).
+    #[serde(default)]
+    pub elapsed_s: f64,
 }
 
 /// Why the SQP could not run.
@@ -167,6 +180,12 @@ pub struct Checkpoint {
     pub hessian: Vec<Vec<f64>>,
     pub penalty: f64,
     pub history: Vec<Iterate>,
+    /// Wall time of the run up to this checkpoint, s, over every session that worked on it.
+    #[serde(default)]
+    pub elapsed_s: f64,
+    /// The problem's own records ([`Problem::state`]).
+    #[serde(default)]
+    pub problem_state: serde_json::Value,
 }
 
 mod sqp;

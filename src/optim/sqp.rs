@@ -202,6 +202,8 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
     }
     let n = x0.len();
     let scaling = Scaling::new(&lb, &ub, x0);
+    let started = std::time::Instant::now();
+    let mut elapsed_before = 0.0;
     let (mut z, mut hess, mut penalty, mut history, mut iteration, mut evaluations) = match resume {
         Some(c) => {
             if c.problem_id != problem_id || c.z.len() != n || c.hessian.len() != n {
@@ -221,6 +223,10 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                     "it was written with other optimizer settings".into(),
                 ));
             }
+            problem
+                .restore(&c.problem_state)
+                .map_err(|e| SqpError::Checkpoint(format!("the problem's records: {e}")))?;
+            elapsed_before = c.elapsed_s;
             (
                 c.z,
                 c.hessian,
@@ -353,6 +359,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                 x: x.clone(),
                 values: values.clone(),
                 history,
+                elapsed_s: elapsed_before + started.elapsed().as_secs_f64(),
             };
         if kkt < params.tolerance && viol < params.tolerance {
             return Ok(finish(
@@ -505,6 +512,8 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
             hessian: hess.clone(),
             penalty,
             history: history.clone(),
+            elapsed_s: elapsed_before + started.elapsed().as_secs_f64(),
+            problem_state: problem.state(),
         };
         if let Some(store) = checkpoints.as_mut() {
             store
@@ -530,6 +539,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                 x,
                 values,
                 history,
+                elapsed_s: checkpoint.elapsed_s,
             });
         }
     }

@@ -363,7 +363,6 @@ pub fn optimize(
         path: dir.join("checkpoint.json"),
     };
     let mut problem = DesignProblem::new(study, settings.clone(), spec.clone());
-    let t0 = Instant::now();
     let info = Executor::new(params, &problem_id)
         .resume(checkpoint)
         .initial_hessian(study.warm_start_hessian()?)
@@ -372,7 +371,8 @@ pub fn optimize(
         .run(&mut problem, x_start.as_deref().unwrap_or(&x0));
     observer.bar.finish_and_clear();
     let info = info.map_err(|e| anyhow::anyhow!("optimization: {e}"))?;
-    let wall_time_s = t0.elapsed().as_secs_f64();
+    // over every session of a resumed run
+    let wall_time_s = info.elapsed_s;
     let timing = Timing {
         function: (!problem.function_times.is_empty())
             .then(|| Stats::of(std::mem::take(&mut problem.function_times))),
