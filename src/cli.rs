@@ -127,9 +127,10 @@ pub enum Command {
     /// Time the structural chain (assembly, modes, all sensitivities) of a study.
     Bench {
         study: PathBuf,
-        /// Repetitions (the median is reported), at least 1.
-        #[arg(long, default_value_t = 20, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
-        repeat: usize,
+        /// Timed repetitions of each line after one warm-up run (median, min and max are
+        /// reported), at least 1; default 20, and 1 for an LFD study (a GAF table takes a minute).
+        #[arg(long, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
+        repeat: Option<usize>,
         /// Also time the study's whole optimization once (from scratch, no checkpoint).
         #[arg(long)]
         optimization: bool,

@@ -658,3 +658,37 @@ fn steady_euler_lift_converges_on_the_medium_mesh() {
         "tip section loading gaps {tip_gaps:?}"
     );
 }
+
+/// `gustkit bench` on an LFD study (the small wing mesh): the model build once, the first GAF
+/// table and reverse call as the warm-up, then `--repeat` timed runs of each with median, min
+/// and max, and the thread count in the header.
+#[test]
+fn lfd_bench_prints_repetitions() {
+    let dir = std::env::temp_dir().join(format!("gustkit-lfd-bench-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut v = flagship();
+    v.as_object_mut().unwrap().remove("optimization");
+    v["structure"]["modes"] = 3.into();
+    v["aero"]["reduced_frequencies"] = serde_json::json!([0.0, 0.3, 1.0]);
+    v["aero"]["fidelity"] = serde_json::json!({"lfd": {"mesh_sizes": {
+        "n_around": 16, "n_radial": 6, "n_span": 4, "n_outboard": 2, "first_spacing_chords": 0.02
+    }}});
+    let file = dir.join("bench.json");
+    std::fs::write(&file, v.to_string()).unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_gustkit"))
+        .args(["bench", file.to_str().unwrap(), "--repeat", "2"])
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.contains("threads"), "{out}");
+    assert!(out.contains("GAF table, first call"), "{out}");
+    let timed: Vec<&str> = out.lines().filter(|l| l.contains("2 reps")).collect();
+    assert!(
+        timed.iter().any(|l| l.contains("GAF table (the function"))
+            && timed.iter().any(|l| l.contains("GAF reverse, tapes reused")),
+        "{out}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -202,6 +202,14 @@ impl Stats {
             self.repetitions
         )
     }
+
+    /// The same line in seconds, for stages that take seconds to minutes.
+    pub fn line_s(&self, label: &str) -> String {
+        format!(
+            "  {label:<42}{:9.2} s   (min {:.2}, max {:.2}, {} reps)",
+            self.median_s, self.min_s, self.max_s, self.repetitions
+        )
+    }
 }
 
 /// How long the optimization's evaluations took in this run (a resumed run: since the resume).
