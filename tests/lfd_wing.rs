@@ -687,7 +687,9 @@ fn lfd_bench_prints_repetitions() {
     let timed: Vec<&str> = out.lines().filter(|l| l.contains("2 reps")).collect();
     assert!(
         timed.iter().any(|l| l.contains("GAF table (the function"))
-            && timed.iter().any(|l| l.contains("GAF reverse, tapes reused")),
+            && timed
+                .iter()
+                .any(|l| l.contains("GAF reverse, tapes reused")),
         "{out}"
     );
     std::fs::remove_dir_all(&dir).unwrap();

@@ -150,7 +150,10 @@ pub fn bench(study: &Study, repeat: Option<usize>, optimization: bool) -> Result
             "  GAF table, first call                                        {:>9.2} s",
             t.gafs_first_s
         );
-        println!("{}", t.gafs.line_s("GAF table (the function's aerodynamics)"));
+        println!(
+            "{}",
+            t.gafs.line_s("GAF table (the function's aerodynamics)")
+        );
         println!(
             "  GAF reverse, first call (records the tapes), all 104 variables {:>7.2} s",
             t.vjp_first_s
