@@ -217,8 +217,8 @@ fn steady_state_is_saved_and_reused() {
         f
     };
     study.aero_model(&plate).unwrap();
-    // the state, its field for ParaView and the C_p sections (figure and CSV: 3 sections of
-    // 16 wall cells each, every value finite), taken away after each fresh solve
+    // the state, its field for ParaView and the C_p sections (CSV: 3 sections of 16 wall cells
+    // each, every value finite; `gustkit run` draws them), taken away after each fresh solve
     let vtk = dir.join("steady_lfd_flow.vtk");
     let take_side_files = || {
         let text = std::fs::read_to_string(&vtk).unwrap();
@@ -237,9 +237,6 @@ fn steady_state_is_saved_and_reused() {
             .unwrap()
             .is_finite()));
         std::fs::remove_file(&csv).unwrap();
-        for ext in ["png", "svg"] {
-            std::fs::remove_file(dir.join(format!("steady_cp_sections.{ext}"))).unwrap();
-        }
     };
     take_side_files();
     let saved = files();
@@ -397,6 +394,13 @@ fn amplitude_fields_are_written() {
     let o = run(&file);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let folder = dir.join("lfd_fields");
+    // the steady state's C_p sections, drawn by the run's report
+    for ext in ["csv", "png", "svg"] {
+        assert!(
+            folder.join(format!("steady_cp_sections.{ext}")).is_file(),
+            "steady_cp_sections.{ext}"
+        );
+    }
     for stem in [
         "lfd_mode1_k0.3",
         "lfd_mode2_k0.3",
@@ -670,7 +674,7 @@ fn lfd_bench_prints_repetitions() {
     let mut v = flagship();
     v.as_object_mut().unwrap().remove("optimization");
     v["structure"]["modes"] = 3.into();
-    v["aero"]["reduced_frequencies"] = serde_json::json!([0.0, 0.3, 1.0]);
+    v["aero"]["reduced_frequencies"] = serde_json::json!([0.0, 0.3, 1.0, 2.0]);
     v["aero"]["fidelity"] = serde_json::json!({"lfd": {"mesh_sizes": {
         "n_around": 16, "n_radial": 6, "n_span": 4, "n_outboard": 2, "first_spacing_chords": 0.02
     }}});

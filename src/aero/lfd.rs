@@ -479,7 +479,7 @@ fn save_state(file: &Path, q: &[gustkit_cfd::residual::State<f64>]) -> std::io::
 /// Span fractions of the C_p sections: root, mid-span and tip (inboard of the tip closure).
 pub const CP_SECTIONS: [f64; 3] = [0.0, 0.5, 0.9];
 
-/// The stem of the C_p section figure and CSV written beside the steady state.
+/// The stem of the C_p section CSV written beside the steady state (and of its figure).
 pub const CP_SECTIONS_STEM: &str = "steady_cp_sections";
 
 /// C_p of the wall cells of the chordwise sections at [`CP_SECTIONS`] (each the strip whose
@@ -502,51 +502,22 @@ pub fn cp_sections(
         .collect()
 }
 
-/// Writes [`cp_sections`] into `dir` as a figure (upper and lower surface against x/c, C_p axis
-/// downwards, one panel a section) and a CSV (eta, x_c, side, cp).
+/// Writes [`cp_sections`] into `dir` as `steady_cp_sections.csv` (eta, x_c, side, cp), which the
+/// run's report draws (upper and lower surface against x/c, one panel a section).
 fn write_cp_sections(
     mesh: &WingMesh,
     q: &[gustkit_cfd::residual::State<f64>],
     mach: f64,
     dir: &Path,
-) -> Result<()> {
-    use crate::report::figures::{line_plot, Panels};
-    let sections = cp_sections(mesh, q, mach);
+) -> std::io::Result<()> {
     let mut csv = String::from("eta,x_c,side,cp\n");
-    let mut plots = Vec::new();
-    for (eta, cells) in &sections {
+    for (eta, cells) in cp_sections(mesh, q, mach) {
         for (c, cp) in cells {
             let side = if c.upper { "upper" } else { "lower" };
             csv.push_str(&format!("{eta:.6},{:.6},{side},{cp:.8e}\n", c.x_c));
         }
-        let side = |want: bool| -> Vec<(f64, f64)> {
-            let mut pts: Vec<(f64, f64)> = cells
-                .iter()
-                .filter(|c| c.0.upper == want)
-                .map(|c| (c.0.x_c, c.1))
-                .collect();
-            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-            pts
-        };
-        let mut plot = line_plot(
-            format!("η = {eta:.3} (wall cells)"),
-            "x/c",
-            "C_p",
-            vec![("upper".into(), side(true)), ("lower".into(), side(false))],
-        );
-        plot.flip_y = true;
-        plots.push(plot);
     }
-    crate::atomic::write(&dir.join(format!("{CP_SECTIONS_STEM}.csv")), csv.as_bytes())?;
-    crate::report::save_figure(
-        dir,
-        CP_SECTIONS_STEM,
-        &Panels {
-            title: format!("Steady Euler C_p at M = {mach}: root, mid-span and tip sections"),
-            cols: 3,
-            plots,
-        },
-    )
+    crate::atomic::write(&dir.join(format!("{CP_SECTIONS_STEM}.csv")), csv.as_bytes())
 }
 
 /// File-name prefix of the cached steady states (`steady_lfd_<hash>.bin`).
@@ -705,7 +676,7 @@ impl WingBuilder for LfdWingSpec {
                         ),
                     );
                     let _ = crate::atomic::write(&f.with_file_name(STEADY_VTK), vtk.as_bytes());
-                    // and C_p at the root, mid-span and tip sections (figure and CSV)
+                    // and C_p at the root, mid-span and tip sections (the report draws them)
                     if let Some(dir) = f.parent() {
                         let _ = write_cp_sections(&mesh, &q, wing.flight.mach, dir);
                     }

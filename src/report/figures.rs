@@ -742,3 +742,51 @@ pub fn gaf_panels(title: String, tables: &[(String, &gustkit_core::GafTable)]) -
         plots,
     }
 }
+
+/// The wall C_p of a steady LFD state at its root, mid-span and tip sections, from the CSV the
+/// LFD fidelity writes beside the state (eta, x_c, side, cp): one panel a section, upper and lower
+/// surface against x/c, the C_p axis downwards.
+pub fn cp_sections(csv: &str) -> Result<Panels> {
+    let mut sections: Vec<(String, Vec<(f64, f64)>, Vec<(f64, f64)>)> = Vec::new();
+    for (i, line) in csv.lines().enumerate().skip(1) {
+        let bad = || anyhow!("C_p sections, line {}: expected eta,x_c,side,cp", i + 1);
+        let f: Vec<&str> = line.split(',').collect();
+        let [eta, x, side, cp] = f[..] else {
+            return Err(bad());
+        };
+        let (x, cp): (f64, f64) = (
+            x.parse().map_err(|_| bad())?,
+            cp.parse().map_err(|_| bad())?,
+        );
+        if sections.last().is_none_or(|s| s.0 != eta) {
+            sections.push((eta.to_string(), Vec::new(), Vec::new()));
+        }
+        let s = sections.last_mut().expect("pushed");
+        match side {
+            "upper" => s.1.push((x, cp)),
+            "lower" => s.2.push((x, cp)),
+            _ => return Err(bad()),
+        }
+    }
+    let plots = sections
+        .into_iter()
+        .map(|(eta, mut upper, mut lower)| {
+            upper.sort_by(|a, b| a.0.total_cmp(&b.0));
+            lower.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let eta: f64 = eta.parse().unwrap_or(f64::NAN);
+            let mut plot = line_plot(
+                format!("η = {eta:.3} (wall cells)"),
+                "x/c",
+                "C_p",
+                vec![("upper".into(), upper), ("lower".into(), lower)],
+            );
+            plot.flip_y = true;
+            plot
+        })
+        .collect();
+    Ok(Panels {
+        title: "Steady Euler C_p: root, mid-span and tip sections".into(),
+        cols: 3,
+        plots,
+    })
+}

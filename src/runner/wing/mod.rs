@@ -206,6 +206,13 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
         run_time_s: t0.elapsed().as_secs_f64(),
     };
     report::run::render(&dir, &results)?;
+    // the C_p sections of the (latest) steady LFD state, when the fidelity wrote them
+    let cp = dir.join(format!("{}.csv", crate::aero::lfd::CP_SECTIONS_STEM));
+    if let Ok(text) = std::fs::read_to_string(&cp) {
+        let figure = report::figures::cp_sections(&text)
+            .with_context(|| format!("reading {}", cp.display()))?;
+        save_figure(&dir, crate::aero::lfd::CP_SECTIONS_STEM, &figure)?;
+    }
     folder.commit()?;
     println!("report written to {}", final_dir.display());
     Ok(match &results.optimization {
