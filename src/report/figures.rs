@@ -743,11 +743,15 @@ pub fn gaf_panels(title: String, tables: &[(String, &gustkit_core::GafTable)]) -
     }
 }
 
+/// (x, y) points of one curve.
+type Points = Vec<(f64, f64)>;
+
 /// The wall C_p of a steady LFD state at its root, mid-span and tip sections, from the CSV the
 /// LFD fidelity writes beside the state (eta, x_c, side, cp): one panel a section, upper and lower
 /// surface against x/c, the C_p axis downwards.
 pub fn cp_sections(csv: &str) -> Result<Panels> {
-    let mut sections: Vec<(String, Vec<(f64, f64)>, Vec<(f64, f64)>)> = Vec::new();
+    // (η as written, upper surface, lower surface)
+    let mut sections: Vec<(String, Points, Points)> = Vec::new();
     for (i, line) in csv.lines().enumerate().skip(1) {
         let bad = || anyhow!("C_p sections, line {}: expected eta,x_c,side,cp", i + 1);
         let f: Vec<&str> = line.split(',').collect();
