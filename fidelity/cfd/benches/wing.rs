@@ -1,14 +1,16 @@
 //! The CFD fidelity on the AGARD 445.6 wing (built-in O-H mesh, M = 0.5, second order): per mesh
 //! level the cells, the memory (peak resident set of the process so far), the steady solve
-//! (Newton–Krylov, block ILU(0)), the exact Jacobian's assembly, one frequency's block ILU(0)
-//! factorization, the GMRES iterations and time of one right-hand side, and the whole GAF table
-//! (11 reduced frequencies × (6 modes + the gust), frequencies and right-hand sides in
+//! (Newton–Krylov, block ILU(0)), the exact Jacobian's assembly, one frequency's block ILU(1)
+//! factorization (first-order Jacobian, reverse Cuthill–McKee order: the wing studies'
+//! default), the GMRES iterations and time of one right-hand side, the same right-hand side at
+//! k = 0.98 with other ILU settings, and the whole GAF table (11 reduced frequencies × (6 modes + the gust), frequencies and right-hand sides in
 //! parallel), with core-seconds per cell beside the paper's 70.5 min on 400 cores for 219 555
 //! nodes. Each figure is one run (these solves take seconds to minutes); the thread count is
 //! printed. `cargo bench -p gustkit-cfd --bench wing` runs the coarse level;
 //! `WING_LEVELS=coarse,medium` adds the medium one (about 10 minutes, 3.5 GB).
 
 use gustkit_cfd::gafs::Lfd;
+use gustkit_cfd::ilu::{IluOrdering, IluParams};
 use gustkit_cfd::lfd::{HarmonicGust, LfdOperator, Preconditioner, Symbol};
 use gustkit_cfd::residual::{free_stream, Euler};
 use gustkit_cfd::steady::{NewtonLinearSolver, SteadyParams};
@@ -43,6 +45,63 @@ fn naca65a004(x: f64) -> f64 {
     Z[i - 1] + (Z[i] - Z[i - 1]) * (x - X[i - 1]) / (X[i] - X[i - 1])
 }
 
+/// One right-hand side (the gust at k = 0.98, the hardest of the table on the medium mesh) with
+/// each preconditioner of `WING_PRECONDITIONERS` (comma-separated `matrix:fill:ordering`, matrix
+/// `first`/`exact`, ordering `natural`/`rcm`; default the first-order Jacobian's ILU(0) in the
+/// mesh's order and ILU(1) in RCM order, the wing studies' default): stored blocks, factorization
+/// time, GMRES iterations and time.
+fn preconditioner_table(e: &Euler, q0: &[gustkit_cfd::residual::State<f64>], mach: f64, c: f64) {
+    let list = std::env::var("WING_PRECONDITIONERS")
+        .unwrap_or_else(|_| "first:0:natural,first:1:rcm".into());
+    let omega = 0.98 * mach / (0.5 * c);
+    for item in list.split(',') {
+        let f: Vec<&str> = item.split(':').collect();
+        let (matrix, fill, ordering) = (f[0], f[1].parse::<usize>().expect("fill"), f[2]);
+        let pre = if matrix == "exact" {
+            Preconditioner::BlockIlu
+        } else {
+            Preconditioner::FirstOrderIlu
+        };
+        let mut op = LfdOperator::with_preconditioner(e.clone(), q0.to_vec(), pre);
+        op.params.tolerance = 1e-8;
+        op.params.ilu = IluParams {
+            fill,
+            ordering: if ordering == "rcm" {
+                IluOrdering::ReverseCuthillMckee
+            } else {
+                IluOrdering::Natural
+            },
+        };
+        let t = Instant::now();
+        let fac = match op.factor(omega, Symbol::Exact) {
+            Ok(f) => f,
+            Err(err) => {
+                println!("  {item}: {err}");
+                continue;
+            }
+        };
+        let t_fac = t.elapsed().as_secs_f64();
+        let gust = op.gust_rhs(
+            omega,
+            &HarmonicGust {
+                convection: mach,
+                x0: 0.0,
+            },
+        );
+        let t = Instant::now();
+        match op.solve(&fac, &[gust]) {
+            Ok(sol) => println!(
+                "  {item}: {} blocks/row, factor {t_fac:.2} s, one right-hand side at k = 0.98: {} GMRES iterations, {:.2} s; peak memory {:.2} GB",
+                fac.n_blocks() as f64 / e.mesh.n_cells as f64,
+                sol[0].1.iterations,
+                t.elapsed().as_secs_f64(),
+                peak_gb()
+            ),
+            Err(err) => println!("  {item}: factor {t_fac:.2} s, {err}"),
+        }
+    }
+}
+
 fn main() {
     let levels = std::env::var("WING_LEVELS").unwrap_or_else(|_| "coarse".into());
     let threads = rayon::current_num_threads();
@@ -64,9 +123,14 @@ fn main() {
         };
         let (q0, info) = e.solve_steady(vec![e.q_inf; n], &params).expect("steady");
         let t_steady = t.elapsed().as_secs_f64();
+        preconditioner_table(&e, &q0, mach, p[2]);
         let t = Instant::now();
-        let mut op = LfdOperator::with_preconditioner(e, q0, Preconditioner::BlockIlu);
+        let mut op = LfdOperator::with_preconditioner(e, q0, Preconditioner::FirstOrderIlu);
         op.params.tolerance = 1e-8;
+        op.params.ilu = IluParams {
+            fill: 1,
+            ordering: IluOrdering::ReverseCuthillMckee,
+        };
         let t_jac = t.elapsed().as_secs_f64();
         let omega = 0.5 * mach / (0.5 * p[2]);
         let t = Instant::now();
@@ -115,7 +179,7 @@ fn main() {
         model.gafs(&flight, &modes, &k).expect("GAF table");
         let t_table = t.elapsed().as_secs_f64();
         println!(
-            "{level}: {n} cells (quality: min volume {:.2e} m³, aspect ratio ≤ {:.0}, non-orthogonality ≤ {:.1}°); mesh {t_mesh:.2} s; steady {t_steady:.1} s ({} Newton iterations to {:.1e}); Jacobian {t_jac:.2} s; block ILU(0) at k = 0.5 {t_fac:.2} s; one right-hand side {t_rhs:.2} s ({} GMRES iterations); GAF table (11 k × 7 right-hand sides) {t_table:.1} s = {:.4} core-s per cell; peak memory {:.2} GB",
+            "{level}: {n} cells (quality: min volume {:.2e} m³, aspect ratio ≤ {:.0}, non-orthogonality ≤ {:.1}°); mesh {t_mesh:.2} s; steady {t_steady:.1} s ({} Newton iterations to {:.1e}); Jacobian {t_jac:.2} s; first-order block ILU(1), RCM, at k = 0.5 {t_fac:.2} s; one right-hand side {t_rhs:.2} s ({} GMRES iterations); GAF table (11 k × 7 right-hand sides) {t_table:.1} s = {:.4} core-s per cell; peak memory {:.2} GB",
             q.min_volume,
             q.max_aspect_ratio,
             q.max_skewness_deg,

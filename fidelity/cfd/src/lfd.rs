@@ -8,7 +8,7 @@
 //! every right-hand side by restarted complex GMRES on the exact operator, preconditioned with it.
 
 use crate::gas::NVAR;
-use crate::ilu::BlockIlu;
+use crate::ilu::{BlockIlu, IluParams};
 use crate::jacobian::{BlockRows, Blocks};
 use crate::krylov::{gmres, GmresError, GmresInfo};
 use crate::residual::{Euler, State};
@@ -49,6 +49,8 @@ pub struct LfdParams {
     pub tolerance: f64,
     pub restart: usize,
     pub max_iterations: usize,
+    /// Fill level and ordering of the block ILU preconditioners (ignored by the LU ones).
+    pub ilu: IluParams,
 }
 
 impl LfdParams {
@@ -64,7 +66,7 @@ impl LfdParams {
         if self.restart == 0 || self.max_iterations == 0 {
             return Err("restart and max_iterations must be at least 1".into());
         }
-        Ok(())
+        self.ilu.validate()
     }
 }
 
@@ -74,6 +76,7 @@ impl Default for LfdParams {
             tolerance: 1e-10,
             restart: 80,
             max_iterations: 800,
+            ilu: IluParams::default(),
         }
     }
 }
@@ -137,6 +140,16 @@ pub struct Factored {
     pub omega: f64,
     pub s: C64,
     factors: Factors,
+}
+
+impl Factored {
+    /// Stored 5 × 5 blocks of an ILU's factors (0 for a sparse LU): the preconditioner's size.
+    pub fn n_blocks(&self) -> usize {
+        match &self.factors {
+            Factors::Ilu(ilu) => ilu.n_blocks(),
+            Factors::Lu(_) => 0,
+        }
+    }
 }
 
 enum Factors {
@@ -485,8 +498,13 @@ impl LfdOperator {
             Preconditioner::BlockIlu | Preconditioner::FirstOrderIlu
         ) {
             Factors::Ilu(
-                BlockIlu::new(self.euler.mesh.n_cells, &self.blocks, &|c| s * vol[c])
-                    .map_err(fail)?,
+                BlockIlu::with_params(
+                    self.euler.mesh.n_cells,
+                    &self.blocks,
+                    &|c| s * vol[c],
+                    &self.params.ilu,
+                )
+                .map_err(fail)?,
             )
         } else {
             let a = self
