@@ -755,3 +755,124 @@ fn lfd_bench_prints_repetitions() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// An external 3-D mesh in a wing study (`aero.fidelity.lfd.mesh_file`): the small built-in
+/// wing mesh written as SU2 in inches and read back gives the GAF table of the built-in mesh to
+/// 1e-9 of its largest entry (the same cells and faces; only the modes' transfer differs, through
+/// the wall nodes' planform coordinates recovered from their positions instead of the grid's
+/// parameters). A mesh of another planform (the same mesh read as metres, 39 times too large),
+/// a 2-D mesh, a missing file and a mesh beside explicit sizes are refused with the field's
+/// path and the reason; planform gradients are refused (the file's nodes do not move).
+#[test]
+fn external_wing_mesh_gives_the_built_in_gafs() {
+    let (study, dir) = small_lfd_study("mesh-file");
+    let plate = study.build_model().unwrap();
+    let st = &study.spec.structure;
+    let modes =
+        gustkit::structure::modal::solve(&plate, st.modes, 0.0, &study.mode_fields()).unwrap();
+    let built_in = study
+        .aero_model(&plate)
+        .unwrap()
+        .gafs(&plate, &modes)
+        .unwrap();
+    // the same mesh as the study builds, written in inches
+    let (planform, airfoil) = (study.planform().unwrap(), study.airfoil().unwrap());
+    let spec = gustkit_cfd::wing_mesh::WingMeshSpec {
+        n_around: 16,
+        n_radial: 6,
+        n_span: 4,
+        n_outboard: 2,
+        far_field_chords: 15.0,
+        first_spacing_chords: 0.02,
+        tip_closure: 0.05,
+    };
+    let mut mesh = gustkit_cfd::wing_mesh::WingMesh::new(
+        planform.to_array(),
+        &|x| airfoil.half_thickness(x),
+        &spec,
+    )
+    .mesh;
+    for p in mesh.nodes.iter_mut() {
+        *p = p.map(|v| v / 0.0254);
+    }
+    let file = dir.join("wing.su2");
+    std::fs::write(&file, gustkit_cfd::readers::write_su2(&mesh)).unwrap();
+    let markers =
+        serde_json::json!({"wall": "wall", "farfield": "far_field", "symmetry": "symmetry"});
+    let mut v = serde_json::to_value(&study.spec).unwrap();
+    v["aero"]["fidelity"] = serde_json::json!({"lfd": {"gmres_tolerance": 1e-12,
+        "mesh_file": {"path": file.to_string_lossy(), "markers": markers, "length_unit": "in"}}});
+    let mut external = load(&v).unwrap();
+    external.cache_dir = Some(dir.clone());
+    let g = external
+        .aero_model(&plate)
+        .unwrap()
+        .gafs(&plate, &modes)
+        .unwrap();
+    for ik in 0..built_in.k.len() {
+        let scale = built_in.q_ss[ik]
+            .iter()
+            .flatten()
+            .chain(&built_in.q_gs[ik])
+            .map(|q| q.norm())
+            .fold(0.0, f64::max);
+        let diff = built_in.q_ss[ik]
+            .iter()
+            .flatten()
+            .zip(g.q_ss[ik].iter().flatten())
+            .chain(built_in.q_gs[ik].iter().zip(&g.q_gs[ik]))
+            .map(|(a, b)| (a - b).norm())
+            .fold(0.0, f64::max);
+        assert!(
+            diff < 1e-9 * scale,
+            "k = {}: difference {diff:e} of {scale:e}",
+            built_in.k[ik]
+        );
+    }
+    // bad input
+    let err_of = |lfd: serde_json::Value| {
+        let mut w = v.clone();
+        w["aero"]["fidelity"] = serde_json::json!({ "lfd": lfd });
+        match load(&w) {
+            Err(e) => e,
+            Ok(s) => {
+                let plate = s.build_model().unwrap();
+                s.aero_model(&plate).err().expect("refused")
+            }
+        }
+    };
+    let e = err_of(
+        serde_json::json!({"mesh_file": {"path": file.to_string_lossy(),
+        "markers": markers, "length_unit": "m"}}),
+    );
+    assert_eq!(e.path, "aero.fidelity.lfd.mesh_file.path", "{e}");
+    assert!(
+        e.reason.contains("does not match the structural planform") && e.reason.contains(" m"),
+        "{e}"
+    );
+    let e = err_of(
+        serde_json::json!({"mesh_file": {"path": dir.join("none.su2").to_string_lossy(),
+        "markers": markers}}),
+    );
+    assert_eq!(e.path, "aero.fidelity.lfd.mesh_file.path", "{e}");
+    assert!(e.reason.contains("cannot read"), "{e}");
+    let e = err_of(
+        serde_json::json!({"mesh_file": {"path": file.to_string_lossy(),
+        "markers": markers}, "mesh_sizes": {"n_around": 16, "n_radial": 6, "n_span": 4,
+        "n_outboard": 2, "first_spacing_chords": 0.02}}),
+    );
+    assert_eq!(e.path, "aero.fidelity.lfd.mesh_file", "{e}");
+    let flat = dir.join("flat.su2");
+    std::fs::write(
+        &flat,
+        "NDIME= 2\nNELEM= 1\n9 0 1 2 3 0\nNPOIN= 4\n0 0 0\n1 0 1\n1 1 2\n0 1 3\nNMARK= 1\nMARKER_TAG= farfield\nMARKER_ELEMS= 4\n3 0 1\n3 1 2\n3 2 3\n3 3 0\n",
+    )
+    .unwrap();
+    let e = err_of(
+        serde_json::json!({"mesh_file": {"path": flat.to_string_lossy(),
+        "markers": {"farfield": "far_field"}}}),
+    );
+    assert_eq!(e.path, "aero.fidelity.lfd.mesh_file.path", "{e}");
+    assert!(e.reason.contains("3-D"), "{e}");
+    let _ = std::fs::remove_dir_all(dir);
+}

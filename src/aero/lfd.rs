@@ -285,6 +285,168 @@ impl LfdPreconditionerSpec {
     }
 }
 
+/// Length unit of an external mesh file's coordinates.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum MeshUnit {
+    #[default]
+    M,
+    Mm,
+    In,
+    Ft,
+}
+
+impl MeshUnit {
+    /// Metres per unit.
+    pub fn to_m(self) -> f64 {
+        match self {
+            MeshUnit::M => 1.0,
+            MeshUnit::Mm => 1e-3,
+            MeshUnit::In => 0.0254,
+            MeshUnit::Ft => 0.3048,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            MeshUnit::M => "m",
+            MeshUnit::Mm => "mm",
+            MeshUnit::In => "in",
+            MeshUnit::Ft => "ft",
+        }
+    }
+}
+
+/// An external 3-D wing mesh: `aero.fidelity.lfd.mesh_file`. The wing lies as the built-in
+/// mesh's does: x downstream, y up, z spanwise from the root (the symmetry plane z = 0), the
+/// root's leading edge at the origin; its wall must match the study's planform.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct WingMeshFile {
+    /// SU2 (`.su2`) or Gmsh 4.1 (`.msh`), relative to the study file's folder.
+    pub path: String,
+    /// Marker (physical group) names and their boundary conditions: every boundary face needs
+    /// one; `wall` is the wing.
+    pub markers: std::collections::BTreeMap<String, MarkerKind>,
+    /// The unit of the file's coordinates (default m).
+    #[serde(default)]
+    pub length_unit: MeshUnit,
+}
+
+/// How far, as a fraction of the local chord or of the span, a wall node may lie outside the
+/// structural planform: the tip cap and a rounded leading edge reach a little beyond it.
+const PLANFORM_TOLERANCE: f64 = 0.02;
+
+impl WingMeshFile {
+    /// Reads the mesh in metres; the error names the file and the reason.
+    pub fn read(&self) -> std::result::Result<Mesh, String> {
+        let text = std::fs::read_to_string(&self.path)
+            .map_err(|e| format!("cannot read {}: {e}", self.path))?;
+        let markers = self
+            .markers
+            .iter()
+            .map(|(name, kind)| (name.clone(), kind.boundary()))
+            .collect();
+        let mut mesh = if self.path.ends_with(".su2") {
+            gustkit_cfd::readers::read_su2(&text, &markers, 1.0)
+        } else if self.path.ends_with(".msh") {
+            gustkit_cfd::readers::read_gmsh(&text, &markers, 1.0)
+        } else {
+            return Err(format!(
+                "{}: the name must end in .su2 or .msh (the format)",
+                self.path
+            ));
+        }
+        .map_err(|e| format!("{}: {e}", self.path))?;
+        // a 2-D file comes back extruded to one unit: z = 0 and 1 only
+        let su2_2d = self.path.ends_with(".su2")
+            && text
+                .lines()
+                .find_map(|l| l.trim().strip_prefix("NDIME"))
+                .is_some_and(|rest| rest.trim_start_matches([' ', '=']).trim() == "2");
+        if su2_2d || mesh.nodes.iter().all(|p| p[2] == 0.0 || p[2] == 1.0) {
+            return Err(format!(
+                "{}: a 2-D mesh; a wing study needs a 3-D mesh of the wing",
+                self.path
+            ));
+        }
+        let scale = self.length_unit.to_m();
+        for p in mesh.nodes.iter_mut() {
+            *p = p.map(|v| v * scale);
+        }
+        Ok(mesh)
+    }
+
+    /// A hash of the file's bytes, for the steady state's cache key.
+    fn content_hash(&self) -> u64 {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        std::fs::read(&self.path).unwrap_or_default().hash(&mut h);
+        self.length_unit.hash(&mut h);
+        h.finish()
+    }
+}
+
+impl std::hash::Hash for MeshUnit {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        self.name().hash(state);
+    }
+}
+
+/// The wall nodes' (ξ, η) on the planform, or why the wall does not match it: a node outside
+/// the planform by more than [`PLANFORM_TOLERANCE`], or a wall that does not reach the root, the
+/// tip, the leading or the trailing edge. Lengths in the errors are in `unit`.
+pub fn planform_coordinates(
+    planform: &crate::wing::Planform,
+    wall: &[[f64; 3]],
+    unit: MeshUnit,
+) -> std::result::Result<Vec<[f64; 2]>, String> {
+    let u = unit.to_m();
+    let mut out = Vec::with_capacity(wall.len());
+    let (mut eta_range, mut xi_range) = ([f64::MAX, f64::MIN], [f64::MAX, f64::MIN]);
+    for (i, x) in wall.iter().enumerate() {
+        // the CFD frame: x downstream, y up, z along the span
+        let eta = x[2] / planform.span;
+        let le = planform.point(0.0, eta.clamp(0.0, 1.0))[0];
+        let chord = planform.chord(eta.clamp(0.0, 1.0));
+        let xi = (x[0] - le) / chord;
+        let outside = (-xi).max(xi - 1.0).max(-eta).max(eta - 1.0);
+        if outside > PLANFORM_TOLERANCE {
+            return Err(format!(
+                "the wing surface does not match the structural planform: wall node {i} at (x, y, z) = ({:.4}, {:.4}, {:.4}) {} (x downstream, y up, z spanwise) lies at chord fraction {xi:.3} and span fraction {eta:.3} of the planform (span {:.4} {}, root chord {:.4} {}), beyond the {} % tolerance",
+                x[0] / u,
+                x[1] / u,
+                x[2] / u,
+                unit.name(),
+                planform.span / u,
+                unit.name(),
+                planform.root_chord / u,
+                unit.name(),
+                PLANFORM_TOLERANCE * 100.0
+            ));
+        }
+        eta_range = [eta_range[0].min(eta), eta_range[1].max(eta)];
+        xi_range = [xi_range[0].min(xi), xi_range[1].max(xi)];
+        out.push([xi.clamp(0.0, 1.0), eta.clamp(0.0, 1.0)]);
+    }
+    if wall.is_empty()
+        || eta_range[0] > PLANFORM_TOLERANCE
+        || eta_range[1] < 1.0 - PLANFORM_TOLERANCE
+        || xi_range[0] > PLANFORM_TOLERANCE
+        || xi_range[1] < 1.0 - PLANFORM_TOLERANCE
+    {
+        return Err(format!(
+            "the wing surface does not match the structural planform: its wall covers span fractions {:.3} to {:.3} and chord fractions {:.3} to {:.3} of the planform (span {:.4} {}), where 0 to 1 are needed",
+            eta_range[0],
+            eta_range[1],
+            xi_range[0],
+            xi_range[1],
+            planform.span / u,
+            unit.name()
+        ));
+    }
+    Ok(out)
+}
+
 /// The elimination order of the block ILU preconditioners.
 #[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
@@ -315,6 +477,9 @@ pub struct LfdWingSpec {
     /// Explicit mesh sizes instead of the level.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mesh_sizes: Option<WingMeshSizes>,
+    /// An external 3-D mesh (SU2 or Gmsh) instead of the built-in one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mesh_file: Option<WingMeshFile>,
     #[serde(default)]
     pub order: OrderSpec,
     #[serde(default)]
@@ -426,7 +591,8 @@ impl LfdWingSpec {
         use std::hash::{Hash, Hasher};
         let mut h = std::collections::hash_map::DefaultHasher::new();
         format!(
-            "{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
+            "{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
+            self.mesh_file.as_ref().map(|f| f.content_hash()),
             self.mesh_spec(),
             wing.planform.to_array().map(f64::to_bits),
             wing.airfoil,
@@ -571,9 +737,10 @@ impl WingBuilder for LfdWingSpec {
 
     fn capabilities(&self) -> Capabilities {
         // the mode shapes by adjoint LFD solves, the planform through the mesh tangents
+        // (not for an external mesh: its nodes do not move with the planform)
         Capabilities {
             reverse: true,
-            reverse_planform: true,
+            reverse_planform: self.mesh_file.is_none(),
         }
     }
 
@@ -591,6 +758,20 @@ impl WingBuilder for LfdWingSpec {
             };
             fail(&path, reason)
         })?;
+        if let Some(file) = &self.mesh_file {
+            if self.mesh_sizes.is_some() {
+                return Err(fail(
+                    "mesh_file",
+                    "give mesh_file or mesh_sizes, not both".into(),
+                ));
+            }
+            if let Err(e) = std::fs::metadata(&file.path) {
+                return Err(fail(
+                    "mesh_file.path",
+                    format!("cannot read {}: {e}", file.path),
+                ));
+            }
+        }
         self.params()
             .ilu
             .validate()
@@ -614,7 +795,8 @@ impl WingBuilder for LfdWingSpec {
             ));
         }
         let gb = self.memory_estimate_gb();
-        if !(gb <= self.memory_limit_gb) {
+        // (an external mesh's size is known once it is read: checked by `build`)
+        if self.mesh_file.is_none() && !(gb <= self.memory_limit_gb) {
             return Err(fail(
                 if self.mesh_sizes.is_some() {
                     "mesh_sizes"
@@ -637,7 +819,7 @@ impl WingBuilder for LfdWingSpec {
         let cells = self.mesh_spec().n_cells();
         let gb = self.memory_estimate_gb()
             + gustkit_cfd::adjoint::LfdReverse::estimate_bytes(cells) as f64 / 1e9;
-        if !(gb <= self.memory_limit_gb) {
+        if self.mesh_file.is_none() && !(gb <= self.memory_limit_gb) {
             return Err(BuildError {
                 path: if self.mesh_sizes.is_some() {
                     "mesh_sizes".into()
@@ -663,11 +845,34 @@ impl WingBuilder for LfdWingSpec {
             reason,
         };
         let p = wing.planform.to_array();
-        let mesh = WingMesh::new(p, &|x| wing.airfoil.half_thickness(x), &self.mesh_spec());
-        mesh.mesh
-            .check()
-            .map_err(|e| fail(format!("the built-in wing mesh is invalid: {e}")))?;
-        let mut e = Euler::new(mesh.mesh.clone(), free_stream(wing.flight.mach, 0.0));
+        let file_fail = |reason: String| BuildError {
+            path: "mesh_file.path".into(),
+            reason,
+        };
+        // the built-in mesh, or the external one (no planform tangents, no C_p sections)
+        let (volume, built_in) = match &self.mesh_file {
+            Some(file) => {
+                let m = file.read().map_err(file_fail)?;
+                m.check()
+                    .map_err(|e| file_fail(format!("{}: invalid mesh: {e}", file.path)))?;
+                let gb = m.n_cells as f64 * bytes_per_cell(self.gmres_restart, self.ilu_fill) / 1e9;
+                if !(gb <= self.memory_limit_gb) {
+                    return Err(file_fail(format!(
+                        "{} ({} cells) needs about {gb:.1} GB, above memory_limit_gb = {}: choose a coarser mesh or raise the limit",
+                        file.path, m.n_cells, self.memory_limit_gb
+                    )));
+                }
+                (m, None)
+            }
+            None => {
+                let wm = WingMesh::new(p, &|x| wing.airfoil.half_thickness(x), &self.mesh_spec());
+                wm.mesh
+                    .check()
+                    .map_err(|e| fail(format!("the built-in wing mesh is invalid: {e}")))?;
+                (wm.mesh.clone(), Some(wm))
+            }
+        };
+        let mut e = Euler::new(volume.clone(), free_stream(wing.flight.mach, 0.0));
         e.order = self.order.order();
         e.limiter = self.limiter.limiter();
         let params = SteadyParams {
@@ -709,7 +914,7 @@ impl WingBuilder for LfdWingSpec {
                     let _ = save_state(f, &q);
                     // and the field for ParaView beside it (ρ, p, C_p, Mach, velocity per cell)
                     let vtk = gustkit_cfd::vtk::flow_vtk(
-                        &mesh.mesh,
+                        &volume,
                         &q,
                         wing.flight.mach,
                         &format!(
@@ -719,8 +924,8 @@ impl WingBuilder for LfdWingSpec {
                     );
                     let _ = crate::atomic::write(&f.with_file_name(STEADY_VTK), vtk.as_bytes());
                     // and C_p at the root, mid-span and tip sections (the report draws them)
-                    if let Some(dir) = f.parent() {
-                        let _ = write_cp_sections(&mesh, &q, wing.flight.mach, dir);
+                    if let (Some(dir), Some(mesh)) = (f.parent(), &built_in) {
+                        let _ = write_cp_sections(mesh, &q, wing.flight.mach, dir);
                     }
                 }
                 q
@@ -734,6 +939,31 @@ impl WingBuilder for LfdWingSpec {
             1.0,
             self.deform_radius_chords * wing.planform.root_chord,
         );
+        let Some(mesh) = built_in else {
+            // an external mesh: its wall nodes placed on the planform, or why they do not fit
+            let unit = self
+                .mesh_file
+                .as_ref()
+                .map_or(MeshUnit::M, |f| f.length_unit);
+            let wall: Vec<[f64; 3]> = model
+                .wall_nodes()
+                .iter()
+                .map(|&n| volume.nodes[n])
+                .collect();
+            let points = planform_coordinates(wing.planform, &wall, unit).map_err(|r| {
+                file_fail(format!(
+                    "{}: {r}",
+                    self.mesh_file.as_ref().map_or("", |f| f.path.as_str())
+                ))
+            })?;
+            return Ok(WingFidelity {
+                model: Box::new(model),
+                binding: SurfaceBinding {
+                    points,
+                    geometry_jacobian: Vec::new(),
+                },
+            });
+        };
         let points = model
             .wall_nodes()
             .iter()

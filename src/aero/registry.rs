@@ -124,6 +124,18 @@ pub enum FidelitySpec {
 }
 
 impl FidelitySpec {
+    /// Makes a relative mesh-file path relative to `dir` (the study file's folder), as a study
+    /// file's paths are.
+    pub fn resolve_paths(&mut self, dir: &std::path::Path) {
+        if let FidelitySpec::Lfd(spec) = self {
+            if let Some(file) = spec.mesh_file.as_mut() {
+                if std::path::Path::new(&file.path).is_relative() {
+                    file.path = dir.join(&file.path).to_string_lossy().into_owned();
+                }
+            }
+        }
+    }
+
     /// The builder of this fidelity.
     pub fn builder(&self) -> &dyn WingBuilder {
         match self {

@@ -131,6 +131,16 @@ impl Study {
                 reason,
             }
         })?;
+        let mut spec = spec;
+        if let Some(aero) = spec.aero.as_mut() {
+            // absolute, so that a study written out again and re-read keeps the same file
+            let dir = file.parent().unwrap_or(Path::new(""));
+            let dir = std::path::absolute(dir).unwrap_or_else(|_| dir.to_path_buf());
+            aero.fidelity.resolve_paths(&dir);
+            if let Some(other) = aero.compare_with.as_mut() {
+                other.resolve_paths(&dir);
+            }
+        }
         let study = Self {
             file: file.to_path_buf(),
             spec,

@@ -536,6 +536,60 @@ pub fn write_su2_2d(mesh: &Mesh) -> String {
     s
 }
 
+/// Writes a 3-D mesh in the SU2 native format: its cells (tetrahedra, pyramids, prisms and
+/// hexahedra by node count, in the VTK node order SU2 shares) and its boundary faces under the
+/// markers "wall", "farfield" and "symmetry" (only those present). [`read_su2`] reads it back.
+pub fn write_su2(mesh: &Mesh) -> String {
+    use std::fmt::Write;
+    let mut s = format!("NDIME= 3\nNELEM= {}\n", mesh.cells.len());
+    for (i, c) in mesh.cells.iter().enumerate() {
+        let kind = match c.len() {
+            4 => 10,
+            5 => 14,
+            6 => 13,
+            _ => 12,
+        };
+        let _ = write!(s, "{kind}");
+        for n in c {
+            let _ = write!(s, " {n}");
+        }
+        let _ = writeln!(s, " {i}");
+    }
+    let _ = writeln!(s, "NPOIN= {}", mesh.nodes.len());
+    for (i, p) in mesh.nodes.iter().enumerate() {
+        let _ = writeln!(s, "{:.17e} {:.17e} {:.17e} {i}", p[0], p[1], p[2]);
+    }
+    let marks: Vec<(&str, Vec<&Vec<usize>>)> = [
+        ("wall", Boundary::Wall),
+        ("farfield", Boundary::FarField),
+        ("symmetry", Boundary::Symmetry),
+    ]
+    .into_iter()
+    .map(|(name, kind)| {
+        let faces = mesh
+            .faces
+            .iter()
+            .filter(|f| f.right == Side::Boundary(kind))
+            .map(|f| &f.nodes)
+            .collect::<Vec<_>>();
+        (name, faces)
+    })
+    .filter(|(_, faces)| !faces.is_empty())
+    .collect();
+    let _ = writeln!(s, "NMARK= {}", marks.len());
+    for (name, faces) in marks {
+        let _ = writeln!(s, "MARKER_TAG= {name}\nMARKER_ELEMS= {}", faces.len());
+        for f in faces {
+            let _ = write!(s, "{}", if f.len() == 3 { 5 } else { 9 });
+            for n in f {
+                let _ = write!(s, " {n}");
+            }
+            s.push('\n');
+        }
+    }
+    s
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
