@@ -145,6 +145,32 @@ fn lfd_settings_are_checked_at_load() {
     assert_eq!(e.path, "aero.fidelity.lfd.ilu_ordering", "{e}");
 }
 
+/// Per reduced frequency of two GAF tables: k, the largest difference of an entry (Q_ss and
+/// Q_gs) and the largest entry of the first table.
+fn table_differences(
+    a: &gustkit_core::GafTable,
+    b: &gustkit_core::GafTable,
+) -> Vec<(f64, f64, f64)> {
+    (0..a.k.len())
+        .map(|ik| {
+            let scale = a.q_ss[ik]
+                .iter()
+                .flatten()
+                .chain(&a.q_gs[ik])
+                .map(|q| q.norm())
+                .fold(0.0, f64::max);
+            let diff = a.q_ss[ik]
+                .iter()
+                .flatten()
+                .zip(b.q_ss[ik].iter().flatten())
+                .chain(a.q_gs[ik].iter().zip(&b.q_gs[ik]))
+                .map(|(x, y)| (x - y).norm())
+                .fold(0.0, f64::max);
+            (a.k[ik], diff, scale)
+        })
+        .collect()
+}
+
 /// The preconditioner changes the GMRES path, not the answer: on the small wing mesh (LFD solves
 /// to 1e-12) the GAF table with the default block ILU(1) in RCM order, with ILU(0) in the mesh's
 /// order and with the exact Jacobian's sparse LU (a direct solve) agree to 1e-9 of the largest
@@ -173,24 +199,10 @@ fn gafs_do_not_depend_on_the_preconditioner() {
         serde_json::json!({"preconditioner": "exact_lu"}),
     ] {
         let g = table(other.clone());
-        for ik in 0..default.k.len() {
-            let scale = default.q_ss[ik]
-                .iter()
-                .flatten()
-                .chain(&default.q_gs[ik])
-                .map(|q| q.norm())
-                .fold(0.0, f64::max);
-            let diff = default.q_ss[ik]
-                .iter()
-                .flatten()
-                .zip(g.q_ss[ik].iter().flatten())
-                .chain(default.q_gs[ik].iter().zip(&g.q_gs[ik]))
-                .map(|(a, b)| (a - b).norm())
-                .fold(0.0, f64::max);
+        for (k, diff, scale) in table_differences(&default, &g) {
             assert!(
                 diff < 1e-9 * scale,
-                "{other}: k = {}, difference {diff:e} of {scale:e}",
-                default.k[ik]
+                "{other}: k = {k}, difference {diff:e} of {scale:e}"
             );
         }
     }
@@ -809,24 +821,10 @@ fn external_wing_mesh_gives_the_built_in_gafs() {
         .unwrap()
         .gafs(&plate, &modes)
         .unwrap();
-    for ik in 0..built_in.k.len() {
-        let scale = built_in.q_ss[ik]
-            .iter()
-            .flatten()
-            .chain(&built_in.q_gs[ik])
-            .map(|q| q.norm())
-            .fold(0.0, f64::max);
-        let diff = built_in.q_ss[ik]
-            .iter()
-            .flatten()
-            .zip(g.q_ss[ik].iter().flatten())
-            .chain(built_in.q_gs[ik].iter().zip(&g.q_gs[ik]))
-            .map(|(a, b)| (a - b).norm())
-            .fold(0.0, f64::max);
+    for (k, diff, scale) in table_differences(&built_in, &g) {
         assert!(
             diff < 1e-9 * scale,
-            "k = {}: difference {diff:e} of {scale:e}",
-            built_in.k[ik]
+            "k = {k}: difference {diff:e} of {scale:e}"
         );
     }
     // bad input

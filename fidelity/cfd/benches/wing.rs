@@ -45,6 +45,17 @@ fn naca65a004(x: f64) -> f64 {
     Z[i - 1] + (Z[i] - Z[i - 1]) * (x - X[i - 1]) / (X[i] - X[i - 1])
 }
 
+/// The gust right-hand side at ω (unit amplitude, convected at the free stream).
+fn gust_rhs(op: &LfdOperator, omega: f64, mach: f64) -> Vec<num_complex::Complex64> {
+    op.gust_rhs(
+        omega,
+        &HarmonicGust {
+            convection: mach,
+            x0: 0.0,
+        },
+    )
+}
+
 /// One right-hand side (the gust at k = 0.98, the hardest of the table on the medium mesh) with
 /// each preconditioner of `WING_PRECONDITIONERS` (comma-separated `matrix:fill:ordering`, matrix
 /// `first`/`exact`, ordering `natural`/`rcm`; default the first-order Jacobian's ILU(0) in the
@@ -81,13 +92,7 @@ fn preconditioner_table(e: &Euler, q0: &[gustkit_cfd::residual::State<f64>], mac
             }
         };
         let t_fac = t.elapsed().as_secs_f64();
-        let gust = op.gust_rhs(
-            omega,
-            &HarmonicGust {
-                convection: mach,
-                x0: 0.0,
-            },
-        );
+        let gust = gust_rhs(&op, omega, mach);
         let t = Instant::now();
         match op.solve(&fac, &[gust]) {
             Ok(sol) => println!(
@@ -136,13 +141,7 @@ fn main() {
         let t = Instant::now();
         let f = op.factor(omega, Symbol::Exact).expect("factor");
         let t_fac = t.elapsed().as_secs_f64();
-        let gust = op.gust_rhs(
-            omega,
-            &HarmonicGust {
-                convection: mach,
-                x0: 0.0,
-            },
-        );
+        let gust = gust_rhs(&op, omega, mach);
         let t = Instant::now();
         let sol = op.solve(&f, &[gust]).expect("solve");
         let t_rhs = t.elapsed().as_secs_f64();
