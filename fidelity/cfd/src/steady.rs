@@ -37,6 +37,8 @@ pub struct SteadyParams {
     /// too fast: on the 7 168-cell coarse wing mesh one first-order LU takes 25 s, its block
     /// ILU(0) 0.15 s).
     pub linear_solver: NewtonLinearSolver,
+    /// Fill level and ordering of the block ILU (with `NewtonLinearSolver::BlockIlu`).
+    pub ilu: crate::ilu::IluParams,
     /// Stop when ‖R‖ ≤ tolerance · ‖R₀‖, when ‖R‖ reaches round-off (1e-15 of the fluxes that
     /// cancel in it), or when it stops falling below 1e-11 ‖R₀‖ or below 100 × the round-off of
     /// the fluxes and time terms together.
@@ -88,6 +90,7 @@ impl Default for SteadyParams {
             keep_preconditioner: false,
             exact_jacobian: false,
             linear_solver: NewtonLinearSolver::Lu,
+            ilu: crate::ilu::IluParams::default(),
             tolerance: 1e-13,
         }
     }
@@ -346,7 +349,8 @@ impl Euler {
                         ))
                     }
                     NewtonLinearSolver::BlockIlu => NewtonPreconditioner::Ilu(
-                        crate::ilu::BlockIlu::new(n, &blocks, &shift).map_err(linear)?,
+                        crate::ilu::BlockIlu::with_params(n, &blocks, &shift, &params.ilu)
+                            .map_err(linear)?,
                     ),
                 });
             }
