@@ -286,7 +286,7 @@ impl LfdPreconditionerSpec {
 }
 
 /// Length unit of an external mesh file's coordinates.
-#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq, Hash)]
 #[serde(rename_all = "snake_case")]
 pub enum MeshUnit {
     #[default]
@@ -383,12 +383,6 @@ impl WingMeshFile {
         std::fs::read(&self.path).unwrap_or_default().hash(&mut h);
         self.length_unit.hash(&mut h);
         h.finish()
-    }
-}
-
-impl std::hash::Hash for MeshUnit {
-    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
-        self.name().hash(state);
     }
 }
 
