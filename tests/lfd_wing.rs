@@ -143,6 +143,8 @@ fn lfd_settings_are_checked_at_load() {
     assert!(e.reason.contains("at most 3"), "{e}");
     let e = with(serde_json::json!({"lfd": {"ilu_ordering": "amd"}}));
     assert_eq!(e.path, "aero.fidelity.lfd.ilu_ordering", "{e}");
+    let e = with(serde_json::json!({"lfd": {"steady_max_iterations": 0}}));
+    assert_eq!(e.path, "aero.fidelity.lfd.steady_max_iterations", "{e}");
 }
 
 /// Per reduced frequency of two GAF tables: k, the largest difference of an entry (Q_ss and

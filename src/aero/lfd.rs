@@ -500,6 +500,10 @@ pub struct LfdWingSpec {
     /// The most memory the model may take, GB (refused before anything is allocated).
     #[serde(default = "default_memory_limit")]
     pub memory_limit_gb: f64,
+    /// The most Newton iterations of the steady solve (transonic cases on finer meshes need
+    /// more than the default 60).
+    #[serde(default = "default_steady_iterations")]
+    pub steady_max_iterations: usize,
     /// `gustkit run` writes the LFD amplitudes at this reduced frequency (one of
     /// `aero.reduced_frequencies`) of every mode and the gust at the initial design for
     /// ParaView: `lfd_mode<i>_k<k>.vtk`, `lfd_gust_k<k>.vtk` (pressure, C_p and velocity, real
@@ -519,6 +523,9 @@ fn default_gmres_max() -> usize {
 }
 fn default_deform_radius() -> f64 {
     5.0
+}
+fn default_steady_iterations() -> usize {
+    60
 }
 fn default_memory_limit() -> f64 {
     12.0
@@ -773,6 +780,12 @@ impl WingBuilder for LfdWingSpec {
         self.params()
             .validate()
             .map_err(|r| fail("gmres_tolerance", r))?;
+        if self.steady_max_iterations == 0 {
+            return Err(fail(
+                "steady_max_iterations",
+                "must be at least 1 (got 0)".into(),
+            ));
+        }
         if !(self.deform_radius_chords > 0.0 && self.deform_radius_chords.is_finite()) {
             return Err(fail(
                 "deform_radius_chords",
@@ -874,6 +887,7 @@ impl WingBuilder for LfdWingSpec {
         let params = SteadyParams {
             linear_solver: NewtonLinearSolver::BlockIlu,
             ilu: self.params().ilu,
+            max_iterations: self.steady_max_iterations,
             ..SteadyParams::default()
         };
         let cache = wing.cache_dir.map(|d| self.steady_file(wing, d));
