@@ -147,6 +147,20 @@ fn lfd_settings_are_checked_at_load() {
     assert_eq!(e.path, "aero.fidelity.lfd.steady_max_iterations", "{e}");
 }
 
+/// The study's plate at its initial design and its undamped modes.
+fn plate_and_modes(
+    study: &Study,
+) -> (
+    gustkit::structure::PlateModel,
+    gustkit::structure::modal::Modes,
+) {
+    let plate = study.build_model().unwrap();
+    let st = &study.spec.structure;
+    let modes =
+        gustkit::structure::modal::solve(&plate, st.modes, 0.0, &study.mode_fields()).unwrap();
+    (plate, modes)
+}
+
 /// Per reduced frequency of two GAF tables: k, the largest difference of an entry (Q_ss and
 /// Q_gs) and the largest entry of the first table.
 fn table_differences(
@@ -181,10 +195,7 @@ fn table_differences(
 #[test]
 fn gafs_do_not_depend_on_the_preconditioner() {
     let (study, dir) = small_lfd_study("preconditioners");
-    let plate = study.build_model().unwrap();
-    let st = &study.spec.structure;
-    let modes =
-        gustkit::structure::modal::solve(&plate, st.modes, 0.0, &study.mode_fields()).unwrap();
+    let (plate, modes) = plate_and_modes(&study);
     let table = |extra: serde_json::Value| {
         let mut s = study.clone();
         let aero = s.spec.aero.as_mut().unwrap();
@@ -789,14 +800,12 @@ fn lfd_bench_prints_repetitions() {
 /// the wall nodes' planform coordinates recovered from their positions instead of the grid's
 /// parameters). A mesh of another planform (the same mesh read as metres, 39 times too large),
 /// a 2-D mesh, a missing file and a mesh beside explicit sizes are refused with the field's
-/// path and the reason; planform gradients are refused (the file's nodes do not move).
+/// path and the reason; the fidelity offers thickness gradients but not planform ones (the
+/// file's nodes do not move with the planform).
 #[test]
 fn external_wing_mesh_gives_the_built_in_gafs() {
     let (study, dir) = small_lfd_study("mesh-file");
-    let plate = study.build_model().unwrap();
-    let st = &study.spec.structure;
-    let modes =
-        gustkit::structure::modal::solve(&plate, st.modes, 0.0, &study.mode_fields()).unwrap();
+    let (plate, modes) = plate_and_modes(&study);
     let built_in = study
         .aero_model(&plate)
         .unwrap()
@@ -831,6 +840,15 @@ fn external_wing_mesh_gives_the_built_in_gafs() {
         "mesh_file": {"path": file.to_string_lossy(), "markers": markers, "length_unit": "in"}}});
     let mut external = load(&v).unwrap();
     external.cache_dir = Some(dir.clone());
+    let caps = external
+        .spec
+        .aero
+        .as_ref()
+        .unwrap()
+        .fidelity
+        .builder()
+        .capabilities();
+    assert!(caps.reverse && !caps.reverse_planform, "{caps:?}");
     let g = external
         .aero_model(&plate)
         .unwrap()
