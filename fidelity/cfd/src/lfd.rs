@@ -675,12 +675,35 @@ pub(crate) mod tests {
         gust: Option<&Gust>,
         motion: Option<crate::unsteady::Motion<'_>>,
     ) -> Vec<(f64, f64)> {
-        let dt = 2.0 * std::f64::consts::PI / omega / steps_per_period as f64;
-        let mut e = lfd.euler.clone();
         let params = SteadyParams {
             exact_jacobian: true,
             ..SteadyParams::small_amplitude()
         };
+        let lift = nonlinear_lift_periods(
+            lfd,
+            omega,
+            steps_per_period,
+            periods,
+            gust,
+            motion,
+            &params,
+        );
+        lift.last().unwrap().clone()
+    }
+
+    /// [`nonlinear_lift`] with the dual-time settings `params`, the lift over every period (the
+    /// first period first), so that a caller can watch the start-up transient decay.
+    pub(crate) fn nonlinear_lift_periods(
+        lfd: &LfdOperator,
+        omega: f64,
+        steps_per_period: usize,
+        periods: usize,
+        gust: Option<&Gust>,
+        motion: Option<crate::unsteady::Motion<'_>>,
+        params: &SteadyParams,
+    ) -> Vec<Vec<(f64, f64)>> {
+        let dt = 2.0 * std::f64::consts::PI / omega / steps_per_period as f64;
+        let mut e = lfd.euler.clone();
         let (_, samples) = march(
             &mut e,
             lfd.q0.clone(),
@@ -688,13 +711,14 @@ pub(crate) mod tests {
             motion,
             dt,
             periods * steps_per_period,
-            &params,
+            params,
         )
         .unwrap();
         let lift0 = lfd.euler.wall_force(&lfd.q0)[1];
-        samples[samples.len() - steps_per_period..]
-            .iter()
-            .map(|s| (s.time, s.force[1] - lift0))
+        // levels 1 ..= steps of each period (t = 0 is level 0)
+        samples[1..]
+            .chunks(steps_per_period)
+            .map(|c| c.iter().map(|s| (s.time, s.force[1] - lift0)).collect())
             .collect()
     }
 
