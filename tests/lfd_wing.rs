@@ -147,6 +147,32 @@ fn lfd_settings_are_checked_at_load() {
     assert_eq!(e.path, "aero.fidelity.lfd.steady_max_iterations", "{e}");
 }
 
+/// A steady solve that runs out of Newton iterations is a clear error naming the key that
+/// raises them, how far the residual fell and its history, and leaves nothing in the folder.
+#[test]
+fn unconverged_steady_state_names_its_key() {
+    let (mut study, dir) = small_lfd_study("steady-limit");
+    match study.spec.aero.as_mut().map(|a| &mut a.fidelity) {
+        Some(gustkit::aero::FidelitySpec::Lfd(l)) => l.steady_max_iterations = 2,
+        _ => panic!("an LFD study"),
+    }
+    let plate = study.build_model().unwrap();
+    let e = study
+        .aero_model(&plate)
+        .err()
+        .expect("two Newton iterations are too few");
+    let text = format!("{e:#}");
+    eprintln!("{text}");
+    assert!(
+        text.contains("aero.fidelity.lfd.steady_max_iterations")
+            && text.contains("did not converge in 2 Newton iterations")
+            && text.contains("residual history"),
+        "{text}"
+    );
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// The study's plate at its initial design and its undamped modes.
 fn plate_and_modes(
     study: &Study,

@@ -524,6 +524,28 @@ fn default_gmres_max() -> usize {
 fn default_deform_radius() -> f64 {
     5.0
 }
+/// The build error of a steady solve that failed: one that ran out of Newton iterations points
+/// at the key that raises them, with how far the residual fell (the whole history follows).
+fn steady_failure(err: gustkit_cfd::steady::SteadyError, limit: usize) -> BuildError {
+    match &err {
+        gustkit_cfd::steady::SteadyError::NoConvergence { history, .. } => {
+            let first = history.first().copied().unwrap_or(f64::NAN);
+            let last = history.last().copied().unwrap_or(f64::NAN);
+            BuildError {
+                path: "steady_max_iterations".into(),
+                reason: format!(
+                    "the steady state did not converge in {limit} Newton iterations (the residual fell from {first:.3e} to {last:.3e}, {:.1} decades): raise steady_max_iterations (transonic cases on the medium mesh need about 250); {err}",
+                    (first / last).log10()
+                ),
+            }
+        }
+        _ => BuildError {
+            path: String::new(),
+            reason: format!("steady state did not converge: {err}"),
+        },
+    }
+}
+
 fn default_steady_iterations() -> usize {
     60
 }
@@ -918,7 +940,7 @@ impl WingBuilder for LfdWingSpec {
                     Some(solved) => solved,
                     None => e
                         .solve_steady(free_stream(), &params)
-                        .map_err(|err| fail(format!("steady state did not converge: {err}")))?,
+                        .map_err(|err| steady_failure(err, self.steady_max_iterations))?,
                 };
                 if let Some(f) = &cache {
                     // a cache that cannot be written costs the next run a steady solve, no more

@@ -679,15 +679,8 @@ pub(crate) mod tests {
             exact_jacobian: true,
             ..SteadyParams::small_amplitude()
         };
-        let lift = nonlinear_lift_periods(
-            lfd,
-            omega,
-            steps_per_period,
-            periods,
-            gust,
-            motion,
-            &params,
-        );
+        let lift =
+            nonlinear_lift_periods(lfd, omega, steps_per_period, periods, gust, motion, &params);
         lift.last().unwrap().clone()
     }
 
