@@ -1,6 +1,7 @@
 //! Plate finite-element model of the wing: elements, mesh, assembly, modal analysis and exact
 //! sensitivities.
 
+pub mod band;
 pub mod element;
 mod material;
 pub mod mesh;

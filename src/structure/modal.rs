@@ -1,12 +1,18 @@
 //! Modal analysis: K φ = λ M φ, mass-normalized modes, generalized matrices, sampling.
 //!
-//! Each uncoupled field (bending, membrane) is solved densely and completely: M = L Lᵀ, the standard
-//! problem L⁻¹ K L⁻ᵀ y = λ y with faer's self-adjoint eigensolver, φ = L⁻ᵀ y. The full spectrum is
-//! kept because the exact eigenvector derivatives use the complete modal expansion.
+//! Each uncoupled field (bending, membrane) is solved for its lowest modes only: K = L Lᵀ, and
+//! Lanczos with full reorthogonalization on the bounded operator L⁻¹ M L⁻ᵀ (eigenvalues
+//! μ = 1/λ, the lowest structural modes at the top of its spectrum, where Lanczos converges
+//! first), run until every wanted Ritz pair's residual is at round-off. The exact eigenvector
+//! derivatives then need no complete spectrum: Nelson's method solves (K − λ_i M) a = r with
+//! the row and column of φ_i's largest entry removed (one factorization per retained mode, made
+//! when the reverse mode first asks for it). The complete dense decomposition is kept
+//! ([`solve_field_complete`]) as the reference the tests hold the partial one to.
 //!
 //! Conventions: φᵀ M φ = 1; the sign of each mode makes its largest-magnitude translational nodal
 //! value (w for bending, u or v for membrane) positive.
 
+use super::band::BandLu;
 use super::element;
 use super::model::{Field, PlateModel, NODAL};
 use faer::linalg::triangular_solve::{
@@ -14,6 +20,8 @@ use faer::linalg::triangular_solve::{
 };
 use faer::{Mat, Par, Side};
 use gustkit_core::scalar::Scalar;
+use rayon::prelude::*;
+use std::sync::OnceLock;
 
 /// Why a modal analysis failed.
 #[derive(Debug, thiserror::Error)]
@@ -28,56 +36,346 @@ pub enum ModalError {
     Unconstrained(Field),
 }
 
-/// Complete eigen-decomposition of one field, in the well-conditioned inverse form:
-/// K = L Lᵀ, L⁻¹ M L⁻ᵀ y_j = μ_j y_j with μ_j = 1/λ_j, φ_j = L⁻ᵀ y_j / √μ_j.
-///
-/// Reducing with the stiffness (not the mass) puts the lowest modes at the top of the spectrum of
-/// a bounded operator, so they carry full relative precision, and the modal expansion can be
-/// written without ever dividing by the tiny μ_j of the highest modes.
-#[derive(Clone, Debug)]
+/// Nelson's factorization for one mode: K − λ M without the row and column `pivot` (φ's
+/// largest entry), banded LU with partial pivoting (the matrix is indefinite; the plate's
+/// stiffness and mass couple only the DOFs of neighbouring nodes).
+#[derive(Debug)]
+struct Nelson {
+    pivot: usize,
+    lu: BandLu,
+}
+
+/// The lowest modes of one field and what their exact derivatives need.
+#[derive(Debug)]
 pub struct FieldEigen {
     pub field: Field,
-    /// Cholesky factor L of the field stiffness.
-    pub chol: Mat<f64>,
-    /// Orthonormal eigenvectors y_j (columns).
-    pub y: Mat<f64>,
-    /// Eigenvalues μ_j = 1/λ_j, ascending (lowest structural modes last).
-    pub mu: Vec<f64>,
+    /// Stiffness and mass over the field's free DOFs.
+    k: Mat<f64>,
+    m: Mat<f64>,
+    /// The lowest eigenvalues λ_j, ascending.
+    pub lambda: Vec<f64>,
+    /// Mass-normalized eigenvectors φ_j (columns, in the order of `lambda`).
+    pub phi: Mat<f64>,
+    /// Half-bandwidth of K and M (largest |i − j| of a nonzero entry).
+    bandwidth: usize,
+    /// Per column: Nelson's factorization, made at first use.
+    nelson: Vec<OnceLock<Nelson>>,
+}
+
+impl Clone for FieldEigen {
+    fn clone(&self) -> Self {
+        Self {
+            field: self.field,
+            k: self.k.clone(),
+            m: self.m.clone(),
+            lambda: self.lambda.clone(),
+            phi: self.phi.clone(),
+            bandwidth: self.bandwidth,
+            // factorizations are made again where a clone needs them
+            nelson: (0..self.lambda.len()).map(|_| OnceLock::new()).collect(),
+        }
+    }
 }
 
 impl FieldEigen {
     /// Column of the j-th lowest structural mode.
     pub fn column_of_mode(&self, j: usize) -> usize {
-        self.mu.len() - 1 - j
+        j
     }
 
-    /// Mass-normalized mode of column c: φ = L⁻ᵀ y_c / √μ_c.
+    /// Free DOFs of the field.
+    pub fn n_dofs(&self) -> usize {
+        self.k.nrows()
+    }
+
+    /// Mass-normalized mode of column c.
     pub fn mode_vector(&self, c: usize) -> Vec<f64> {
-        let mut v = self.y.col(c).to_owned();
-        solve_upper_triangular_in_place(self.chol.transpose(), v.as_mat_mut(), Par::Seq);
-        let s = 1.0 / self.mu[c].sqrt();
-        v.iter().map(|x| x * s).collect()
+        self.phi.col(c).iter().copied().collect()
     }
 
-    /// Σ_{j≠c} φ_j (φ_jᵀ r) / (λ_c − λ_j), the complete modal expansion applied to r, evaluated as
-    /// L⁻ᵀ Σ_{j≠c} y_j (y_jᵀ L⁻¹ r) μ_c / (μ_j − μ_c).
+    /// Makes Nelson's factorizations of the given columns (in parallel) before they are used.
+    pub fn prepare(&self, columns: &[usize]) {
+        columns.par_iter().for_each(|&c| {
+            self.nelson(c);
+        });
+    }
+
+    fn nelson(&self, c: usize) -> &Nelson {
+        self.nelson[c].get_or_init(|| {
+            let n = self.n_dofs();
+            let phi = self.phi.col(c);
+            let pivot = (0..n)
+                .max_by(|&a, &b| phi[a].abs().total_cmp(&phi[b].abs()))
+                .expect("a field has DOFs");
+            let lam = self.lambda[c];
+            // the full index of a reduced one (the pivot's row and column dropped)
+            let full = |i: usize| if i < pivot { i } else { i + 1 };
+            let lu = BandLu::factor(n - 1, self.bandwidth, self.bandwidth, |i, j| {
+                let (i, j) = (full(i), full(j));
+                self.k[(i, j)] - lam * self.m[(i, j)]
+            })
+            .expect("K − λM without the pivot's row and column is regular for a simple λ");
+            Nelson { pivot, lu }
+        })
+    }
+
+    /// Σ_{j≠c} φ_j (φ_jᵀ r) / (λ_c − λ_j), the complete modal expansion applied to r, without the
+    /// complete spectrum: it is the a with (K − λ_c M) a = −(r − M φ_c φ_cᵀ r) and φ_cᵀ M a = 0.
+    /// Nelson's method: the right-hand side is orthogonal to φ_c, so solving with φ_c's largest
+    /// entry's row and column removed (that entry of the solution zero) satisfies the removed
+    /// row too; adding −(φ_cᵀ M v) φ_c makes the solution M-orthogonal to φ_c.
     pub fn expansion(&self, c: usize, r: &[f64]) -> Vec<f64> {
         let n = r.len();
-        let mut z = Mat::from_fn(n, 1, |i, _| r[i]);
-        solve_lower_triangular_in_place(self.chol.as_ref(), z.as_mut(), Par::Seq);
-        let mut coef = self.y.transpose() * &z;
-        let mu_c = self.mu[c];
-        for j in 0..n {
-            coef[(j, 0)] = if j == c {
-                0.0
-            } else {
-                coef[(j, 0)] * mu_c / (self.mu[j] - mu_c)
-            };
+        let phi = self.phi.col(c);
+        let phi_r: f64 = phi.iter().zip(r).map(|(a, b)| a * b).sum();
+        let m_phi = &self.m * phi;
+        let nel = self.nelson(c);
+        let skip = |i: usize| if i < nel.pivot { i } else { i + 1 };
+        let mut v_red: Vec<f64> = (0..n - 1)
+            .map(|i| {
+                let i = skip(i);
+                -(r[i] - m_phi[i] * phi_r)
+            })
+            .collect();
+        nel.lu.solve_in_place(&mut v_red);
+        let mut v = vec![0.0; n];
+        for (i, x) in v_red.into_iter().enumerate() {
+            v[skip(i)] = x;
         }
-        let mut out = &self.y * &coef;
-        solve_upper_triangular_in_place(self.chol.transpose(), out.as_mut(), Par::Seq);
-        out.col(0).iter().copied().collect()
+        let shift: f64 = m_phi.iter().zip(&v).map(|(a, b)| a * b).sum();
+        v.iter()
+            .zip(phi.iter())
+            .map(|(a, p)| a - shift * p)
+            .collect()
     }
+}
+
+/// The largest |i − j| over the nonzero entries of two symmetric matrices.
+fn half_bandwidth(k: &Mat<f64>, m: &Mat<f64>) -> usize {
+    let n = k.nrows();
+    (0..n)
+        .map(|j| {
+            (0..j)
+                .find(|&i| k[(i, j)] != 0.0 || m[(i, j)] != 0.0)
+                .map_or(0, |i| j - i)
+        })
+        .max()
+        .unwrap_or(0)
+}
+
+/// Solves one field for its `n_want` lowest modes (all of them when `n_want` is at least the
+/// DOF count, or when the field is so small that the complete decomposition is as cheap).
+pub fn solve_field(
+    model: &PlateModel,
+    field: Field,
+    n_want: usize,
+) -> Result<FieldEigen, ModalError> {
+    let (k, m) = model.assemble(field);
+    let n = k.nrows();
+    let n_want = n_want.min(n);
+    let chol = k
+        .llt(Side::Lower)
+        .map_err(|_| ModalError::Unconstrained(field))?
+        .L()
+        .to_owned();
+    let (mu, y) = if n <= 4 * n_want + 40 {
+        complete(field, &chol, &m, n_want)?
+    } else {
+        lanczos(field, &chol, &m, n_want)?
+    };
+    // φ = L⁻ᵀ y / √μ, λ = 1/μ (μ descending: λ ascending)
+    let mut phi = y;
+    solve_upper_triangular_in_place(chol.transpose(), phi.as_mut(), Par::Seq);
+    for (j, &mu_j) in mu.iter().enumerate() {
+        let s = 1.0 / mu_j.sqrt();
+        phi.col_mut(j).iter_mut().for_each(|v| *v *= s);
+    }
+    Ok(FieldEigen {
+        field,
+        bandwidth: half_bandwidth(&k, &m),
+        k,
+        m,
+        lambda: mu.iter().map(|v| 1.0 / v).collect(),
+        phi,
+        nelson: (0..n_want).map(|_| OnceLock::new()).collect(),
+    })
+}
+
+/// The complete decomposition of L⁻¹ M L⁻ᵀ: its `n_want` largest eigenvalues (descending) and
+/// their orthonormal eigenvectors.
+fn complete(
+    field: Field,
+    chol: &Mat<f64>,
+    m: &Mat<f64>,
+    n_want: usize,
+) -> Result<(Vec<f64>, Mat<f64>), ModalError> {
+    let n = m.nrows();
+    let mut b = m.clone();
+    solve_lower_triangular_in_place(chol.as_ref(), b.as_mut(), Par::Seq);
+    let mut bt = b.transpose().to_owned();
+    solve_lower_triangular_in_place(chol.as_ref(), bt.as_mut(), Par::Seq);
+    let b = Mat::from_fn(n, n, |i, j| 0.5 * (bt[(i, j)] + bt[(j, i)]));
+    let eig = b
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|_| ModalError::Eigen(field))?;
+    if eig.S()[n - 1] <= 0.0 {
+        return Err(ModalError::MassNotPositive(field));
+    }
+    let cols: Vec<usize> = (0..n_want).map(|j| n - 1 - j).collect();
+    let mu = cols.iter().map(|&c| eig.S()[c]).collect();
+    let y = Mat::from_fn(n, n_want, |i, j| eig.U()[(i, cols[j])]);
+    Ok((mu, y))
+}
+
+/// Relative residual ‖C y − μ y‖ / μ_max at which a wanted Ritz pair counts as converged.
+const LANCZOS_TOLERANCE: f64 = 1e-14;
+
+/// Lanczos with full reorthogonalization on C = L⁻¹ M L⁻ᵀ for its `n_want` largest eigenpairs
+/// (descending). Converged when every wanted Ritz pair's residual bound |β_m s_mi| is below
+/// [`LANCZOS_TOLERANCE`] of the largest Ritz value (the Krylov space is then refined no further);
+/// at a breakdown (an invariant subspace) a fresh start vector orthogonal to the basis continues
+/// the run, so no eigenvalue is missed for want of a component in the start vector.
+fn lanczos(
+    field: Field,
+    chol: &Mat<f64>,
+    m: &Mat<f64>,
+    n_want: usize,
+) -> Result<(Vec<f64>, Mat<f64>), ModalError> {
+    let n = m.nrows();
+    let apply = |v: &[f64], out: &mut Mat<f64>| {
+        for (i, x) in v.iter().enumerate() {
+            out[(i, 0)] = *x;
+        }
+        solve_upper_triangular_in_place(chol.transpose(), out.as_mut(), Par::Seq);
+        let mv = m * &*out;
+        out.copy_from(&mv);
+        solve_lower_triangular_in_place(chol.as_ref(), out.as_mut(), Par::Seq);
+    };
+    // a deterministic start vector with every component present
+    let start = |seed: usize| -> Vec<f64> {
+        (0..n)
+            .map(|i| 1.0 + 0.5 * ((i * (2 * seed + 7) + 3) as f64 * 0.618_033_988_75).sin())
+            .collect()
+    };
+    let max_steps = n;
+    let mut basis: Vec<Vec<f64>> = Vec::with_capacity(max_steps.min(200));
+    let (mut alpha, mut beta): (Vec<f64>, Vec<f64>) = (Vec::new(), Vec::new());
+    let mut w = Mat::<f64>::zeros(n, 1);
+    let orthogonalize = |v: &mut Vec<f64>, basis: &[Vec<f64>]| {
+        // classical Gram–Schmidt twice ("twice is enough")
+        for _ in 0..2 {
+            for b in basis {
+                let d: f64 = b.iter().zip(v.iter()).map(|(x, y)| x * y).sum();
+                v.iter_mut().zip(b).for_each(|(x, y)| *x -= d * y);
+            }
+        }
+    };
+    let normalize = |v: &mut Vec<f64>| -> f64 {
+        let nrm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        v.iter_mut().for_each(|x| *x /= nrm);
+        nrm
+    };
+    let mut q = start(0);
+    normalize(&mut q);
+    let mut restarts = 0;
+    loop {
+        basis.push(q.clone());
+        let j = basis.len();
+        apply(&q, &mut w);
+        let mut r: Vec<f64> = (0..n).map(|i| w[(i, 0)]).collect();
+        let a: f64 = r.iter().zip(&q).map(|(x, y)| x * y).sum();
+        alpha.push(a);
+        orthogonalize(&mut r, &basis);
+        let b = r.iter().map(|x| x * x).sum::<f64>().sqrt();
+        // the wanted Ritz pairs of T_j and their residual bounds |b s_ji|
+        let check = j >= n_want && (j % 4 == 0 || j == max_steps || b <= 0.0);
+        if check || j == max_steps {
+            let t = Mat::from_fn(j, j, |i, k| {
+                if i == k {
+                    alpha[i]
+                } else if i + 1 == k || k + 1 == i {
+                    beta[i.min(k)]
+                } else {
+                    0.0
+                }
+            });
+            let eig = t
+                .self_adjoint_eigen(Side::Lower)
+                .map_err(|_| ModalError::Eigen(field))?;
+            let top = eig.S()[j - 1];
+            if top <= 0.0 {
+                return Err(ModalError::MassNotPositive(field));
+            }
+            let done = j == max_steps
+                || (0..n_want).all(|i| {
+                    let c = j - 1 - i;
+                    (b * eig.U()[(j - 1, c)]).abs() <= LANCZOS_TOLERANCE * top
+                });
+            if done {
+                let mu: Vec<f64> = (0..n_want).map(|i| eig.S()[j - 1 - i]).collect();
+                let mut y = Mat::<f64>::zeros(n, n_want);
+                for i in 0..n_want {
+                    let c = j - 1 - i;
+                    for (k, v) in basis.iter().enumerate() {
+                        let s = eig.U()[(k, c)];
+                        for (row, x) in v.iter().enumerate() {
+                            y[(row, i)] += s * x;
+                        }
+                    }
+                    let nrm = y.col(i).iter().map(|x| x * x).sum::<f64>().sqrt();
+                    y.col_mut(i).iter_mut().for_each(|x| *x /= nrm);
+                }
+                if mu.iter().any(|v| !(*v > 0.0 && v.is_finite())) {
+                    return Err(ModalError::MassNotPositive(field));
+                }
+                return Ok((mu, y));
+            }
+        }
+        let tiny = 1e-10 * alpha.iter().fold(0.0f64, |acc, v| acc.max(v.abs()));
+        if b > tiny {
+            beta.push(b);
+            r.iter_mut().for_each(|x| *x /= b);
+            q = r;
+        } else {
+            // an invariant subspace: continue from a fresh direction (T splits there)
+            restarts += 1;
+            let mut fresh = start(restarts);
+            orthogonalize(&mut fresh, &basis);
+            if normalize(&mut fresh) <= 1e-8 * (n as f64).sqrt() {
+                return Err(ModalError::Eigen(field));
+            }
+            beta.push(0.0);
+            q = fresh;
+        }
+    }
+}
+
+/// The complete decomposition of one field (every mode, ascending), by the dense
+/// self-adjoint eigensolver: the reference for the partial solve.
+pub fn solve_field_complete(model: &PlateModel, field: Field) -> Result<FieldEigen, ModalError> {
+    let (k, m) = model.assemble(field);
+    let n = k.nrows();
+    let chol = k
+        .llt(Side::Lower)
+        .map_err(|_| ModalError::Unconstrained(field))?
+        .L()
+        .to_owned();
+    let (mu, y) = complete(field, &chol, &m, n)?;
+    let mut phi = y;
+    solve_upper_triangular_in_place(chol.transpose(), phi.as_mut(), Par::Seq);
+    for (j, &mu_j) in mu.iter().enumerate() {
+        let s = 1.0 / mu_j.sqrt();
+        phi.col_mut(j).iter_mut().for_each(|v| *v *= s);
+    }
+    Ok(FieldEigen {
+        field,
+        bandwidth: half_bandwidth(&k, &m),
+        k,
+        m,
+        lambda: mu.iter().map(|v| 1.0 / v).collect(),
+        phi,
+        nelson: (0..n).map(|_| OnceLock::new()).collect(),
+    })
 }
 
 /// One retained mode.
@@ -153,35 +451,6 @@ impl Modes {
     }
 }
 
-/// Solves one field completely.
-pub fn solve_field(model: &PlateModel, field: Field) -> Result<FieldEigen, ModalError> {
-    let (k, m) = model.assemble(field);
-    let n = k.nrows();
-    let llt = k
-        .llt(Side::Lower)
-        .map_err(|_| ModalError::Unconstrained(field))?;
-    let chol = llt.L().to_owned();
-    // B = L⁻¹ M L⁻ᵀ
-    let mut b = m;
-    solve_lower_triangular_in_place(chol.as_ref(), b.as_mut(), Par::Seq);
-    let mut bt = b.transpose().to_owned();
-    solve_lower_triangular_in_place(chol.as_ref(), bt.as_mut(), Par::Seq);
-    let b = Mat::from_fn(n, n, |i, j| 0.5 * (bt[(i, j)] + bt[(j, i)]));
-    let eig = b
-        .self_adjoint_eigen(Side::Lower)
-        .map_err(|_| ModalError::Eigen(field))?;
-    let mu: Vec<f64> = (0..n).map(|i| eig.S()[i]).collect();
-    if mu.last().is_some_and(|&top| top <= 0.0) {
-        return Err(ModalError::MassNotPositive(field));
-    }
-    Ok(FieldEigen {
-        field,
-        chol,
-        y: eig.U().to_owned(),
-        mu,
-    })
-}
-
 /// The `n_modes` lowest modes over the given fields with modal damping ratio `damping_ratio`.
 ///
 /// Aeroelastic studies retain bending modes only: for a flat plate the in-plane (membrane) field is
@@ -201,16 +470,16 @@ pub fn solve(
     }
     let fields: Vec<FieldEigen> = fields
         .iter()
-        .map(|&f| solve_field(model, f))
+        .map(|&f| solve_field(model, f, n_modes))
         .collect::<Result<_, _>>()?;
     // merge the two ascending spectra
     let mut picks: Vec<(f64, usize, usize)> = fields
         .iter()
         .enumerate()
         .flat_map(|(fi, fe)| {
-            (0..n_modes.min(fe.mu.len())).map(move |j| {
+            (0..n_modes.min(fe.lambda.len())).map(move |j| {
                 let c = fe.column_of_mode(j);
-                (1.0 / fe.mu[c], fi, c)
+                (fe.lambda[c], fi, c)
             })
         })
         .collect();
@@ -234,7 +503,7 @@ pub fn solve(
                 .fold(0.0f64, |a, v| if v.abs() > a.abs() { v } else { a });
             if big < 0.0 {
                 shape.iter_mut().for_each(|v| *v = -*v);
-                fe.y.col_mut(column).iter_mut().for_each(|v| *v = -*v);
+                fe.phi.col_mut(column).iter_mut().for_each(|v| *v = -*v);
             }
             Mode {
                 field: fe.field,

@@ -1,8 +1,8 @@
 //! Exact reverse- and forward-mode sensitivities of the structural outputs with respect to the
 //! design vector x = [t (patch thicknesses), span, sweep_c4, root_chord, tip_chord].
 //!
-//! Eigen-derivatives use the complete modal expansion of the (dense, fully solved) field, exact for
-//! distinct eigenvalues:
+//! Eigen-derivatives use the complete modal expansion, exact for distinct eigenvalues, evaluated
+//! without the complete spectrum by Nelson's method ([`super::modal::FieldEigen::expansion`]):
 //!   dλ_i = φ_iᵀ (dK − λ_i dM) φ_i,
 //!   dφ_i = Σ_{j≠i} φ_j φ_jᵀ (dK − λ_i dM) φ_i / (λ_i − λ_j) − ½ φ_i (φ_iᵀ dM φ_i),
 //! the second term keeping φᵀ M φ = 1. In reverse, the seeds (λ̄_i, φ̄_i) collapse to
@@ -63,6 +63,15 @@ pub fn modes_vjp(model: &PlateModel, modes: &Modes, seed: &ModalSeed) -> Vec<f64
         let Some(fe) = modes.field(field) else {
             continue;
         };
+        // Nelson's factorizations of the seeded shapes, in parallel, before they are used
+        let seeded: Vec<usize> = modes
+            .modes
+            .iter()
+            .enumerate()
+            .filter(|(i, m)| m.field == field && seed.shape.get(*i).is_some_and(|s| !s.is_empty()))
+            .map(|(_, m)| m.column)
+            .collect();
+        fe.prepare(&seeded);
         // (u_i, v_i, φ_i) over the free DOFs of this field
         let mut triples: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)> = Vec::new();
         for (i, mode) in modes.modes.iter().enumerate() {
@@ -134,7 +143,7 @@ pub fn modes_jvp(model: &PlateModel, modes: &Modes, dx: &[f64]) -> (Vec<f64>, Ve
         let Some(fe) = modes.field(field) else {
             continue;
         };
-        let n = fe.mu.len();
+        let n = fe.n_dofs();
         let pow = stiffness_power(field);
         let mut dk = Mat::<f64>::zeros(n, n);
         let mut dm = Mat::<f64>::zeros(n, n);
@@ -252,25 +261,25 @@ fn matvec(m: &Mat<f64>, v: &[f64]) -> Vec<f64> {
 /// S_m = ω_m² rᵀ M φ_m with r the rigid rotation about the x axis (w = y, ∂w/∂y = 1). Positive when
 /// the loads bend the wing up. N·m per unit η.
 pub fn root_bending_moment(model: &PlateModel, modes: &Modes) -> Vec<f64> {
-    modes
-        .modes
-        .iter()
-        .map(|m| {
-            if m.field != Field::Bending {
-                return 0.0;
-            }
-            let mut b = 0.0;
-            for (e, (_, me)) in model.element_duals(Field::Bending).iter().enumerate() {
-                let (r, _) = root_rotation(model, e);
+    // the element mass matrices' values alone, each built once for every mode: the function
+    // path does not build the planform-derivative cache that only the reverse mode needs
+    let p = model.planform().to_array();
+    let mut b = vec![0.0; modes.len()];
+    for e in 0..model.mesh.elements.len() {
+        let (_, me) = model.element_matrices(Field::Bending, p, e, model.element_thickness(e));
+        let (r, _) = root_rotation(model, e);
+        // rᵀ Mₑ, then its product with each mode
+        let rm: [f64; 12] = std::array::from_fn(|c| (0..12).map(|a| r[a] * me[a * 12 + c]).sum());
+        for (bi, m) in b.iter_mut().zip(&modes.modes) {
+            if m.field == Field::Bending {
                 let phi = element_nodal(model, e, &m.shape);
-                for a in 0..12 {
-                    for c in 0..12 {
-                        b += r[a] * me[a * 12 + c].v * phi[c];
-                    }
-                }
+                *bi += rm.iter().zip(&phi).map(|(x, y)| x * y).sum::<f64>();
             }
-            m.lambda * b
-        })
+        }
+    }
+    b.iter()
+        .zip(&modes.modes)
+        .map(|(bi, m)| m.lambda * bi)
         .collect()
 }
 
