@@ -174,7 +174,6 @@ pub fn respond(a: Aeroelastic, settings: &GustSettings) -> Result<Evaluation> {
         table,
     } = a;
     let f = &aero.flight;
-    check_stability(&modes, &table, f)?;
     let omega_max = table.k.last().copied().unwrap_or(0.0) * f.velocity / f.b_ref;
     let grid = FrequencyGrid::log(settings.omega_min, omega_max, settings.points)?;
     let samplers: Vec<Option<Sampler>> = settings
@@ -213,7 +212,14 @@ pub fn respond(a: Aeroelastic, settings: &GustSettings) -> Result<Evaluation> {
         outputs_s,
         settings: settings.clone(),
     };
-    let response = gust::solve(&ev.problem())?;
+    // the stability check and the response side by side (the p-k's few roots a speed leave a
+    // thread idle that the response's frequencies fill); an unstable model's error comes first
+    let (stable, response) = rayon::join(
+        || check_stability(&ev.modes, &ev.table, &ev.aero.flight),
+        || gust::solve(&ev.problem()),
+    );
+    stable?;
+    let response = response?;
     ev.rms_m = response.rms.clone();
     ev.n0_hz = response.n0.clone();
     ev.response = response;

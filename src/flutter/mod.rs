@@ -323,7 +323,8 @@ impl PkProblem<'_> {
 
     /// Q(k) by the table's spline (clamped to its range) as (real part, imaginary part), and the
     /// slope dQ/dk the same way (zero outside the table, where Q is held).
-    fn q_at(&self, k: f64) -> Result<[Mat<f64>; 4], FlutterError> {
+    /// The slopes only when `slope` (else empty matrices: the roots alone need none).
+    fn q_at_with(&self, k: f64, slope: bool) -> Result<[Mat<f64>; 4], FlutterError> {
         let (w, dw) = self.spline_at(k)?;
         // the Q_I/k damping term is held at k = 1e-6 below it (the steady limit dQ_I/dk)
         let (w_im, dw_im) = if k < K_HOLD {
@@ -338,11 +339,12 @@ impl PkProblem<'_> {
                 .map(|(i, wi)| self.table.q_ss[i][m][j] * *wi)
                 .sum()
         };
+        let ns = if slope { n } else { 0 };
         Ok([
             Mat::from_fn(n, n, |m, j| q(&w, m, j).re),
             Mat::from_fn(n, n, |m, j| q(&w_im, m, j).im),
-            Mat::from_fn(n, n, |m, j| q(&dw, m, j).re),
-            Mat::from_fn(n, n, |m, j| q(&dw_im, m, j).im),
+            Mat::from_fn(ns, ns, |m, j| q(&dw, m, j).re),
+            Mat::from_fn(ns, ns, |m, j| q(&dw_im, m, j).im),
         ])
     }
 
@@ -370,14 +372,25 @@ impl PkProblem<'_> {
     /// The first-order state matrix of the p-k equation at speed `v` with the aerodynamics at `k`,
     /// and its derivative with respect to k.
     fn state_matrix(&self, v: f64, k: f64) -> Result<(Mat<f64>, Mat<f64>), FlutterError> {
+        self.state_matrix_with(v, k, true)
+    }
+
+    /// [`Self::state_matrix`], the derivative only when `slope` (else an empty matrix).
+    fn state_matrix_with(
+        &self,
+        v: f64,
+        k: f64,
+        slope: bool,
+    ) -> Result<(Mat<f64>, Mat<f64>), FlutterError> {
         let n = self.omega_n.len();
         let beta = self.table.b_ref / v;
         let qd = 0.5 * self.density * v * v;
-        let [qr, qi, dqr, dqi] = self.q_at(k)?;
+        let [qr, qi, dqr, dqi] = self.q_at_with(k, slope)?;
         // below k = 1e-6 the Q_I/k term is held, as the steady limit of the damping
         let (kk, dkk) = if k >= K_HOLD { (k, 1.0) } else { (K_HOLD, 0.0) };
         let mut a = Mat::<f64>::zeros(2 * n, 2 * n);
-        let mut a_k = Mat::<f64>::zeros(2 * n, 2 * n);
+        let ns = if slope { 2 * n } else { 0 };
+        let mut a_k = Mat::<f64>::zeros(ns, ns);
         for i in 0..n {
             a[(i, n + i)] = 1.0;
             for j in 0..n {
@@ -389,8 +402,11 @@ impl PkProblem<'_> {
                 } - qd * beta * qi[(i, j)] / kk;
                 a[(n + i, j)] = -kstiff;
                 a[(n + i, n + j)] = -cdamp;
-                a_k[(n + i, j)] = qd * dqr[(i, j)];
-                a_k[(n + i, n + j)] = qd * beta * (dqi[(i, j)] / kk - dkk * qi[(i, j)] / (kk * kk));
+                if slope {
+                    a_k[(n + i, j)] = qd * dqr[(i, j)];
+                    a_k[(n + i, n + j)] =
+                        qd * beta * (dqi[(i, j)] / kk - dkk * qi[(i, j)] / (kk * kk));
+                }
             }
         }
         Ok((a, a_k))
@@ -398,7 +414,7 @@ impl PkProblem<'_> {
 
     /// Roots p of the p-k equation at speed `v` with the aerodynamics evaluated at `k`.
     fn roots(&self, v: f64, k: f64) -> Result<Vec<Complex64>, FlutterError> {
-        let (mut a, _) = self.state_matrix(v, k)?;
+        let (mut a, _) = self.state_matrix_with(v, k, false)?;
         // the similarity D⁻¹ A D with D = diag(I, s I), s the largest natural frequency, brings
         // the stiffness block (ω², up to 1e6 and more) and the identity block to one scale: the
         // eigenvalues are the same, their rounding errors those of a balanced matrix

@@ -5,6 +5,7 @@ pub mod interp;
 pub mod psd;
 pub mod response;
 pub mod settings;
+pub mod small_lu;
 
 pub use psd::Turbulence;
 pub use response::{

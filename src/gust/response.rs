@@ -15,8 +15,8 @@
 
 use super::interp::SplineWeights;
 use super::psd::Turbulence;
-use faer::linalg::solvers::Solve;
-use faer::{c64, Mat};
+use super::small_lu::SmallLu;
+use faer::c64;
 use gustkit_core::GafTable;
 use rayon::prelude::*;
 
@@ -91,7 +91,7 @@ pub struct GustResponse {
     pub psd: Vec<Vec<f64>>,
     pub eta: Vec<Vec<c64>>,
     h: Vec<Vec<c64>>,
-    lus: Vec<faer::linalg::solvers::PartialPivLu<c64>>,
+    lus: Vec<SmallLu>,
 }
 
 /// Reverse-mode result of [`rms_vjp`].
@@ -144,24 +144,27 @@ impl<'a> GustProblem<'a> {
         SplineWeights::new(&self.table.k, &ks).map_err(GustError::Input)
     }
 
-    /// The aeroelastic matrix A(ω) and right-hand side q Q_gs at grid point j.
-    fn system(&self, w: &[f64], omega: f64) -> (Mat<c64>, Vec<c64>) {
+    /// The aeroelastic matrix A(ω) (row-major) and right-hand side q Q_gs at grid point j.
+    fn system(&self, w: &[f64], omega: f64) -> (Vec<c64>, Vec<c64>) {
         let nm = self.omega_n.len();
         let interp = |f: &dyn Fn(usize) -> c64| -> c64 {
             w.iter().enumerate().map(|(i, wi)| f(i) * *wi).sum()
         };
-        let a = Mat::<c64>::from_fn(nm, nm, |m, n| {
-            let q = interp(&|i| self.table.q_ss[i][m][n]);
-            let mut v = -q * self.q_inf;
-            if m == n {
-                let wn = self.omega_n[m];
-                v += c64::new(
-                    wn * wn - omega * omega,
-                    2.0 * self.damping_ratio * wn * omega,
-                );
+        let mut a = Vec::with_capacity(nm * nm);
+        for m in 0..nm {
+            for n in 0..nm {
+                let q = interp(&|i| self.table.q_ss[i][m][n]);
+                let mut v = -q * self.q_inf;
+                if m == n {
+                    let wn = self.omega_n[m];
+                    v += c64::new(
+                        wn * wn - omega * omega,
+                        2.0 * self.damping_ratio * wn * omega,
+                    );
+                }
+                a.push(v);
             }
-            v
-        });
+        }
         let g = (0..nm)
             .map(|m| interp(&|i| self.table.q_gs[i][m]) * self.q_inf)
             .collect();
@@ -173,17 +176,15 @@ impl<'a> GustProblem<'a> {
 pub fn solve(p: &GustProblem) -> Result<GustResponse, GustError> {
     let weights = p.check()?;
     let nm = p.omega_n.len();
-    let per: Vec<(Vec<c64>, faer::linalg::solvers::PartialPivLu<c64>)> = p
+    let per: Vec<(Vec<c64>, SmallLu)> = p
         .grid
         .omega
         .par_iter()
         .zip(&weights.weights)
         .map(|(&omega, w)| {
             let (a, g) = p.system(w, omega);
-            let lu = a.partial_piv_lu();
-            let rhs = Mat::<c64>::from_fn(nm, 1, |i, _| g[i]);
-            let eta = lu.solve(&rhs);
-            let eta: Vec<c64> = (0..nm).map(|i| eta[(i, 0)]).collect();
+            let lu = SmallLu::factor(nm, a).ok_or(GustError::Singular { omega })?;
+            let eta = lu.solve(&g);
             if eta.iter().any(|v| !(v.re.is_finite() && v.im.is_finite())) {
                 return Err(GustError::Singular { omega });
             }
@@ -267,11 +268,10 @@ pub fn rms_vjp(
                 outputs[y][m] += (hbar.conj() * r.eta[j][m]).re / p.velocity;
             }
         }
-        let mut lam = Mat::<c64>::from_fn(nm, 1, |i, _| eta_bar[i]);
-        r.lus[j].solve_adjoint_in_place(lam.as_mut());
+        let lam = r.lus[j].solve_adjoint(&eta_bar);
         let eta = &r.eta[j];
         for m in 0..nm {
-            let l = lam[(m, 0)];
+            let l = lam[m];
             // Ā_mn = −λ_m conj(η_n); Q̄_ss = −q Ā = q λ_m conj(η_n); Q̄_gs = q λ
             let wn = p.omega_n[m];
             let dadl = c64::new(1.0, omega * p.damping_ratio / wn);
@@ -313,19 +313,21 @@ pub fn rms_jvp(
         };
         let eta = &r.eta[j];
         // dA η and q dQ_gs
-        let rhs = Mat::<c64>::from_fn(nm, 1, |m, _| {
-            let mut v = interp(&|i| d_table.q_gs[i][m]) * p.q_inf;
-            for n in 0..nm {
-                v += interp(&|i| d_table.q_ss[i][m][n]) * p.q_inf * eta[n];
-            }
-            let wn = p.omega_n[m];
-            v - c64::new(1.0, omega * p.damping_ratio / wn) * d_lambda[m] * eta[m]
-        });
+        let rhs: Vec<c64> = (0..nm)
+            .map(|m| {
+                let mut v = interp(&|i| d_table.q_gs[i][m]) * p.q_inf;
+                for n in 0..nm {
+                    v += interp(&|i| d_table.q_ss[i][m][n]) * p.q_inf * eta[n];
+                }
+                let wn = p.omega_n[m];
+                v - c64::new(1.0, omega * p.damping_ratio / wn) * d_lambda[m] * eta[m]
+            })
+            .collect();
         let deta = r.lus[j].solve(&rhs);
         let phi = p.turbulence.psd(omega, p.velocity);
         for (y, s) in p.outputs.iter().enumerate() {
             let dh: c64 = (0..nm)
-                .map(|m| deta[(m, 0)] * s[m] + eta[m] * d_outputs[y][m])
+                .map(|m| deta[m] * s[m] + eta[m] * d_outputs[y][m])
                 .sum::<c64>()
                 / p.velocity;
             d_ms[y] += p.grid.weights[j] * phi * 2.0 * (r.h[y][j].conj() * dh).re;
