@@ -28,8 +28,8 @@ fn lfd_wing_optimization_study_loads() {
 }
 
 /// The flagship's initial design with 4 modes and 6 reduced frequencies on a small built-in
-/// wing mesh (576 cells, LFD solves to 1e-12), its steady state kept in a scratch folder (also
-/// returned, for removal).
+/// wing mesh (768 cells, which halve: the steady state starts by mesh sequencing; LFD solves to
+/// 1e-12), its steady state kept in a scratch folder (also returned, for removal).
 fn small_lfd_study(name: &str) -> (Study, std::path::PathBuf) {
     let dir = std::env::temp_dir().join(format!("gustkit-lfd-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -39,7 +39,7 @@ fn small_lfd_study(name: &str) -> (Study, std::path::PathBuf) {
     v["structure"]["modes"] = serde_json::json!(4);
     v["aero"]["reduced_frequencies"] = serde_json::json!([0.0, 0.1, 0.3, 0.6, 1.0, 2.0]);
     v["aero"]["fidelity"] = serde_json::json!({"lfd": {"gmres_tolerance": 1e-12, "mesh_sizes": {
-        "n_around": 16, "n_radial": 6, "n_span": 4, "n_outboard": 2, "first_spacing_chords": 0.02
+        "n_around": 16, "n_radial": 6, "n_span": 4, "n_outboard": 4, "first_spacing_chords": 0.02
     }}});
     let mut study = load(&v).unwrap();
     study.cache_dir = Some(dir.clone());
@@ -824,7 +824,9 @@ fn lfd_bench_prints_repetitions() {
 /// wing mesh written as SU2 in inches and read back gives the GAF table of the built-in mesh to
 /// 1e-9 of its largest entry (the same cells and faces; only the modes' transfer differs, through
 /// the wall nodes' planform coordinates recovered from their positions instead of the grid's
-/// parameters). A mesh of another planform (the same mesh read as metres, 39 times too large),
+/// parameters; and the steady state: the built-in mesh's is started from the halved mesh's by
+/// mesh sequencing, the file's from the free stream, so this also checks that sequencing
+/// converges to the same state). A mesh of another planform (the same mesh read as metres, 39 times too large),
 /// a 2-D mesh, a missing file and a mesh beside explicit sizes are refused with the field's
 /// path and the reason; the fidelity offers thickness gradients but not planform ones (the
 /// file's nodes do not move with the planform).
@@ -843,7 +845,7 @@ fn external_wing_mesh_gives_the_built_in_gafs() {
         n_around: 16,
         n_radial: 6,
         n_span: 4,
-        n_outboard: 2,
+        n_outboard: 4,
         far_field_chords: 15.0,
         first_spacing_chords: 0.02,
         tip_closure: 0.05,

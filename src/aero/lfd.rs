@@ -586,6 +586,50 @@ impl LfdWingSpec {
         }
     }
 
+    /// The converged steady state on the built-in mesh `spec` (the flight condition, order and
+    /// limiter of the study), started from the state of the mesh with half its cells in each
+    /// direction where there is one, else from the free stream; `None` if it does not converge
+    /// (the caller then starts its own mesh from the free stream).
+    fn sequenced_steady(
+        &self,
+        wing: &WingContext,
+        spec: &WingMeshSpec,
+        params: &SteadyParams,
+    ) -> Option<Vec<gustkit_cfd::residual::State<f64>>> {
+        let wm = WingMesh::new(
+            wing.planform.to_array(),
+            &|x| wing.airfoil.half_thickness(x),
+            spec,
+        );
+        let mut e = Euler::new(wm.mesh, free_stream(wing.flight.mach, 0.0));
+        e.order = self.order.order();
+        e.limiter = self.limiter.limiter();
+        let free_stream = vec![e.q_inf; e.mesh.n_cells];
+        let guess = spec.halved().and_then(|coarse| {
+            let q = self.sequenced_steady(wing, &coarse, params)?;
+            Some(spec.prolong(&coarse, &q))
+        });
+        if let Some(q) = guess {
+            let norm = |q: &[gustkit_cfd::residual::State<f64>]| -> f64 {
+                e.residual(q)
+                    .iter()
+                    .flatten()
+                    .map(|v| v * v)
+                    .sum::<f64>()
+                    .sqrt()
+            };
+            let ratio = norm(&free_stream) / norm(&q);
+            let warm_params = SteadyParams {
+                cfl0: (params.cfl0 * ratio).clamp(params.cfl0, params.cfl_max),
+                ..params.clone()
+            };
+            if let Ok((q, _)) = e.solve_steady(q, &warm_params) {
+                return Some(q);
+            }
+        }
+        e.solve_steady(free_stream, params).ok().map(|(q, _)| q)
+    }
+
     /// The memory the model would take, GB.
     pub fn memory_estimate_gb(&self) -> f64 {
         self.mesh_spec().n_cells() as f64 * bytes_per_cell(self.gmres_restart, self.ilu_fill) / 1e9
@@ -928,14 +972,26 @@ impl WingBuilder for LfdWingSpec {
                         .sum::<f64>()
                         .sqrt()
                 };
-                let warm = previous_state(&e, cache.as_deref()).and_then(|q| {
+                let from_guess = |q: Vec<gustkit_cfd::residual::State<f64>>| {
                     let ratio = norm(&free_stream()) / norm(&q);
                     let warm_params = SteadyParams {
                         cfl0: (params.cfl0 * ratio).clamp(params.cfl0, params.cfl_max),
                         ..params.clone()
                     };
                     e.solve_steady(q, &warm_params).ok()
-                });
+                };
+                // else, on the built-in mesh, from the steady state of the mesh with half the
+                // cells in each direction (itself started the same way): mesh sequencing, which
+                // converges transonic cases on the finer levels in a few Newton iterations where
+                // the free-stream start needs hundreds
+                let warm = previous_state(&e, cache.as_deref())
+                    .and_then(from_guess)
+                    .or_else(|| {
+                        let spec = self.mesh_spec();
+                        let coarse = spec.halved().filter(|_| built_in.is_some())?;
+                        let q = self.sequenced_steady(wing, &coarse, &params)?;
+                        from_guess(spec.prolong(&coarse, &q))
+                    });
                 let (q, _) = match warm {
                     Some(solved) => solved,
                     None => e

@@ -96,6 +96,10 @@ impl Default for SteadyParams {
     }
 }
 
+/// How many times a steady solve cuts its pseudo-time step by ten after GMRES stalls before it
+/// reports the linear solver's failure.
+pub const MAX_CFL_BACKOFFS: usize = 6;
+
 /// The preconditioner of the steady Newton steps.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum NewtonLinearSolver {
@@ -307,6 +311,7 @@ impl Euler {
         // where a stalled residual counts as round-off
         let stall = 100.0 * 1e-15 * (flux_scale + time_scale);
         let mut cfl = params.cfl0;
+        let mut backoffs = 0;
         for it in 0..params.max_iterations {
             let rn = *history.last().expect("starts with r0");
             // converged, or stagnating at round-off below 1e-11 of the initial residual
@@ -379,9 +384,21 @@ impl Euler {
                             .collect()
                     };
                     let eta = (rn / r0).clamp(1e-12, 1e-2);
-                    krylov::gmres(&op, &solve_lu, &rhs, eta, 40, 400)
-                        .map_err(|e| linear(e.to_string()))?
-                        .0
+                    match krylov::gmres(&op, &solve_lu, &rhs, eta, 40, 400) {
+                        Ok((dq, _)) => dq,
+                        // a pseudo-time step too large for the first-order preconditioner
+                        // (shocks at a large CFL number): retry the iteration with a tenth of
+                        // it, a few times, before giving up (a kept preconditioner, the time
+                        // domain's, has no pseudo-time step to cut)
+                        Err(e) if !kept && backoffs < MAX_CFL_BACKOFFS => {
+                            backoffs += 1;
+                            cfl = (cfl * 0.1).max(1e-3 * params.cfl0);
+                            *precond = None;
+                            let _ = e;
+                            continue;
+                        }
+                        Err(e) => return Err(linear(e.to_string())),
+                    }
                 }
             };
             // the full Newton update, halved until every state is physical

@@ -121,6 +121,53 @@ impl WingMeshSpec {
         }
         Ok(())
     }
+
+    /// The mesh with half the cells in every direction (first spacing doubled), if every count
+    /// halves into a valid mesh: the start of mesh sequencing.
+    pub fn halved(&self) -> Option<Self> {
+        let even = |v: usize| v % 2 == 0;
+        if !(even(self.n_around) && even(self.n_radial) && even(self.n_span))
+            || !even(self.n_outboard)
+        {
+            return None;
+        }
+        let h = Self {
+            n_around: self.n_around / 2,
+            n_radial: self.n_radial / 2,
+            n_span: self.n_span / 2,
+            n_outboard: self.n_outboard / 2,
+            first_spacing_chords: 2.0 * self.first_spacing_chords,
+            ..self.clone()
+        };
+        h.validate().ok().map(|_| h)
+    }
+
+    /// Cell values of a `coarse` mesh of the same topology carried to this one: each cell takes
+    /// the value of the coarse cell at the same fraction of each index range (around, radial, and
+    /// span inboard and outboard of the tip separately), the injection of mesh sequencing. The
+    /// cells are ordered as the generator numbers them, (s n_radial + j) n_around + i.
+    pub fn prolong<T: Copy>(&self, coarse: &WingMeshSpec, values: &[T]) -> Vec<T> {
+        let (nc, njc) = (coarse.n_around, coarse.n_radial);
+        let (nf, njf) = (self.n_around, self.n_radial);
+        let span = |s: usize| {
+            if s < self.n_span {
+                s * coarse.n_span / self.n_span
+            } else {
+                coarse.n_span + (s - self.n_span) * coarse.n_outboard / self.n_outboard
+            }
+        };
+        let mut out = Vec::with_capacity(self.n_cells());
+        for s in 0..self.n_span + self.n_outboard {
+            let sc = span(s);
+            for j in 0..njf {
+                let jc = j * njc / njf;
+                for i in 0..nf {
+                    out.push(values[(sc * njc + jc) * nc + i * nc / nf]);
+                }
+            }
+        }
+        out
+    }
 }
 
 /// The built-in wing mesh: the mesh at the planform it was made for, and what it needs to place

@@ -672,3 +672,47 @@ fn su2_round_trip_of_the_wing_mesh() {
         "{diff:e} of {scale:e}"
     );
 }
+
+/// Mesh sequencing's sizes and injection: the medium level halves into the coarse one and the
+/// coarse into a 896-cell mesh (which halves no further: 7 radial cells); every cell of the finer
+/// mesh takes a coarse cell that overlaps it: the fine cell's node-average centre lies within
+/// the coarse cell's node bounding box (the radial distributions do not nest exactly, so the box
+/// is widened by a tenth of its size).
+#[test]
+fn halved_meshes_and_prolongation() {
+    let medium = WingMeshSpec::level("medium").unwrap();
+    let coarse = WingMeshSpec::level("coarse").unwrap();
+    assert_eq!(medium.halved().as_ref(), Some(&coarse));
+    let extra = coarse.halved().unwrap();
+    assert_eq!(extra.n_cells(), 896);
+    assert!(extra.halved().is_none());
+    let fine = WingMesh::new(agard(), &section, &coarse);
+    let rough = WingMesh::new(agard(), &section, &extra);
+    let ids: Vec<usize> = (0..extra.n_cells()).collect();
+    let parent = coarse.prolong(&extra, &ids);
+    assert_eq!(parent.len(), coarse.n_cells());
+    let centre = |m: &crate::mesh::Mesh, c: usize| -> [f64; 3] {
+        let nodes = &m.cells[c];
+        std::array::from_fn(|k| nodes.iter().map(|&n| m.nodes[n][k]).sum::<f64>() / 8.0)
+    };
+    for (c, &pc) in parent.iter().enumerate() {
+        let x = centre(&fine.mesh, c);
+        let nodes = &rough.mesh.cells[pc];
+        for k in 0..3 {
+            let lo = nodes
+                .iter()
+                .map(|&n| rough.mesh.nodes[n][k])
+                .fold(f64::INFINITY, f64::min);
+            let hi = nodes
+                .iter()
+                .map(|&n| rough.mesh.nodes[n][k])
+                .fold(f64::NEG_INFINITY, f64::max);
+            let pad = 0.1 * (hi - lo) + 1e-12;
+            assert!(
+                x[k] >= lo - pad && x[k] <= hi + pad,
+                "cell {c} (parent {pc}), axis {k}: {} outside [{lo}, {hi}]",
+                x[k]
+            );
+        }
+    }
+}
