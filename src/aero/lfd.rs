@@ -524,6 +524,33 @@ fn default_gmres_max() -> usize {
 fn default_deform_radius() -> f64 {
     5.0
 }
+/// The steady state of `e` from the guess `q`, the pseudo-time step started where switched
+/// evolution relaxation would have taken it by the time the residual fell from the free
+/// stream's to the guess's; `None` if it does not converge.
+fn steady_from_guess(
+    e: &Euler,
+    q: Vec<gustkit_cfd::residual::State<f64>>,
+    params: &SteadyParams,
+) -> Option<(
+    Vec<gustkit_cfd::residual::State<f64>>,
+    gustkit_cfd::steady::SteadyInfo,
+)> {
+    let norm = |q: &[gustkit_cfd::residual::State<f64>]| -> f64 {
+        e.residual(q)
+            .iter()
+            .flatten()
+            .map(|v| v * v)
+            .sum::<f64>()
+            .sqrt()
+    };
+    let ratio = norm(&vec![e.q_inf; e.mesh.n_cells]) / norm(&q);
+    let warm_params = SteadyParams {
+        cfl0: (params.cfl0 * ratio).clamp(params.cfl0, params.cfl_max),
+        ..params.clone()
+    };
+    e.solve_steady(q, &warm_params).ok()
+}
+
 /// The build error of a steady solve that failed: one that ran out of Newton iterations points
 /// at the key that raises them, with how far the residual fell (the whole history follows).
 fn steady_failure(err: gustkit_cfd::steady::SteadyError, limit: usize) -> BuildError {
@@ -609,25 +636,10 @@ impl LfdWingSpec {
             let q = self.sequenced_steady(wing, &coarse, params)?;
             Some(spec.prolong(&coarse, &q))
         });
-        if let Some(q) = guess {
-            let norm = |q: &[gustkit_cfd::residual::State<f64>]| -> f64 {
-                e.residual(q)
-                    .iter()
-                    .flatten()
-                    .map(|v| v * v)
-                    .sum::<f64>()
-                    .sqrt()
-            };
-            let ratio = norm(&free_stream) / norm(&q);
-            let warm_params = SteadyParams {
-                cfl0: (params.cfl0 * ratio).clamp(params.cfl0, params.cfl_max),
-                ..params.clone()
-            };
-            if let Ok((q, _)) = e.solve_steady(q, &warm_params) {
-                return Some(q);
-            }
-        }
-        e.solve_steady(free_stream, params).ok().map(|(q, _)| q)
+        guess
+            .and_then(|q| steady_from_guess(&e, q, params))
+            .or_else(|| e.solve_steady(free_stream, params).ok())
+            .map(|(q, _)| q)
     }
 
     /// The memory the model would take, GB.
@@ -961,29 +973,12 @@ impl WingBuilder for LfdWingSpec {
             Some(q) => q,
             None => {
                 let free_stream = || vec![e.q_inf; e.mesh.n_cells];
-                // from the previous design's state, and from the free stream should that fail;
-                // the pseudo-time step starts where switched evolution relaxation would have
-                // taken it by the time the residual fell from the free stream's to the guess's
-                let norm = |q: &[gustkit_cfd::residual::State<f64>]| -> f64 {
-                    e.residual(q)
-                        .iter()
-                        .flatten()
-                        .map(|v| v * v)
-                        .sum::<f64>()
-                        .sqrt()
-                };
-                let from_guess = |q: Vec<gustkit_cfd::residual::State<f64>>| {
-                    let ratio = norm(&free_stream()) / norm(&q);
-                    let warm_params = SteadyParams {
-                        cfl0: (params.cfl0 * ratio).clamp(params.cfl0, params.cfl_max),
-                        ..params.clone()
-                    };
-                    e.solve_steady(q, &warm_params).ok()
-                };
-                // else, on the built-in mesh, from the steady state of the mesh with half the
-                // cells in each direction (itself started the same way): mesh sequencing, which
-                // converges transonic cases on the finer levels in a few Newton iterations where
-                // the free-stream start needs hundreds
+                let from_guess = |q| steady_from_guess(&e, q, &params);
+                // from the previous design's state; else, on the built-in mesh, from the steady
+                // state of the mesh with half the cells in each direction (itself started the
+                // same way): mesh sequencing, which converges transonic cases on the finer levels
+                // in a few Newton iterations where the free-stream start needs hundreds; from the
+                // free stream should those fail
                 let warm = previous_state(&e, cache.as_deref())
                     .and_then(from_guess)
                     .or_else(|| {

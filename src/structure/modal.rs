@@ -170,6 +170,23 @@ pub fn solve_field(
     field: Field,
     n_want: usize,
 ) -> Result<FieldEigen, ModalError> {
+    solve_field_with(model, field, n_want, false)
+}
+
+/// The complete decomposition of one field (every mode, ascending), by the dense
+/// self-adjoint eigensolver: the reference for the partial solve.
+pub fn solve_field_complete(model: &PlateModel, field: Field) -> Result<FieldEigen, ModalError> {
+    solve_field_with(model, field, model.n_dofs(field), true)
+}
+
+/// The `n_want` lowest modes of a field, by the complete dense decomposition when `complete_only`
+/// or when the field is small, else by Lanczos.
+fn solve_field_with(
+    model: &PlateModel,
+    field: Field,
+    n_want: usize,
+    complete_only: bool,
+) -> Result<FieldEigen, ModalError> {
     let (k, m) = model.assemble(field);
     let n = k.nrows();
     let n_want = n_want.min(n);
@@ -178,7 +195,7 @@ pub fn solve_field(
         .map_err(|_| ModalError::Unconstrained(field))?
         .L()
         .to_owned();
-    let (mu, y) = if n <= 4 * n_want + 40 {
+    let (mu, y) = if complete_only || n <= 4 * n_want + 40 {
         complete(field, &chol, &m, n_want)?
     } else {
         lanczos(field, &chol, &m, n_want)?
@@ -348,34 +365,6 @@ fn lanczos(
             q = fresh;
         }
     }
-}
-
-/// The complete decomposition of one field (every mode, ascending), by the dense
-/// self-adjoint eigensolver: the reference for the partial solve.
-pub fn solve_field_complete(model: &PlateModel, field: Field) -> Result<FieldEigen, ModalError> {
-    let (k, m) = model.assemble(field);
-    let n = k.nrows();
-    let chol = k
-        .llt(Side::Lower)
-        .map_err(|_| ModalError::Unconstrained(field))?
-        .L()
-        .to_owned();
-    let (mu, y) = complete(field, &chol, &m, n)?;
-    let mut phi = y;
-    solve_upper_triangular_in_place(chol.transpose(), phi.as_mut(), Par::Seq);
-    for (j, &mu_j) in mu.iter().enumerate() {
-        let s = 1.0 / mu_j.sqrt();
-        phi.col_mut(j).iter_mut().for_each(|v| *v *= s);
-    }
-    Ok(FieldEigen {
-        field,
-        bandwidth: half_bandwidth(&k, &m),
-        k,
-        m,
-        lambda: mu.iter().map(|v| 1.0 / v).collect(),
-        phi,
-        nelson: (0..n).map(|_| OnceLock::new()).collect(),
-    })
 }
 
 /// One retained mode.

@@ -126,9 +126,8 @@ impl WingMeshSpec {
     /// halves into a valid mesh: the start of mesh sequencing.
     pub fn halved(&self) -> Option<Self> {
         let even = |v: usize| v % 2 == 0;
-        if !(even(self.n_around) && even(self.n_radial) && even(self.n_span))
-            || !even(self.n_outboard)
-        {
+        let counts = [self.n_around, self.n_radial, self.n_span, self.n_outboard];
+        if !counts.iter().all(|&v| even(v)) {
             return None;
         }
         let h = Self {
