@@ -1,7 +1,7 @@
 //! LU with partial pivoting of a banded matrix (LAPACK's gbtf2/gbtrs scheme), for Nelson's
 //! eigenvector derivatives: the plate's K − λM is indefinite and banded (half-bandwidth 38 of 335
 //! DOFs on the flagship's plate), where faer's general sparse LU spends about 1.5 ms on ordering
-//! and symbolic work that a band needs none of (this factorization: about 0.1 ms).
+//! and symbolic work that a band needs none of (this factorization: about 0.4 ms).
 
 /// Why a banded factorization failed.
 #[derive(Debug, thiserror::Error)]
