@@ -31,7 +31,7 @@ pub fn measure(repeat: usize, mut f: impl FnMut() -> Result<f64>) -> Result<Stat
 pub struct StructureTimings {
     /// Assembly of K and M alone (informational: the modal analysis includes it).
     pub assembly: Stats,
-    /// Assembly + Cholesky + complete eigen-decomposition.
+    /// Assembly + Cholesky + the partial eigensolve of the retained modes.
     pub modes: Stats,
     pub sensitivities: Stats,
     pub total: Stats,

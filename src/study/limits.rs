@@ -5,7 +5,8 @@
 //! The per-item costs were measured on this build (peak resident memory of `gustkit modes`,
 //! `gafs`, `run` and `check-gradient` at several sizes) and rounded up:
 //! - plate: about 700 bytes per (node pair) for the dense K, M, the eigensolver's workspace and
-//!   the sensitivities (1.86 GB at 1 681 nodes);
+//!   the sensitivities (1.86 GB at 1 681 nodes with the complete eigen-decomposition; the partial
+//!   one of today takes 0.77 GB there, so the bound is now conservative by about 2.4×);
 //! - DLM: 32 bytes per (box pair) per reduced frequency for an analysis (the complex AIC and its
 //!   LU), 100 with gradients (the geometry derivatives; 0.79 GB at 864 boxes × 11 k);
 //! - gust grid: 600 bytes per frequency point per mode for an analysis, 1 200 with gradients
