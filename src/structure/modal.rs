@@ -43,6 +43,24 @@ pub enum ModalError {
 struct Nelson {
     pivot: usize,
     lu: BandLu,
+    /// M φ of the mode (every expansion projects with it).
+    m_phi: Vec<f64>,
+}
+
+impl Nelson {
+    /// The full index of a reduced one (the pivot's row and column dropped).
+    fn full(&self, i: usize) -> usize {
+        full_index(self.pivot, i)
+    }
+}
+
+/// The full index of reduced index `i` when row and column `pivot` are dropped.
+fn full_index(pivot: usize, i: usize) -> usize {
+    if i < pivot {
+        i
+    } else {
+        i + 1
+    }
 }
 
 /// The lowest modes of one field and what their exact derivatives need.
@@ -108,14 +126,16 @@ impl FieldEigen {
                 .max_by(|&a, &b| phi[a].abs().total_cmp(&phi[b].abs()))
                 .expect("a field has DOFs");
             let lam = self.lambda[c];
-            // the full index of a reduced one (the pivot's row and column dropped)
-            let full = |i: usize| if i < pivot { i } else { i + 1 };
             let lu = BandLu::factor(n - 1, self.bandwidth, self.bandwidth, |i, j| {
-                let (i, j) = (full(i), full(j));
+                let (i, j) = (full_index(pivot, i), full_index(pivot, j));
                 self.k[(i, j)] - lam * self.m[(i, j)]
             })
             .expect("K − λM without the pivot's row and column is regular for a simple λ");
-            Nelson { pivot, lu }
+            Nelson {
+                pivot,
+                lu,
+                m_phi: (&self.m * phi).iter().copied().collect(),
+            }
         })
     }
 
@@ -128,19 +148,18 @@ impl FieldEigen {
         let n = r.len();
         let phi = self.phi.col(c);
         let phi_r: f64 = phi.iter().zip(r).map(|(a, b)| a * b).sum();
-        let m_phi = &self.m * phi;
         let nel = self.nelson(c);
-        let skip = |i: usize| if i < nel.pivot { i } else { i + 1 };
+        let m_phi = &nel.m_phi;
         let mut v_red: Vec<f64> = (0..n - 1)
             .map(|i| {
-                let i = skip(i);
+                let i = nel.full(i);
                 -(r[i] - m_phi[i] * phi_r)
             })
             .collect();
         nel.lu.solve_in_place(&mut v_red);
         let mut v = vec![0.0; n];
         for (i, x) in v_red.into_iter().enumerate() {
-            v[skip(i)] = x;
+            v[nel.full(i)] = x;
         }
         let shift: f64 = m_phi.iter().zip(&v).map(|(a, b)| a * b).sum();
         v.iter()

@@ -390,11 +390,10 @@ impl Euler {
                         // (shocks at a large CFL number): retry the iteration with a tenth of
                         // it, a few times, before giving up (a kept preconditioner, the time
                         // domain's, has no pseudo-time step to cut)
-                        Err(e) if !kept && backoffs < MAX_CFL_BACKOFFS => {
+                        Err(_) if !kept && backoffs < MAX_CFL_BACKOFFS => {
                             backoffs += 1;
                             cfl = (cfl * 0.1).max(1e-3 * params.cfl0);
                             *precond = None;
-                            let _ = e;
                             continue;
                         }
                         Err(e) => return Err(linear(e.to_string())),
