@@ -566,8 +566,10 @@ impl PkProblem<'_> {
 
 pub mod margin;
 pub mod stability;
+pub mod verdict;
 
 pub use stability::check_stability;
+pub use verdict::Verdict;
 
 #[cfg(test)]
 mod tests;

@@ -1,5 +1,6 @@
 //! The stability check that must pass before a gust RMS means anything.
 
+use super::verdict::Verdict;
 use super::PkProblem;
 use crate::structure::Modes;
 use anyhow::Result;
@@ -7,7 +8,8 @@ use gustkit_core::GafTable;
 
 /// The gust response of an unstable aeroelastic system has no meaning: a p-k sweep from a fifth
 /// of the flight speed up to it (12 speeds, so the branches are followed through any frequency
-/// coalescence) must find every mode damped.
+/// coalescence) must find every mode damped, and no consistent root at the flight speed may be
+/// undamped (whichever branch the tracking followed). The words are the [`Verdict`]'s.
 pub fn check_stability(
     modes: &Modes,
     table: &GafTable,
@@ -20,25 +22,26 @@ pub fn check_stability(
     let r = pk
         .sweep(&speeds)
         .map_err(|e| anyhow::anyhow!("stability check: {e}"))?;
+    let conditions = format!(
+        "M = {}, rho = {} kg/m3; the gust RMS has no meaning",
+        flight.mach, flight.density
+    );
+    let verdict = Verdict::of(&r);
+    if !verdict.stable_up_to(flight.velocity) {
+        anyhow::bail!(
+            "unstable: the aeroelastic system {} ({conditions})",
+            verdict.words(flight.velocity)
+        );
+    }
     let last = speeds.len() - 1;
     let ks: Vec<f64> = r.curves.iter().map(|c| c.k[last]).collect();
     let gmax = pk
         .max_damping(flight.velocity, &ks)
         .map_err(|e| anyhow::anyhow!("stability check: {e}"))?;
-    let unstable = r.flutter_speed_m_s.is_some() || gmax >= 0.0;
-    if let Some(c) = r
-        .curves
-        .iter()
-        .find(|c| unstable && (c.damping_g[last] >= 0.0 || r.flutter_mode == Some(c.mode)))
-    {
+    if gmax >= 0.0 {
         anyhow::bail!(
-            "unstable: the aeroelastic system flutters at the flight condition (mode {} has damping g = {:.4} at {:.3} Hz, V = {} m/s, M = {}, rho = {} kg/m3); the gust RMS has no meaning",
-            c.mode,
-            c.damping_g[last],
-            c.frequency_hz[last],
-            flight.velocity,
-            flight.mach,
-            flight.density
+            "unstable: the aeroelastic system has an undamped p-k root at the flight speed V = {:.1} m/s (g = {gmax:+.4}, on a branch the mode tracking did not follow; {conditions})",
+            flight.velocity
         );
     }
     Ok(())

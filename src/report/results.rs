@@ -70,6 +70,9 @@ pub struct Calibration {
 pub struct FlutterSummary {
     pub mach: f64,
     pub density_kg_m3: f64,
+    /// The flight speed the verdict's speeds are relative to (absent in older results).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flight_speed_m_s: Option<f64>,
     #[serde(flatten)]
     pub result: FlutterResult,
 }

@@ -23,22 +23,18 @@ pub fn frequency_table(modes: &[ModeRow]) -> String {
     t
 }
 
-/// One design's flutter point in words: speed as a multiple of the flight speed.
+/// One design's flutter point in words: the verdict's, speed as a multiple of the flight speed.
 fn flutter_point_words(
     p: &crate::report::results::FlutterPoint,
     fc: &crate::report::results::FlutterCheck,
 ) -> String {
-    match (p.speed_m_s, p.frequency_hz, p.mode) {
-        (Some(v), Some(f), Some(m)) => format!(
-            "{:.3} × the flight speed ({v:.1} m/s, mode {m}, {f:.2} Hz)",
-            v / fc.flight_speed_m_s
-        ),
-        _ => format!(
-            "none below {:.2} × the flight speed ({:.1} m/s)",
-            fc.searched_up_to_m_s / fc.flight_speed_m_s,
-            fc.searched_up_to_m_s
-        ),
-    }
+    crate::flutter::verdict::point_words(
+        p.speed_m_s,
+        p.frequency_hz,
+        p.mode,
+        fc.flight_speed_m_s,
+        fc.searched_up_to_m_s,
+    )
 }
 
 /// The flutter speeds of an optimization's initial and final designs (and of the final design
@@ -70,26 +66,16 @@ fn flutter_check_text(
     md + "\n"
 }
 
-/// One sentence on the flutter point of a sweep.
-pub fn flutter_point(r: &FlutterResult) -> String {
-    match (r.flutter_speed_m_s, r.flutter_frequency_hz) {
-        (Some(v), Some(f)) => format!(
-            "flutter at V = {v:.2} m/s ({:.1} ft/s), f = {f:.2} Hz, mode {}",
-            v / 0.3048,
-            r.flutter_mode.unwrap_or(0)
-        ),
-        _ => {
-            let v = r
-                .curves
-                .first()
-                .map(|c| c.velocity_m_s.as_slice())
-                .unwrap_or(&[]);
-            format!(
-                "no flutter between {} and {} m/s",
-                v.first().copied().unwrap_or(f64::NAN),
-                v.last().copied().unwrap_or(f64::NAN)
-            )
-        }
+/// One sentence on the flutter point of a sweep: the [`Verdict`](crate::flutter::Verdict)'s words,
+/// relative to the flight speed when the results record it (older results do not).
+pub fn flutter_point(r: &FlutterResult, flight_speed_m_s: Option<f64>) -> String {
+    let verdict = crate::flutter::Verdict::of(r);
+    match flight_speed_m_s {
+        Some(v) => verdict.words(v),
+        None => match verdict.unstable_from() {
+            Some(v) => format!("unstable from V = {v:.2} m/s ({:.1} ft/s)", v / 0.3048),
+            None => "no flutter over the speeds examined".to_string(),
+        },
     }
 }
 
@@ -129,7 +115,7 @@ pub fn summary(r: &RunResults) -> String {
             "\n## Flutter (p-k)\n\nM = {}, ρ = {} kg/m³: {}.\n\n![V-g, V-f](flutter_vg.png)\n",
             f.mach,
             f.density_kg_m3,
-            flutter_point(&f.result)
+            flutter_point(&f.result, f.flight_speed_m_s)
         );
     }
     if let Some(o) = &r.optimization {
@@ -267,8 +253,8 @@ pub fn comparison_text(
             "\nFlutter (p-k, M = {}, ρ = {} kg/m³): {a} {}; {b} {}.\n",
             f.mach,
             f.density_kg_m3,
-            flutter_point(&f.result),
-            flutter_point(other)
+            flutter_point(&f.result, f.flight_speed_m_s),
+            flutter_point(other, f.flight_speed_m_s)
         );
     }
     md += &format!(

@@ -105,13 +105,12 @@ fn analyze(
     let flutter = pk
         .sweep(&velocities)
         .map_err(|e| anyhow::anyhow!("{name}: flutter: {e}"))?;
-    if let Some(v) = flutter.flutter_speed_m_s {
-        if v <= flight.velocity {
-            bail!(
-                "{name}: the section flutters at {v:.2} m/s, below the flight speed {:.2} m/s: its gust response has no steady state (stiffen the section or lower the Mach number)",
-                flight.velocity
-            );
-        }
+    let verdict = crate::flutter::Verdict::of(&flutter);
+    if !verdict.stable_up_to(flight.velocity) {
+        bail!(
+            "{name}: the section {}: its gust response has no steady state (stiffen the section or lower the Mach number)",
+            verdict.words(flight.velocity)
+        );
     }
     let psd = |i: usize, label: &str, unit: &str| PsdSeries {
         label: format!("{name}: {label}"),

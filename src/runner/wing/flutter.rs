@@ -59,6 +59,8 @@ pub(crate) fn flutter_analysis(
         "study": study.spec.name,
         "mach": aero.flight.mach,
         "density_kg_m3": aero.flight.density,
+        "flight_speed_m_s": aero.flight.velocity,
+        "verdict": crate::flutter::Verdict::of(&r).words(aero.flight.velocity),
         "flutter_speed_m_s": r.flutter_speed_m_s,
         "flutter_frequency_hz": r.flutter_frequency_hz,
         "flutter_mode": r.flutter_mode,
@@ -94,5 +96,5 @@ pub(crate) fn print_flutter(
         }
         println!();
     }
-    println!("{}", flutter_point(r));
+    println!("{}", flutter_point(r, doc["flight_speed_m_s"].as_f64()));
 }

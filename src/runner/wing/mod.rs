@@ -142,6 +142,7 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
             Some(FlutterSummary {
                 mach: doc["mach"].as_f64().unwrap_or(f64::NAN),
                 density_kg_m3: doc["density_kg_m3"].as_f64().unwrap_or(f64::NAN),
+                flight_speed_m_s: doc["flight_speed_m_s"].as_f64(),
                 result: r,
             })
         }

@@ -80,17 +80,14 @@ impl crate::optim::Observer for RunObserver {
             it.kkt,
             it.alpha,
             if it.failed_trials > 0 {
-                // the reason's first line, shortened: the progress line stays one line
-                let reason: String = it
+                // the reason whole (never cut mid-word), its lines joined: one progress line
+                let reason = it
                     .trial_failure
                     .as_deref()
                     .unwrap_or("")
                     .lines()
-                    .next()
-                    .unwrap_or("")
-                    .chars()
-                    .take(160)
-                    .collect();
+                    .collect::<Vec<_>>()
+                    .join("; ");
                 format!(" ({} trial points failed; the last: {reason})", it.failed_trials)
             } else {
                 String::new()
