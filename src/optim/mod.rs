@@ -116,6 +116,9 @@ pub struct Iterate {
     /// Why the last of them could not be (e.g. the design flutters at the flight condition).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub trial_failure: Option<String>,
+    /// The recovery that solved this iteration's subproblem when clarabel could not as posed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub recovery: Option<String>,
 }
 
 /// How a run ended.
@@ -147,10 +150,6 @@ pub enum SqpError {
     Start(String),
     #[error("checkpoint: {0}")]
     Checkpoint(String),
-    #[error(
-        "the QP subproblem failed at iteration {iteration} (clarabel could not solve it: {reason})"
-    )]
-    Subproblem { iteration: usize, reason: String },
     #[error("bounds: {lower} lower and {upper} upper bounds for {n} design variables")]
     BoundsLength {
         n: usize,
@@ -186,10 +185,14 @@ pub struct Checkpoint {
     /// The problem's own records ([`Problem::state`]).
     #[serde(default)]
     pub problem_state: serde_json::Value,
+    /// Why the run ended here when it could not go on (a subproblem that no recovery solved):
+    /// `--resume` then says so at once instead of failing the same way.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stopped: Option<String>,
 }
 
 mod sqp;
-pub use sqp::{minimize, Checkpointing, Control, Executor, Observer};
+pub use sqp::{minimize, Checkpointing, Clarabel, Control, Executor, Observer, SubproblemSolver};
 
 #[cfg(test)]
 mod tests;

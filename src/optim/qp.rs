@@ -22,7 +22,15 @@ pub struct QpData<'a> {
     pub upper: &'a [f64],
     /// Elastic penalty ρ.
     pub rho: f64,
+    /// Clarabel with more iterations, looser tolerances and more regularization: a recovery
+    /// setting for a subproblem the default settings could not solve.
+    pub tolerant: bool,
 }
+
+/// Step bounds closer than this (scaled variables) fix the variable: it enters the subproblem as
+/// an equality, since a pair of opposite inequalities with no interior between them stalls an
+/// interior-point method (clarabel's `InsufficientProgress`).
+const FIXED_GAP: f64 = 1e-12;
 
 /// The step and the multipliers of the linearized constraints (equality, inequality; inequality
 /// multipliers ≥ 0), and the elastic violation left in the subproblem.
@@ -84,6 +92,22 @@ pub fn solve(q: &QpData) -> Result<QpStep, QpError> {
         b.push(-q.eq[e]);
         row += 1;
     }
+    // variables with equal step bounds: d_j = the bound (zero cone)
+    let fixed: Vec<usize> = (0..n)
+        .filter(|&j| {
+            q.lower[j].is_finite() && q.upper[j].is_finite() && q.upper[j] - q.lower[j] <= FIXED_GAP
+        })
+        .collect();
+    let mut fixed_rows = Vec::new();
+    for &j in &fixed {
+        ai.push(row);
+        aj.push(j);
+        av.push(1.0);
+        b.push(0.5 * (q.lower[j] + q.upper[j]));
+        fixed_rows.push((j, row));
+        row += 1;
+    }
+    let zero_rows = row;
     for c in 0..mi {
         for j in 0..n {
             if q.ineq_jac[c][j] != 0.0 {
@@ -102,6 +126,9 @@ pub fn solve(q: &QpData) -> Result<QpStep, QpError> {
     // finite step bounds only (rows of infinite bounds would wreck the conditioning)
     let mut bound_rows = Vec::new();
     for j in 0..n {
+        if fixed.binary_search(&j).is_ok() {
+            continue;
+        }
         // d ≤ ub − x
         if q.upper[j].is_finite() {
             ai.push(row);
@@ -129,11 +156,25 @@ pub fn solve(q: &QpData) -> Result<QpStep, QpError> {
         row += 1;
     }
     let a = CscMatrix::new_from_triplets(row, nv, ai, aj, av);
-    let cones = [ZeroConeT(me), NonnegativeConeT(row - me)];
-    let settings = DefaultSettings {
-        verbose: false,
-        presolve_enable: false,
-        ..DefaultSettings::default()
+    let cones = [ZeroConeT(zero_rows), NonnegativeConeT(row - zero_rows)];
+    let settings = if q.tolerant {
+        DefaultSettings {
+            verbose: false,
+            presolve_enable: false,
+            max_iter: 1000,
+            tol_gap_abs: 1e-7,
+            tol_gap_rel: 1e-7,
+            tol_feas: 1e-7,
+            static_regularization_constant: 1e-7,
+            equilibrate_max_iter: 50,
+            ..DefaultSettings::default()
+        }
+    } else {
+        DefaultSettings {
+            verbose: false,
+            presolve_enable: false,
+            ..DefaultSettings::default()
+        }
     };
     let mut solver = DefaultSolver::new(&p, &lin, &a, &b, &cones, settings)
         .map_err(|e| QpError(format!("problem data refused: {e:?}")))?;
@@ -153,10 +194,15 @@ pub fn solve(q: &QpData) -> Result<QpStep, QpError> {
             bound_lower[j] = z[r];
         }
     }
+    // a fixed variable's equality multiplier: the upper bound's when positive, else the lower's
+    for &(j, r) in &fixed_rows {
+        bound_upper[j] = z[r].max(0.0);
+        bound_lower[j] = (-z[r]).max(0.0);
+    }
     Ok(QpStep {
         d: s.x[..n].to_vec(),
         lambda_eq: z[..me].to_vec(),
-        lambda_ineq: z[me..me + mi].to_vec(),
+        lambda_ineq: z[zero_rows..zero_rows + mi].to_vec(),
         bound_upper,
         bound_lower,
         elastic,

@@ -38,6 +38,45 @@ impl Checkpointing for () {
     }
 }
 
+/// Solves the QP subproblems: clarabel by default ([`Clarabel`]); a plug-in so that a test can
+/// hand the run a subproblem that fails and watch it recover.
+pub trait SubproblemSolver {
+    fn solve(&mut self, data: &QpData<'_>) -> Result<qp::QpStep, qp::QpError>;
+}
+
+/// The subproblems on clarabel ([`qp::solve`]).
+pub struct Clarabel;
+
+impl SubproblemSolver for Clarabel {
+    fn solve(&mut self, data: &QpData<'_>) -> Result<qp::QpStep, qp::QpError> {
+        qp::solve(data)
+    }
+}
+
+/// The recoveries tried, in order, when a subproblem cannot be solved, each from the original
+/// data: the BFGS matrix reset to the identity (an ill-conditioned quasi-Newton matrix is the
+/// usual cause), then clarabel's tolerant settings as well, then also a step no longer than
+/// [`SHORT_STEP`] in every scaled variable (a trust region that keeps the subproblem bounded
+/// and well scaled).
+const RECOVERIES: [(&str, bool, bool, bool); 3] = [
+    ("the BFGS matrix reset to the identity", true, false, false),
+    (
+        "the BFGS matrix reset and clarabel's tolerant settings",
+        true,
+        true,
+        false,
+    ),
+    (
+        "the BFGS matrix reset, tolerant settings and a step of at most 0.05 in each scaled variable",
+        true,
+        true,
+        true,
+    ),
+];
+
+/// The longest step in a scaled variable in the last recovery.
+const SHORT_STEP: f64 = 0.05;
+
 /// The SQP run: settings, the problem's identity (a checkpoint of another problem is refused),
 /// an optional checkpoint to continue, observers and a checkpoint store.
 pub struct Executor<'a> {
@@ -47,6 +86,7 @@ pub struct Executor<'a> {
     hessian: Option<Vec<Vec<f64>>>,
     observers: Vec<&'a mut dyn Observer>,
     checkpoints: Option<&'a mut dyn Checkpointing>,
+    subproblems: Option<&'a mut dyn SubproblemSolver>,
 }
 
 impl<'a> Executor<'a> {
@@ -58,7 +98,14 @@ impl<'a> Executor<'a> {
             hessian: None,
             observers: Vec::new(),
             checkpoints: None,
+            subproblems: None,
         }
+    }
+
+    /// Solves the QP subproblems with `solver` instead of clarabel.
+    pub fn subproblem_solver(mut self, solver: &'a mut dyn SubproblemSolver) -> Self {
+        self.subproblems = Some(solver);
+        self
     }
 
     /// Start the BFGS approximation from `hessian` (of the Lagrangian in the scaled variables
@@ -180,7 +227,13 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
         hessian,
         mut observers,
         mut checkpoints,
+        subproblems,
     } = ex;
+    let mut clarabel = Clarabel;
+    let solver: &mut dyn SubproblemSolver = match subproblems {
+        Some(s) => s,
+        None => &mut clarabel,
+    };
     let (params, problem_id) = (&params, problem_id.as_str());
     params.validate()?;
     let (lb, ub) = (problem.lower(), problem.upper());
@@ -222,6 +275,12 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                 return Err(SqpError::Checkpoint(
                     "it was written with other optimizer settings".into(),
                 ));
+            }
+            if let Some(reason) = &c.stopped {
+                return Err(SqpError::Checkpoint(format!(
+                    "the run it belongs to stopped at iteration {} because {reason}; every recovery was tried there, so resuming would stop the same way: change the study (bounds, constraints, starting point) and run without --resume",
+                    c.iteration
+                )));
             }
             problem
                 .restore(&c.problem_state)
@@ -273,9 +332,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                     }
                     h
                 }
-                None => (0..n)
-                    .map(|i| (0..n).map(|j| if i == j { 1.0 } else { 0.0 }).collect())
-                    .collect(),
+                None => identity(n),
             };
             (z0, h0, 0.0, Vec::new(), 0, 0)
         }
@@ -308,7 +365,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                 }
             })
             .collect();
-        let step = qp::solve(&QpData {
+        let data = QpData {
             hessian: &hess,
             grad: &g,
             eq: &values.eq,
@@ -318,11 +375,62 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
             lower: &lower,
             upper: &upper,
             rho: params.elastic_penalty,
-        })
-        .map_err(|e| SqpError::Subproblem {
-            iteration,
-            reason: e.0,
-        })?;
+            tolerant: false,
+        };
+        let (step, recovery) = match solve_with_recovery(solver, &data) {
+            Ok(s) => s,
+            Err(reason) => {
+                let message = format!(
+                    "the QP subproblem failed at iteration {iteration} and every recovery failed too ({reason})"
+                );
+                let x_last = scaling.x(&z);
+                // no subproblem was solved here: the KKT measure is the previous iteration's
+                let kkt = history.last().map_or(f64::MAX, |it| it.kkt);
+                history.push(Iterate {
+                    iteration,
+                    x: x_last,
+                    values: values.clone(),
+                    violation: violation(&values),
+                    kkt,
+                    step: 0.0,
+                    evaluations,
+                    alpha: 0.0,
+                    failed_trials: 0,
+                    trial_failure: None,
+                    recovery: None,
+                });
+                let stopped = Checkpoint {
+                    problem_id: problem_id.to_string(),
+                    params: params.clone(),
+                    iteration,
+                    evaluations,
+                    z: z.clone(),
+                    hessian: hess.clone(),
+                    penalty,
+                    history: history.clone(),
+                    elapsed_s: elapsed_before + started.elapsed().as_secs_f64(),
+                    problem_state: problem.state(),
+                    stopped: Some(message.clone()),
+                };
+                if let Some(store) = checkpoints.as_mut() {
+                    store
+                        .save(&stopped)
+                        .map_err(|e| SqpError::Checkpoint(format!("cannot save it: {e}")))?;
+                }
+                return Ok(stop_at_best(
+                    message,
+                    history,
+                    iteration,
+                    evaluations,
+                    stopped.elapsed_s,
+                    params.tolerance,
+                ));
+            }
+        };
+        if recovery.is_some() {
+            // the recovered subproblem solved with the identity: the BFGS restarts from it
+            hess = identity(n);
+        }
         let viol = violation(&values);
         let kkt = dot(&g, &step.d).abs()
             + step
@@ -348,6 +456,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
             alpha: 0.0,
             failed_trials: 0,
             trial_failure: None,
+            recovery,
         };
         history.push(record);
         let finish =
@@ -422,7 +531,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                                 .collect()
                         };
                         let (eq_soc, ineq_soc) = (shift(&v.eq, &eq_jac), shift(&v.ineq, &ineq_jac));
-                        if let Ok(soc) = qp::solve(&QpData {
+                        if let Ok(soc) = solver.solve(&QpData {
                             hessian: &hess,
                             grad: &g,
                             eq: &eq_soc,
@@ -432,6 +541,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                             lower: &lower,
                             upper: &upper,
                             rho: params.elastic_penalty,
+                            tolerant: false,
                         }) {
                             let zc: Vec<f64> = z.iter().zip(&soc.d).map(|(a, b)| a + b).collect();
                             evaluations += 1;
@@ -474,9 +584,22 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
             } + &infeasible;
             return Ok(finish(converged, message, history, evaluations));
         };
-        let grads_new = problem
-            .gradients(&scaling.x(&z_new))
-            .map_err(|reason| SqpError::Gradient { iteration, reason })?;
+        let grads_new = match problem.gradients(&scaling.x(&z_new)) {
+            Ok(g) => g,
+            Err(reason) => {
+                let message = format!(
+                    "the gradients at the point accepted at iteration {iteration} could not be evaluated ({reason})"
+                );
+                return Ok(stop_at_best(
+                    message,
+                    history,
+                    iteration,
+                    evaluations,
+                    elapsed_before + started.elapsed().as_secs_f64(),
+                    params.tolerance,
+                ));
+            }
+        };
         // damped BFGS (Powell) on the Lagrangian with the new multipliers
         let s: Vec<f64> = z_new.iter().zip(&z).map(|(a, b)| a - b).collect();
         let gl_new = lagrangian_grad(&scaling, &grads_new, &step.lambda_eq, &step.lambda_ineq);
@@ -514,6 +637,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
             history: history.clone(),
             elapsed_s: elapsed_before + started.elapsed().as_secs_f64(),
             problem_state: problem.state(),
+            stopped: None,
         };
         if let Some(store) = checkpoints.as_mut() {
             store
@@ -542,5 +666,100 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                 elapsed_s: checkpoint.elapsed_s,
             });
         }
+    }
+}
+
+/// The n × n identity (the BFGS start and reset).
+fn identity(n: usize) -> Vec<Vec<f64>> {
+    (0..n)
+        .map(|i| (0..n).map(|j| if i == j { 1.0 } else { 0.0 }).collect())
+        .collect()
+}
+
+/// Solves a subproblem, and when that fails, tries the [`RECOVERIES`] in order. Returns the step
+/// and which recovery gave it, or every attempt's reason.
+fn solve_with_recovery(
+    solver: &mut dyn SubproblemSolver,
+    data: &QpData<'_>,
+) -> Result<(qp::QpStep, Option<String>), String> {
+    let first = match solver.solve(data) {
+        Ok(step) => return Ok((step, None)),
+        Err(e) => e.0,
+    };
+    let mut reasons = vec![format!("as posed: {first}")];
+    let n = data.grad.len();
+    let eye = identity(n);
+    for (name, reset, tolerant, short) in RECOVERIES {
+        let (lower, upper): (Vec<f64>, Vec<f64>) = if short {
+            (
+                data.lower.iter().map(|l| l.max(-SHORT_STEP)).collect(),
+                data.upper.iter().map(|u| u.min(SHORT_STEP)).collect(),
+            )
+        } else {
+            (data.lower.to_vec(), data.upper.to_vec())
+        };
+        // a bound pair the trust region would cross (a variable outside it) keeps its own bounds
+        let (lower, upper): (Vec<f64>, Vec<f64>) = lower
+            .iter()
+            .zip(&upper)
+            .zip(data.lower.iter().zip(data.upper))
+            .map(|((l, u), (l0, u0))| if l <= u { (*l, *u) } else { (*l0, *u0) })
+            .unzip();
+        let attempt = QpData {
+            hessian: if reset { &eye } else { data.hessian },
+            lower: &lower,
+            upper: &upper,
+            tolerant,
+            ..*data
+        };
+        match solver.solve(&attempt) {
+            Ok(step) => return Ok((step, Some(name.to_string()))),
+            Err(e) => reasons.push(format!("{name}: {}", e.0)),
+        }
+    }
+    Err(reasons.join("; "))
+}
+
+/// The end of a run that cannot go on: not converged, at the best feasible iterate of `history`
+/// (the lowest objective among those whose violation is below `tolerance`; the last iterate when
+/// none is feasible), the message saying which it is and why the run ended.
+fn stop_at_best(
+    why: String,
+    history: Vec<Iterate>,
+    iteration: usize,
+    evaluations: usize,
+    elapsed_s: f64,
+    tolerance: f64,
+) -> SqpInfo {
+    let last = history.last().expect("at least the starting point");
+    let best = history
+        .iter()
+        .filter(|it| it.violation < tolerance)
+        .min_by(|a, b| a.values.f.total_cmp(&b.values.f));
+    let (chosen, which) = match best {
+        Some(b) => (
+            b,
+            format!(
+                "the results are those of iteration {}, the best feasible iterate (the last, iteration {}, has objective {:.6} and violation {:.2e})",
+                b.iteration, last.iteration, last.values.f, last.violation
+            ),
+        ),
+        None => (
+            last,
+            format!(
+                "no iterate was feasible: the results are those of the last, iteration {} (violation {:.2e})",
+                last.iteration, last.violation
+            ),
+        ),
+    };
+    SqpInfo {
+        converged: false,
+        iterations: iteration,
+        evaluations,
+        message: format!("{why}; {which}"),
+        x: chosen.x.clone(),
+        values: chosen.values.clone(),
+        history,
+        elapsed_s,
     }
 }

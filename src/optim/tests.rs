@@ -329,6 +329,7 @@ fn qp_failure_names_clarabel_status() {
         lower: &[-1.0],
         upper: &[1.0],
         rho: 1e4,
+        tolerant: false,
     })
     .unwrap_err();
     assert!(e.to_string().starts_with("clarabel: "), "{e}");
@@ -397,4 +398,175 @@ fn initial_hessian_from_another_run() {
     let mut negative = eye;
     negative[2][2] = -1.0;
     refused(negative);
+}
+
+/// Clarabel, except that calls listed in `fail` (counted from 0) fail as clarabel's
+/// `InsufficientProgress` would, and with `fail_from` every call from that one on.
+/// With `fail_once`, the first call whose Hessian is not the identity (a BFGS matrix, posed as
+/// is: no recovery resets it) fails once.
+struct Failing {
+    calls: usize,
+    fail: Vec<usize>,
+    fail_from: Option<usize>,
+    fail_once: bool,
+}
+
+impl SubproblemSolver for Failing {
+    fn solve(&mut self, d: &qp::QpData<'_>) -> Result<qp::QpStep, qp::QpError> {
+        let c = self.calls;
+        self.calls += 1;
+        let identity = d
+            .hessian
+            .iter()
+            .enumerate()
+            .all(|(i, r)| r.iter().enumerate().all(|(j, v)| *v == f64::from(i == j)));
+        if self.fail_once && !identity {
+            self.fail_once = false;
+            return Err(qp::QpError("status InsufficientProgress".into()));
+        }
+        if self.fail.contains(&c) || self.fail_from.is_some_and(|f| c >= f) {
+            return Err(qp::QpError("status InsufficientProgress".into()));
+        }
+        Clarabel.solve(d)
+    }
+}
+
+/// A subproblem that fails once is recovered (the BFGS matrix reset): HS71 still reaches its
+/// optimum to 1e-6 and the iteration records which recovery solved it.
+#[test]
+fn a_failed_subproblem_is_recovered() {
+    let params = SqpParams {
+        tolerance: 1e-8,
+        ..Default::default()
+    };
+    let x0 = [1.0, 5.0, 5.0, 1.0];
+    // the first subproblem posed with a BFGS matrix fails (as clarabel's InsufficientProgress)
+    let mut solver = Failing {
+        calls: 0,
+        fail: Vec::new(),
+        fail_from: None,
+        fail_once: true,
+    };
+    let r = Executor::new(params, "hs71")
+        .subproblem_solver(&mut solver)
+        .run(&mut hs71(), &x0)
+        .unwrap();
+    assert!(r.converged, "{}", r.message);
+    assert!((r.values.f - 17.014_017_3).abs() < 1e-6, "{}", r.values.f);
+    let recovered: Vec<&str> = r
+        .history
+        .iter()
+        .filter_map(|it| it.recovery.as_deref())
+        .collect();
+    assert_eq!(recovered, ["the BFGS matrix reset to the identity"]);
+}
+
+/// When no recovery solves the subproblem the run ends without an error: not converged, at the
+/// best feasible iterate, the reason in words naming every attempt; its checkpoint says so, and
+/// resuming from it is refused at once with that reason.
+#[test]
+fn an_unrecoverable_subproblem_ends_the_run_at_the_best_feasible_iterate() {
+    let params = SqpParams {
+        tolerance: 1e-8,
+        ..Default::default()
+    };
+    let x0 = [1.0, 5.0, 5.0, 1.0];
+    struct Keep(Option<Checkpoint>);
+    impl Checkpointing for Keep {
+        fn save(&mut self, c: &Checkpoint) -> Result<(), String> {
+            self.0 = Some(serde_json::from_str(&serde_json::to_string(c).unwrap()).unwrap());
+            Ok(())
+        }
+    }
+    let mut store = Keep(None);
+    let mut solver = Failing {
+        calls: 0,
+        fail: Vec::new(),
+        fail_from: Some(4),
+        fail_once: false,
+    };
+    let r = Executor::new(params.clone(), "hs71")
+        .subproblem_solver(&mut solver)
+        .checkpoint(&mut store)
+        .run(&mut hs71(), &x0)
+        .unwrap();
+    assert!(!r.converged);
+    assert!(
+        r.message.contains("every recovery failed")
+            && r.message.contains("BFGS matrix reset")
+            && r.message.contains("InsufficientProgress"),
+        "{}",
+        r.message
+    );
+    // the reported design is the best feasible iterate (or the last when none is)
+    let feasible: Vec<&Iterate> = r
+        .history
+        .iter()
+        .filter(|it| it.violation < params.tolerance)
+        .collect();
+    match feasible
+        .iter()
+        .min_by(|a, b| a.values.f.total_cmp(&b.values.f))
+    {
+        Some(best) => {
+            assert_eq!(r.x, best.x);
+            assert!(r.message.contains("best feasible"), "{}", r.message);
+        }
+        None => {
+            assert_eq!(&r.x, &r.history.last().unwrap().x);
+            assert!(
+                r.message.contains("no iterate was feasible"),
+                "{}",
+                r.message
+            );
+        }
+    }
+    let cp = store.0.expect("a checkpoint");
+    assert!(cp.stopped.is_some());
+    let e = minimize(&mut hs71(), &x0, &params, "hs71", Some(cp), &mut ()).unwrap_err();
+    assert!(
+        matches!(&e, SqpError::Checkpoint(m) if m.contains("every recovery was tried")),
+        "{e}"
+    );
+}
+
+/// A variable with equal bounds (a fixed planform) enters the subproblem as an equality: the
+/// bounded Rosenbrock-like problem with one variable fixed solves, and the variable never moves.
+#[test]
+fn equal_bounds_fix_a_variable() {
+    let mut p = Fns {
+        lb: vec![-2.0, 0.7, -2.0],
+        ub: vec![2.0, 0.7, 2.0],
+        values: |x: &[f64]| {
+            Ok(Values {
+                f: (x[0] - 1.0).powi(2) + (x[2] - x[1]).powi(2) + x[0] * x[1],
+                eq: vec![],
+                ineq: vec![x[0] + x[2] - 1.0],
+            })
+        },
+        grads: |x: &[f64]| Gradients {
+            f: vec![
+                2.0 * (x[0] - 1.0) + x[1],
+                -2.0 * (x[2] - x[1]) + x[0],
+                2.0 * (x[2] - x[1]),
+            ],
+            eq: vec![],
+            ineq: vec![vec![1.0, 0.0, 1.0]],
+        },
+    };
+    // clarabel's own tolerances (1e-8) bound how far the KKT measure falls
+    let params = SqpParams {
+        tolerance: 1e-7,
+        ..Default::default()
+    };
+    let r = minimize(&mut p, &[0.0, 0.7, 0.0], &params, "fixed", None, &mut ()).unwrap();
+    assert!(r.converged, "{}", r.message);
+    assert!(r.history.iter().all(|it| it.x[1] == 0.7));
+    // optimum of (x0 − 1)² + 0.7 x0 + (x2 − 0.7)² with x0 + x2 ≤ 1: x0 = 0.65, x2 = 0.7 → 1.35 > 1,
+    // so the constraint is active: x0 = 0.475, x2 = 0.525 (stationarity with one multiplier)
+    assert!(
+        (r.x[0] - 0.475).abs() < 1e-6 && (r.x[2] - 0.525).abs() < 1e-6,
+        "{:?}",
+        r.x
+    );
 }
