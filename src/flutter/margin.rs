@@ -181,12 +181,13 @@ impl PkProblem<'_> {
             let a_im = -2.0 * pr / (pi * pi);
             (a_re, (a_re * beta * c.re + a_im) / (1.0 - beta * c.im))
         };
+        let w = self.aero_weights(r.k)?;
         Ok(Linearization {
             s,
             a_re,
             gamma,
-            weights: self.spline_at(r.k)?.0,
-            weights_im: self.spline_at(r.k.max(super::K_HOLD))?.0,
+            weights: w.re,
+            weights_im: w.im,
             beta,
             qd: 0.5 * self.density * v * v,
             // as in the state matrix: the Q_I/k term is held below k = 1e-6

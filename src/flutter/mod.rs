@@ -69,6 +69,15 @@ pub struct FlutterResult {
     pub curves: Vec<ModeCurve>,
 }
 
+/// Weights of the GAF table entries for the real and imaginary parts of Q(ik) and their slopes
+/// ([`PkProblem::aero_weights`]).
+pub(crate) struct AeroWeights {
+    pub re: Vec<f64>,
+    pub d_re: Vec<f64>,
+    pub im: Vec<f64>,
+    pub d_im: Vec<f64>,
+}
+
 /// The structural and aerodynamic data of a p-k analysis.
 pub struct PkProblem<'a> {
     pub omega_n: Vec<f64>,
@@ -325,13 +334,7 @@ impl PkProblem<'_> {
     /// slope dQ/dk the same way (zero outside the table, where Q is held).
     /// The slopes only when `slope` (else empty matrices: the roots alone need none).
     fn q_at_with(&self, k: f64, slope: bool) -> Result<[Mat<f64>; 4], FlutterError> {
-        let (w, dw) = self.spline_at(k)?;
-        // the Q_I/k damping term is held at k = 1e-6 below it (the steady limit dQ_I/dk)
-        let (w_im, dw_im) = if k < K_HOLD {
-            self.spline_at(K_HOLD)?
-        } else {
-            (w.clone(), dw.clone())
-        };
+        let w = self.aero_weights(k)?;
         let n = self.omega_n.len();
         let q = |w: &[f64], m: usize, j: usize| -> Complex64 {
             w.iter()
@@ -341,15 +344,49 @@ impl PkProblem<'_> {
         };
         let ns = if slope { n } else { 0 };
         Ok([
-            Mat::from_fn(n, n, |m, j| q(&w, m, j).re),
-            Mat::from_fn(n, n, |m, j| q(&w_im, m, j).im),
-            Mat::from_fn(ns, ns, |m, j| q(&dw, m, j).re),
-            Mat::from_fn(ns, ns, |m, j| q(&dw_im, m, j).im),
+            Mat::from_fn(n, n, |m, j| q(&w.re, m, j).re),
+            Mat::from_fn(n, n, |m, j| q(&w.im, m, j).im),
+            Mat::from_fn(ns, ns, |m, j| q(&w.d_re, m, j).re),
+            Mat::from_fn(ns, ns, |m, j| q(&w.d_im, m, j).im),
         ])
     }
 
-    /// Spline weights of the table at k clamped to its range, and the weights of the slope d/dk
-    /// (zero outside the table, where the GAFs are held).
+    /// The weights of the table entries that give the real and imaginary parts of the GAFs at k,
+    /// and of their slopes d/dk. Inside the table: the spline. Below k = 1e-6 the imaginary part
+    /// is taken at that k (the Q_I/k damping term held at its steady limit). Beyond the table's
+    /// last k (k_n): the high-frequency asymptote of unsteady aerodynamics, Q ≈ A₀ + i k A₁ − k² A₂
+    /// (apparent stiffness, damping and mass), joined to the spline with its value and slope at
+    /// k_n: Re Q(k) = Re Q(k_n) + (k² − k_n²) Re Q'(k_n) / (2 k_n), Im Q(k) = Im Q(k_n) + (k − k_n)
+    /// Im Q'(k_n). Holding the GAFs at k_n instead made the aerodynamic damping Q_I/k vanish as
+    /// 1/k, and high modes at low speeds (k ≈ 15 for the AGARD wing's 20th mode at a fifth of the
+    /// flight speed) came out spuriously undamped.
+    pub(crate) fn aero_weights(&self, k: f64) -> Result<AeroWeights, FlutterError> {
+        let kmax = *self.table.k.last().expect("table has k");
+        let (w, dw) = self.spline_at(k.min(kmax))?;
+        let (w_im, dw_im) = if k < K_HOLD {
+            self.spline_at(K_HOLD)?
+        } else {
+            (w.clone(), dw.clone())
+        };
+        if k <= kmax {
+            return Ok(AeroWeights {
+                re: w,
+                d_re: dw,
+                im: w_im,
+                d_im: dw_im,
+            });
+        }
+        let c = (k * k - kmax * kmax) / (2.0 * kmax);
+        Ok(AeroWeights {
+            re: w.iter().zip(&dw).map(|(w, d)| w + c * d).collect(),
+            d_re: dw.iter().map(|d| k / kmax * d).collect(),
+            im: w.iter().zip(&dw).map(|(w, d)| w + (k - kmax) * d).collect(),
+            d_im: dw,
+        })
+    }
+
+    /// Spline weights of the table at k clamped to its range, and the weights of its slope d/dk
+    /// (at the clamped k).
     fn spline_at(&self, k: f64) -> Result<(Vec<f64>, Vec<f64>), FlutterError> {
         let kmax = *self.table.k.last().expect("table has k");
         let kk = k.clamp(self.table.k[0], kmax);
@@ -363,9 +400,6 @@ impl PkProblem<'_> {
         basis
             .weights_at(kk, &mut w, &mut dw)
             .map_err(FlutterError::Input)?;
-        if kk != k {
-            dw.fill(0.0);
-        }
         Ok((w, dw))
     }
 

@@ -253,3 +253,60 @@ fn a_single_branch_converges_before_the_fallback() {
     assert!(calls < 10, "{calls} eigenvalue solves");
     assert!((root.k - (1.12 - 0.3 * 1.14) / 0.7).abs() <= 1e-13);
 }
+
+/// Beyond the table the GAFs follow the high-frequency asymptote Q ≈ A₀ + i k A₁ − k² A₂ (real
+/// A's: apparent stiffness, damping and mass, Roger's quasi-steady form): a table sampled from
+/// exactly that form (which the not-a-knot spline reproduces inside it) is continued exactly, to
+/// round-off, up to k = 8 times the table's last, with the slopes d/dk equal to central differences of the values (step 1e-5,
+/// error O(h²) ≈ 1e-10 of the entries).
+#[test]
+fn gafs_beyond_the_table_follow_the_quadratic_asymptote() {
+    let (a0, a1, a2) = (-1.3, 0.7, 0.45);
+    let exact = |k: f64| C::new(a0 - k * k * a2, k * a1);
+    let ks = [0.0, 0.1, 0.3, 0.6, 1.0, 1.5, 2.0];
+    let t = GafTable {
+        mach: 0.0,
+        b_ref: 1.0,
+        x_ref: 0.0,
+        k: ks.to_vec(),
+        q_ss: ks.iter().map(|&k| vec![vec![exact(k)]]).collect(),
+        q_gs: ks.iter().map(|_| vec![C::new(0.0, 0.0)]).collect(),
+    };
+    let pk = PkProblem::from_parts(vec![10.0], 0.0, &t, 1.0);
+    let value = |k: f64| {
+        let w = pk.aero_weights(k).unwrap();
+        let sum = |w: &[f64]| -> C { w.iter().zip(&t.q_ss).map(|(w, q)| q[0][0] * *w).sum() };
+        (
+            sum(&w.re).re,
+            sum(&w.im).im,
+            sum(&w.d_re).re,
+            sum(&w.d_im).im,
+        )
+    };
+    for k in [0.5, 1.7, 2.0, 2.5, 4.0, 9.0, 16.0] {
+        let (re, im, d_re, d_im) = value(k);
+        let q = exact(k);
+        let scale = 1.0 + k * k;
+        assert!(
+            (re - q.re).abs() < 1e-12 * scale,
+            "k {k}: Re {re} vs {}",
+            q.re
+        );
+        assert!(
+            (im - q.im).abs() < 1e-12 * scale,
+            "k {k}: Im {im} vs {}",
+            q.im
+        );
+        let h = 1e-5;
+        let (rp, ip, _, _) = value(k + h);
+        let (rm, im_m, _, _) = value(k - h);
+        assert!(
+            (d_re - (rp - rm) / (2.0 * h)).abs() < 1e-8 * scale,
+            "k {k}: dRe"
+        );
+        assert!(
+            (d_im - (ip - im_m) / (2.0 * h)).abs() < 1e-8 * scale,
+            "k {k}: dIm"
+        );
+    }
+}
