@@ -15,7 +15,7 @@ use crate::flutter::{check_stability, PkProblem};
 use crate::gust::{self, FrequencyGrid, GustProblem, GustResponse, GustSettings, Quantity};
 use crate::structure::modal::SAMPLED;
 use crate::structure::{
-    mass_grad, modal, modes_vjp, root_bending_moment, root_bending_moment_vjp, ModalSeed, Modes,
+    mass_grad, modes_vjp, root_bending_moment, root_bending_moment_vjp, ModalSeed, Modes,
     PlateModel, Sampler,
 };
 use crate::study::{Study, StudyError};
@@ -136,14 +136,10 @@ pub fn aeroelastic(study: &Study, x: &[f64]) -> Result<Aeroelastic> {
     let plate = study
         .model_at(DesignVector::from_slice(x))
         .map_err(|e: StudyError| anyhow::anyhow!("design: {}", e.reason))?;
-    let st = &study.spec.structure;
     // the aerodynamic model and what of it does not need the modes (a DLM's influence matrices)
     // run beside the modal analysis
     let (modes, aero) = rayon::join(
-        || {
-            modal::solve(&plate, st.modes, st.damping_ratio, &study.mode_fields())
-                .context("modal analysis")
-        },
+        || study.solve_modes(&plate).context("modal analysis"),
         || {
             let aero = study.aero_model(&plate)?;
             aero.fidelity.prepare(&aero.flight, &aero.k);
@@ -218,6 +214,11 @@ pub fn respond(a: Aeroelastic, settings: &GustSettings) -> Result<Evaluation> {
         || check_stability(&ev.modes, &ev.table, &ev.aero.flight),
         || gust::solve(&ev.problem()),
     );
+    // an input that cannot give a response (a grid that leaves turbulence out) is named before
+    // any verdict on the model's stability, which such input may not reach
+    if let Err(e @ (gust::GustError::Input(_) | gust::GustError::GridTooShort { .. })) = &response {
+        return Err(anyhow::Error::new(e.clone()));
+    }
     stable?;
     let response = response?;
     ev.rms_m = response.rms.clone();

@@ -77,6 +77,18 @@ fn run_writes_results_and_summary() {
     assert!(outs[0]["rms"].as_f64().unwrap() > 0.0);
     assert_eq!(outs[1]["unit"], "N m");
     assert!(md.contains("## Gust response"));
+    // the resolution check: twice the modes on a lattice refined by two each way; the initial
+    // design is stable at the flight speed at both resolutions and its RMS moves by less than
+    // 10 % (the 6 modes and 400 boxes are the study's own choice, not a converged one)
+    let c = &r["resolution_check"];
+    assert_eq!(c["refined_model"], "DLM 32 × 50 boxes, 12 modes", "{c}");
+    assert_eq!(c["passed"], true, "{c}");
+    let (rms, fine) = (
+        c["rms_m"][0].as_f64().unwrap(),
+        c["refined_rms_m"][0].as_f64().unwrap(),
+    );
+    assert!((fine / rms - 1.0).abs() < 0.1, "{rms} vs {fine}");
+    assert!(md.contains("## Resolution check"), "{md}");
     assert!(
         dir.join("agard445_dlm_analysis/psd.png").exists()
             && dir.join("agard445_dlm_analysis/psd.svg").exists()

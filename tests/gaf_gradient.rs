@@ -44,8 +44,7 @@ fn seed(nk: usize, nm: usize) -> GafTable {
 
 fn functional(study: &Study, seed: &GafTable, x: &[f64]) -> f64 {
     let plate = study.model_at(DesignVector::from_slice(x)).unwrap();
-    let st = &study.spec.structure;
-    let modes = modal::solve(&plate, st.modes, 0.0, &study.mode_fields()).unwrap();
+    let modes = modal::solve(&plate, study.max_modes(), 0.0, &study.mode_fields()).unwrap();
     let aero = study.aero_model(&plate).unwrap();
     let q = aero.gafs(&plate, &modes).unwrap();
     seed.pair(&q)

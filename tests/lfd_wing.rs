@@ -181,9 +181,9 @@ fn plate_and_modes(
     gustkit::structure::modal::Modes,
 ) {
     let plate = study.build_model().unwrap();
-    let st = &study.spec.structure;
     let modes =
-        gustkit::structure::modal::solve(&plate, st.modes, 0.0, &study.mode_fields()).unwrap();
+        gustkit::structure::modal::solve(&plate, study.max_modes(), 0.0, &study.mode_fields())
+            .unwrap();
     (plate, modes)
 }
 
@@ -266,9 +266,8 @@ fn coarse_lfd_gafs_beside_the_dlm() {
     v["aero"]["fidelity"] = serde_json::json!({"lfd": {"mesh": "coarse"}});
     let lfd = load(&v).unwrap();
     let plate = dlm.build_model().unwrap();
-    let st = &dlm.spec.structure;
     let modes =
-        gustkit::structure::modal::solve(&plate, st.modes, 0.0, &dlm.mode_fields()).unwrap();
+        gustkit::structure::modal::solve(&plate, dlm.max_modes(), 0.0, &dlm.mode_fields()).unwrap();
     let a = dlm
         .aero_model(&plate)
         .unwrap()

@@ -70,9 +70,7 @@ impl Aerodynamics for ForwardOnly {
 fn model_without_reverse_mode_is_refused_by_name() {
     let study = agard();
     let plate = study.build_model().unwrap();
-    let st = &study.spec.structure;
-    let modes =
-        crate::structure::modal::solve(&plate, st.modes, 0.0, &study.mode_fields()).unwrap();
+    let modes = study.solve_modes(&plate).unwrap();
     let aero = study.spec.aero.as_ref().unwrap();
     let (airfoil, flight) = (study.airfoil().unwrap(), study.flight_condition().unwrap());
     let ctx = WingContext {

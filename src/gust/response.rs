@@ -21,7 +21,7 @@ use gustkit_core::GafTable;
 use rayon::prelude::*;
 
 /// Why a gust response cannot be computed.
-#[derive(Debug, thiserror::Error, PartialEq)]
+#[derive(Clone, Debug, thiserror::Error, PartialEq)]
 pub enum GustError {
     #[error("{0}")]
     Input(String),

@@ -337,7 +337,41 @@ pub struct RunResults {
     /// The analysis repeated with `aero.compare_with` (absent without it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub comparison: Option<FidelityComparison>,
+    /// The resolution check of the final design (the initial one without an optimization).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub resolution_check: Option<ResolutionCheck>,
     pub run_time_s: f64,
+}
+
+/// The resolution check of a design (`runner::wing::resolution`): its flutter point and RMS at
+/// the study's resolution and at a refined one (twice the modes, the DLM lattice refined by two),
+/// and whether the refined model still meets the requirement (SI).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct ResolutionCheck {
+    /// The study's model ("DLM 8 × 12 boxes, 11 modes") and the refined one (absent when the
+    /// refined analysis could not run: `not_run` says why).
+    pub model: String,
+    pub refined_model: Option<String>,
+    pub flight_speed_m_s: f64,
+    /// The speed up to which the design must not flutter (the margin speed, or the flight speed).
+    pub stable_to_m_s: f64,
+    /// The stability verdicts in words, and the lowest speed each found unstable.
+    pub flutter: String,
+    pub flutter_speed_m_s: Option<f64>,
+    pub refined_flutter: Option<String>,
+    pub refined_flutter_speed_m_s: Option<f64>,
+    /// RMS of every gust output at both resolutions (empty without a gust analysis), m or N m.
+    pub rms_m: Vec<f64>,
+    pub refined_rms_m: Vec<f64>,
+    /// Why the refined model gives no gust response (unstable at the flight speed).
+    pub refined_unstable: Option<String>,
+    /// The constrained output's index and RMS limit, when there is one.
+    pub rms_limit: Option<(usize, f64)>,
+    pub flutter_tolerance: f64,
+    pub rms_tolerance: f64,
+    pub passed: bool,
+    pub not_run: Option<String>,
+    pub time_s: f64,
 }
 
 /// The study's analysis at its initial design with its own fidelity and with the one of

@@ -197,6 +197,9 @@ pub fn summary(r: &RunResults) -> String {
             n
         );
     }
+    if let Some(c) = &r.resolution_check {
+        md += &format!("\n## Resolution check\n\n{}\n", resolution_words(c));
+    }
     if let Some(c) = &r.comparison {
         md += &comparison_text(c, r.gust.as_ref(), r.flutter.as_ref());
         md += "\n![GAFs of both fidelities](gafs_fidelities.png)\n";
@@ -412,4 +415,59 @@ fn with_optimization(
         r.optimization = Some(from_json(path, value)?);
     }
     Ok(r)
+}
+
+/// The resolution check in one paragraph: both models, their verdicts and RMS, and whether the
+/// refined one meets the requirement.
+pub fn resolution_words(c: &crate::report::results::ResolutionCheck) -> String {
+    let Some(refined) = &c.refined_model else {
+        return format!(
+            "Resolution check ({}): {}; the refined analysis did not run: {}.",
+            c.model,
+            c.flutter,
+            c.not_run.as_deref().unwrap_or("")
+        );
+    };
+    let rms = match (c.rms_limit, c.rms_m.first()) {
+        (Some((i, limit)), _) => match (c.rms_m.get(i), c.refined_rms_m.get(i)) {
+            (Some(a), Some(b)) => format!(
+                " RMS of the constrained output {a:.6e} → {b:.6e} ({:+.2} %; limit {limit:.6e}, tolerance {:.0} %).",
+                100.0 * (b / a - 1.0),
+                100.0 * c.rms_tolerance
+            ),
+            _ => String::new(),
+        },
+        (None, Some(a)) => match c.refined_rms_m.first() {
+            Some(b) => format!(" RMS of the first output {a:.6e} → {b:.6e} ({:+.2} %).", 100.0 * (b / a - 1.0)),
+            None => String::new(),
+        },
+        _ => String::new(),
+    };
+    let unstable = c
+        .refined_unstable
+        .as_deref()
+        .map(|u| format!(" The refined model gives no gust response: {u}."))
+        .unwrap_or_default();
+    let verdict = if c.passed {
+        format!(
+            "The design holds at the refined resolution (no flutter below {:.1} m/s within {:.0} %).",
+            c.stable_to_m_s,
+            100.0 * c.flutter_tolerance
+        )
+    } else {
+        format!(
+            "**The design fails at the refined resolution** (it must not flutter below {:.1} m/s, {:.2} × the flight speed, within {:.0} %, and meet its RMS limit within {:.0} %).",
+            c.stable_to_m_s,
+            c.stable_to_m_s / c.flight_speed_m_s,
+            100.0 * c.flutter_tolerance,
+            100.0 * c.rms_tolerance
+        )
+    };
+    format!(
+        "Resolution check: with {} the design {}; with {refined} it {}.{rms}{unstable} {verdict} ({:.1} s)",
+        c.model,
+        c.flutter,
+        c.refined_flutter.as_deref().unwrap_or(""),
+        c.time_s
+    )
 }

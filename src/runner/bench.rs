@@ -3,7 +3,7 @@
 //! reported as the median, minimum and maximum of its repetitions, with the thread count in use.
 
 use crate::runner::wing::{analyze, optimize::optimize};
-use crate::structure::{mass_grad, modal, modes_vjp, ModalSeed, Sampler};
+use crate::structure::{mass_grad, modes_vjp, ModalSeed, Sampler};
 use crate::study::Study;
 use anyhow::{Context, Result};
 use serde::Serialize;
@@ -43,7 +43,6 @@ pub struct StructureTimings {
 /// mode and the mass with respect to all design variables (one reverse sweep each).
 pub fn bench_structure(study: &Study, repeat: usize) -> Result<StructureTimings> {
     let (mut ta, mut tm, mut ts, mut tt) = (vec![], vec![], vec![], vec![]);
-    let st = &study.spec.structure;
     let (mut n_dv, mut n_modes) = (0, 0);
     for rep in 0..WARMUP + repeat.max(1) {
         let t0 = Instant::now();
@@ -53,7 +52,7 @@ pub fn bench_structure(study: &Study, repeat: usize) -> Result<StructureTimings>
             std::hint::black_box(model.assemble(f));
         }
         let t1 = Instant::now();
-        let modes = modal::solve(&model, st.modes, st.damping_ratio, &study.mode_fields())?;
+        let modes = study.solve_modes(&model)?;
         let t2 = Instant::now();
         let tip = Sampler::new(&model, &[[1.0, 1.0]]);
         let mut grads = vec![mass_grad(&model)];

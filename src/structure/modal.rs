@@ -528,6 +528,38 @@ pub fn solve(
     })
 }
 
+/// Every mode with ω ≤ `omega_cut` over the given fields, at least `min` and at most `max` of
+/// them (each capped at the degrees of freedom): the `max` lowest are solved, those above the
+/// cutoff dropped. A (near-)repeated pair is never split at the cut: a mode within 1e-6 of the
+/// last retained one's frequency is retained with it.
+pub fn solve_below(
+    model: &PlateModel,
+    omega_cut: f64,
+    min: usize,
+    max: usize,
+    damping_ratio: f64,
+    fields: &[Field],
+) -> Result<Modes, ModalError> {
+    let available: usize = fields.iter().map(|&f| model.n_dofs(f)).sum();
+    let max = max.min(available);
+    let mut modes = solve(model, max, damping_ratio, fields)?;
+    let lambda_cut = omega_cut * omega_cut;
+    let mut keep = modes
+        .modes
+        .iter()
+        .take_while(|m| m.lambda <= lambda_cut)
+        .count()
+        .max(min.min(max));
+    while keep > 0
+        && keep < modes.modes.len()
+        && modes.modes[keep].lambda <= modes.modes[keep - 1].lambda * (1.0 + 2e-6)
+    {
+        keep += 1;
+    }
+    modes.modes.truncate(keep);
+    Ok(modes)
+}
+
 /// Scatters a field's free-DOF vector into a nodal [`NODAL`]-vector.
 pub fn nodal_shape(model: &PlateModel, field: Field, dofs: impl Iterator<Item = f64>) -> Vec<f64> {
     let dofs: Vec<f64> = dofs.collect();

@@ -169,10 +169,11 @@ impl Study {
             out.push(Footprint {
                 what: format!(
                     "the gust response on {} frequencies with {} modes",
-                    g.points, st.modes
+                    g.points,
+                    self.max_modes()
                 ),
                 path: "gust.points".into(),
-                bytes: gust_bytes(g.points, st.modes, gradients),
+                bytes: gust_bytes(g.points, self.max_modes(), gradients),
             });
         }
         out

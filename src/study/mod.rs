@@ -13,11 +13,23 @@ pub mod sweep;
 pub use crate::aero::{dlm::DlmSpec, FidelitySpec};
 pub use schema::{
     AeroSpec, AirfoilSpec, ClampSpec, FlightSpec, FlutterSpec, GustSpec, LengthUnit, MaterialSpec,
-    MeshSpec, OptimizationSpec, OutputSpec, ReferenceSpec, StructureSpec, StudyFile, SweepCombine,
-    SweepParameter, SweepSpec, WarmStartSpec, WingSpec,
+    MeshSpec, ModeCutoffSpec, ModesSpec, OptimizationSpec, OutputSpec, ReferenceSpec,
+    StructureSpec, StudyFile, SweepCombine, SweepParameter, SweepSpec, WarmStartSpec, WingSpec,
 };
 
 use crate::aero::AeroModel;
+
+/// How the modes of a design are chosen (SI): a fixed count, or every mode with ω ≤ `omega_cut`,
+/// at least `min` and at most `max`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ModeRule {
+    Count(usize),
+    Cutoff {
+        omega_cut: f64,
+        min: usize,
+        max: usize,
+    },
+}
 use crate::gust::{GustSettings, Output, Quantity, QuantityName};
 use crate::structure::{airfoil_thickness, Clamp, Orthotropic, PlateMesh, PlateModel};
 use crate::wing::{Airfoil, DesignVector, Planform};
@@ -166,8 +178,39 @@ impl Study {
         self.airfoil()?;
         self.material()?;
         let st = &s.structure;
-        if st.modes == 0 {
-            return Err(self.err("structure.modes", "must be at least 1"));
+        match &st.modes {
+            ModesSpec::Count(0) => {
+                return Err(self.err("structure.modes", "must be at least 1"));
+            }
+            ModesSpec::Count(_) => {}
+            ModesSpec::Cutoff(c) => {
+                if c.min == 0 {
+                    return Err(self.err(
+                        "structure.modes.min",
+                        "must be at least 1: a cutoff below the first mode would retain none",
+                    ));
+                }
+                if c.max < c.min {
+                    return Err(self.err(
+                        "structure.modes.max",
+                        format!("must be at least min ({}) (got {})", c.min, c.max),
+                    ));
+                }
+                if let Some(f) = c.cutoff_hz {
+                    if !(f > 0.0 && f.is_finite()) {
+                        return Err(self.err(
+                            "structure.modes.cutoff_hz",
+                            format!("must be positive (got {f})"),
+                        ));
+                    }
+                }
+                if !(c.factor > 0.0 && c.factor <= 10.0) {
+                    return Err(self.err(
+                        "structure.modes.factor",
+                        format!("must lie in (0, 10] (got {})", c.factor),
+                    ));
+                }
+            }
         }
         if !(0.0..1.0).contains(&st.damping_ratio) {
             return Err(self.err(
@@ -193,12 +236,17 @@ impl Study {
         limits::check(self, &footprints[..1], 1, "the modal analysis")?;
         let plate = self.build_model()?;
         let dofs = self.retained_dofs(&plate);
-        if st.modes > dofs {
+        let (path, asked) = match &st.modes {
+            ModesSpec::Count(n) => ("structure.modes", *n),
+            ModesSpec::Cutoff(c) => ("structure.modes.min", c.min),
+        };
+        if asked > dofs {
             return Err(self.err(
-                "structure.modes",
-                format!("the plate has {dofs} degrees of freedom in the retained fields, fewer than the {} modes asked for", st.modes),
+                path,
+                format!("the plate has {dofs} degrees of freedom in the retained fields, fewer than the {asked} modes asked for"),
             ));
         }
+        self.mode_rule()?;
         self.check_memory(1)?;
         if self.spec.aero.is_some() || self.spec.flight.is_some() {
             self.flight_condition()?;
@@ -986,6 +1034,85 @@ impl Study {
     /// Degrees of freedom of the plate in the retained fields: the most modes it has.
     pub fn retained_dofs(&self, plate: &PlateModel) -> usize {
         self.mode_fields().iter().map(|f| plate.n_dofs(*f)).sum()
+    }
+
+    /// The modal basis rule in SI (see [`ModeRule`]).
+    pub fn mode_rule(&self) -> Result<ModeRule, StudyError> {
+        let c = match &self.spec.structure.modes {
+            ModesSpec::Count(n) => return Ok(ModeRule::Count(*n)),
+            ModesSpec::Cutoff(c) => c,
+        };
+        let omega_cut = match c.cutoff_hz {
+            Some(f) => 2.0 * std::f64::consts::PI * f,
+            None => {
+                if self.spec.aero.is_none() || self.spec.flight.is_none() {
+                    return Err(self.err(
+                        "structure.modes",
+                        "the cutoff rule needs the GAF table's reduced frequencies and the flight condition (aero and flight): give structure.modes.cutoff_hz or a mode count",
+                    ));
+                }
+                let f = self.flight_condition()?;
+                let k_max = self
+                    .spec
+                    .aero
+                    .as_ref()
+                    .and_then(|a| a.reduced_frequencies.last().copied())
+                    .unwrap_or(0.0);
+                c.factor * k_max * self.top_speed()? / f.b_ref
+            }
+        };
+        Ok(ModeRule::Cutoff {
+            omega_cut,
+            min: c.min,
+            max: c.max,
+        })
+    }
+
+    /// The highest speed any analysis of the study examines, m/s: the flight speed, the flutter
+    /// margin's speed and the flutter sweep's last speed.
+    pub fn top_speed(&self) -> Result<f64, StudyError> {
+        let v = self.flight_condition()?.velocity;
+        let margin = self
+            .spec
+            .optimization
+            .as_ref()
+            .and_then(|o| o.flutter_margin.as_ref())
+            .map_or(v, |m| m.speed_factor * v);
+        let sweep = self.spec.flutter.as_ref().map_or(v, |f| f.velocity_max_m_s);
+        Ok(v.max(margin).max(sweep))
+    }
+
+    /// The most modes the study can retain (the count, or the rule's ceiling): what memory
+    /// estimates are made for.
+    pub fn max_modes(&self) -> usize {
+        match &self.spec.structure.modes {
+            ModesSpec::Count(n) => *n,
+            ModesSpec::Cutoff(c) => c.max.max(c.min),
+        }
+    }
+
+    /// The modal analysis of a plate of the study by its [`ModeRule`].
+    pub fn solve_modes(&self, plate: &PlateModel) -> anyhow::Result<crate::structure::Modes> {
+        let st = &self.spec.structure;
+        let fields = self.mode_fields();
+        let modes = match self.mode_rule()? {
+            ModeRule::Count(n) => {
+                crate::structure::modal::solve(plate, n, st.damping_ratio, &fields)?
+            }
+            ModeRule::Cutoff {
+                omega_cut,
+                min,
+                max,
+            } => crate::structure::modal::solve_below(
+                plate,
+                omega_cut,
+                min,
+                max,
+                st.damping_ratio,
+                &fields,
+            )?,
+        };
+        Ok(modes)
     }
 
     /// Plate fields whose modes are retained.

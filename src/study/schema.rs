@@ -361,9 +361,9 @@ pub struct StructureSpec {
     pub mesh: MeshSpec,
     #[serde(default)]
     pub clamp: ClampSpec,
-    /// Number of retained modes.
+    /// The retained modes: a fixed count, or every mode below a cutoff frequency.
     #[serde(default = "default_modes")]
-    pub modes: usize,
+    pub modes: ModesSpec,
     /// Modal damping ratio ζ of every mode.
     #[serde(default)]
     pub damping_ratio: f64,
@@ -387,8 +387,41 @@ fn is_one(v: &f64) -> bool {
     *v == 1.0
 }
 
-fn default_modes() -> usize {
+fn default_modes() -> ModesSpec {
+    ModesSpec::Count(6)
+}
+
+/// `structure.modes`: a count (`6`), or every mode below a cutoff frequency with a floor and a
+/// ceiling (`{"min": 6, "max": 40}`: the cutoff by the aerodynamic-table rule, or `cutoff_hz`).
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(untagged)]
+pub enum ModesSpec {
+    Count(usize),
+    Cutoff(ModeCutoffSpec),
+}
+
+/// Every mode below a cutoff frequency, at least `min` and at most `max` of them. Without
+/// `cutoff_hz` the cutoff is `factor` × k_max V_top / (2π b_ref): the highest frequency whose
+/// reduced frequency at the highest speed the study examines (the flight speed, the flutter
+/// margin's speed, the flutter sweep's last) lies inside the GAF table.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ModeCutoffSpec {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cutoff_hz: Option<f64>,
+    #[serde(default = "default_one", skip_serializing_if = "is_one")]
+    pub factor: f64,
+    #[serde(default = "default_min_modes")]
+    pub min: usize,
+    #[serde(default = "default_max_modes")]
+    pub max: usize,
+}
+
+fn default_min_modes() -> usize {
     6
+}
+fn default_max_modes() -> usize {
+    40
 }
 
 /// Design patches chordwise × spanwise, each split into refine × refine elements.

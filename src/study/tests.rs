@@ -247,3 +247,75 @@ fn sweep_cases_grid_zip_and_errors() {
     let s = Study::from_str(Path::new("s.json"), &v.to_string()).unwrap();
     assert_eq!(s.sweep_cases().unwrap_err().path, "sweep.optimize");
 }
+
+/// `structure.modes` as a cutoff rule: its fields are checked by name, and the rule retains
+/// exactly the modes of the complete spectrum below the cutoff k_max V_top / (2π b_ref), at least
+/// `min`, at most `max`.
+#[test]
+fn mode_cutoff_rule() {
+    expect_error(
+        |v| v["structure"]["modes"] = serde_json::json!({"min": 0}),
+        "structure.modes.min",
+        "at least 1",
+    );
+    expect_error(
+        |v| v["structure"]["modes"] = serde_json::json!({"min": 8, "max": 4}),
+        "structure.modes.max",
+        "at least min",
+    );
+    expect_error(
+        |v| v["structure"]["modes"] = serde_json::json!({"cutoff_hz": -5.0}),
+        "structure.modes.cutoff_hz",
+        "positive",
+    );
+    expect_error(
+        |v| v["structure"]["modes"] = serde_json::json!({"min": 100000, "max": 100000}),
+        "structure.modes.min",
+        "degrees of freedom",
+    );
+    let study =
+        load_modified(|v| v["structure"]["modes"] = serde_json::json!({"max": 40})).unwrap();
+    let crate::study::ModeRule::Cutoff {
+        omega_cut,
+        min,
+        max,
+    } = study.mode_rule().unwrap()
+    else {
+        panic!("a cutoff rule");
+    };
+    let f = study.flight_condition().unwrap();
+    let k_max = *study
+        .spec
+        .aero
+        .as_ref()
+        .unwrap()
+        .reduced_frequencies
+        .last()
+        .unwrap();
+    assert!((omega_cut - k_max * study.top_speed().unwrap() / f.b_ref).abs() < 1e-9 * omega_cut);
+    assert_eq!((min, max), (6, 40));
+    let plate = study.build_model().unwrap();
+    let modes = study.solve_modes(&plate).unwrap();
+    let all = crate::structure::modal::solve(&plate, 40, 0.0, &study.mode_fields()).unwrap();
+    let below = all
+        .omega()
+        .iter()
+        .filter(|w| **w <= omega_cut)
+        .count()
+        .max(6);
+    assert_eq!(modes.len(), below);
+    for (a, b) in modes.omega().iter().zip(all.omega()) {
+        assert!((a - b).abs() <= 1e-12 * b);
+    }
+    // a cutoff below the first mode keeps the floor; one above every mode the ceiling
+    let low = load_modified(|v| {
+        v["structure"]["modes"] = serde_json::json!({"cutoff_hz": 0.1, "min": 3})
+    })
+    .unwrap();
+    assert_eq!(low.solve_modes(&plate).unwrap().len(), 3);
+    let high = load_modified(|v| {
+        v["structure"]["modes"] = serde_json::json!({"cutoff_hz": 1e6, "min": 3, "max": 9})
+    })
+    .unwrap();
+    assert_eq!(high.solve_modes(&plate).unwrap().len(), 9);
+}

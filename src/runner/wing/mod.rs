@@ -7,6 +7,7 @@ pub mod flutter;
 pub mod gradient;
 pub mod gust;
 pub mod optimize;
+pub mod resolution;
 
 use crate::kind::StudyKind;
 use crate::report::figures::ModeShapes;
@@ -14,7 +15,7 @@ use crate::report::results::{FlutterSummary, ModeRow, RunResults};
 use crate::report::run::frequency_table;
 use crate::report::{self, save_figure, write_atomic};
 use crate::structure::model::Field;
-use crate::structure::{modal, Modes, PlateModel, Sampler};
+use crate::structure::{Modes, PlateModel, Sampler};
 use crate::study::Study;
 use anyhow::{Context, Result};
 use serde::Serialize;
@@ -41,8 +42,8 @@ fn field_name(f: Field) -> &'static str {
 /// Builds the model of a study and solves its modes.
 pub fn analyze(study: &Study) -> Result<(PlateModel, Modes, ModalSummary)> {
     let model = study.build_model()?;
-    let st = &study.spec.structure;
-    let modes = modal::solve(&model, st.modes, st.damping_ratio, &study.mode_fields())
+    let modes = study
+        .solve_modes(&model)
         .with_context(|| format!("{}: modal analysis", study.file.display()))?;
     let tip = Sampler::new(&model, &[[1.0, 1.0]]);
     let names = crate::report::results::mode_names(&model, &modes);
@@ -184,6 +185,10 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
         Some(_) => Some(optimize::optimize(&study, &dir, resume, false)?),
         None => None,
     };
+    let resolution_check = resolution_check(&study, optimization.as_ref())?;
+    if let Some(c) = &resolution_check {
+        println!("{}", report::run::resolution_words(c));
+    }
     let results = RunResults {
         kind: StudyKind::Wing,
         study: study.spec.name.clone(),
@@ -204,6 +209,7 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
         flutter,
         optimization,
         comparison,
+        resolution_check,
         run_time_s: t0.elapsed().as_secs_f64(),
     };
     report::run::render(&dir, &results)?;
@@ -216,11 +222,75 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
     }
     folder.commit()?;
     println!("report written to {}", final_dir.display());
-    Ok(match &results.optimization {
-        Some(o) if !o.converged => crate::runner::Outcome::GoalNotReached(format!(
+    Ok(match (&results.optimization, &results.resolution_check) {
+        (Some(o), _) if !o.converged => crate::runner::Outcome::GoalNotReached(format!(
             "the optimization did not converge: {} after {} iterations",
             o.message, o.iterations
         )),
+        (_, Some(c)) if !c.passed => crate::runner::Outcome::GoalNotReached(format!(
+            "the design fails the resolution check: with {} it {}",
+            c.refined_model.as_deref().unwrap_or(""),
+            c.refined_flutter.as_deref().unwrap_or("")
+        )),
         _ => crate::runner::Outcome::Done,
     })
+}
+
+/// The resolution check of a run: the optimization's final design against its margin speed and
+/// RMS limit, or (without an optimization) the initial design against the flight speed. None for
+/// a study with neither a gust nor a flutter analysis.
+fn resolution_check(
+    study: &Study,
+    optimization: Option<&crate::report::results::OptimizationResults>,
+) -> Result<Option<crate::report::results::ResolutionCheck>> {
+    let s = &study.spec;
+    if s.aero.is_none() || (s.gust.is_none() && s.flutter.is_none() && s.optimization.is_none()) {
+        return Ok(None);
+    }
+    let settings = match s.gust {
+        Some(_) => Some(study.gust_settings()?),
+        None => None,
+    };
+    let flight = study.flight_condition()?.velocity;
+    let (x, req) = match (optimization, &s.optimization) {
+        (Some(o), Some(spec)) => {
+            let output = settings
+                .as_ref()
+                .and_then(|g| g.outputs.iter().position(|out| out.name == spec.output));
+            let to_m = s.length_unit.to_m();
+            let limit = output.map(|i| {
+                let disp = matches!(
+                    settings.as_ref().expect("found in it").outputs[i].quantity,
+                    crate::gust::Quantity::Displacement { .. }
+                );
+                (
+                    i,
+                    if disp {
+                        spec.rms_max * to_m
+                    } else {
+                        spec.rms_max
+                    },
+                )
+            });
+            let margin = spec
+                .flutter_margin
+                .as_ref()
+                .map_or(flight, |m| m.speed_factor * flight);
+            (
+                o.final_.design_variables.clone(),
+                resolution::Requirement {
+                    stable_to_m_s: margin,
+                    rms: limit,
+                },
+            )
+        }
+        _ => (
+            study.initial_design()?.to_vec(),
+            resolution::Requirement {
+                stable_to_m_s: flight,
+                rms: None,
+            },
+        ),
+    };
+    Ok(Some(resolution::check(study, &x, settings.as_ref(), req)?))
 }

@@ -419,7 +419,7 @@ pub fn optimize(
         })
         .collect::<Result<Vec<_>>>()?;
     // the flutter check reports; it does not fail a finished optimization
-    let flutter = match flutter_check(study, &ev0, &ev) {
+    let flutter = match flutter_check(&ev0, &ev) {
         Ok(f) => Some(f),
         Err(e) => {
             eprintln!("warning: the flutter check of the initial and final designs failed: {e:#}");
@@ -645,36 +645,21 @@ fn flutter_point(
     })
 }
 
-/// The flutter speeds of the initial and final designs, and of the final design with two more
-/// modes than the study retains (when the plate has them).
+/// The flutter speeds of the initial and final designs (the resolution check of the run adds the
+/// final design's at the refined resolution).
 fn flutter_check(
-    study: &Study,
     ev0: &crate::pipeline::Evaluation,
     ev: &crate::pipeline::Evaluation,
 ) -> Result<FlutterCheck> {
     let flight = &ev.aero.flight;
     let v_max = FLUTTER_CHECK_FACTOR * flight.velocity;
-    let st = &study.spec.structure;
-    let more = (st.modes + 2).min(study.retained_dofs(&ev.plate));
-    let final_more_modes = if more > st.modes {
-        let wider =
-            crate::structure::modal::solve(&ev.plate, more, st.damping_ratio, &study.mode_fields())
-                .context("the final design with more modes")?;
-        let table = ev
-            .aero
-            .gafs(&ev.plate, &wider)
-            .map_err(|e| anyhow::anyhow!("the final design with more modes: aero: {e}"))?;
-        Some(flutter_point(&wider, &table, flight, v_max)?)
-    } else {
-        None
-    };
     Ok(FlutterCheck {
         flight_speed_m_s: flight.velocity,
         searched_up_to_m_s: v_max,
         initial: flutter_point(&ev0.modes, &ev0.table, &ev0.aero.flight, v_max)?,
         final_: flutter_point(&ev.modes, &ev.table, flight, v_max)?,
-        modes: st.modes,
-        more_modes: final_more_modes.as_ref().map(|_| more),
-        final_more_modes,
+        modes: ev.modes.len(),
+        more_modes: None,
+        final_more_modes: None,
     })
 }

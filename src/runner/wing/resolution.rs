@@ -1,0 +1,170 @@
+//! The resolution check at the end of `run`, `flutter` and every optimization: the design
+//! re-analysed with twice the modes (as many as the plate has, if fewer) and the DLM lattice
+//! refined by two in each direction, so that a result that depends on what the model leaves out
+//! shows it. A design that fails its flutter margin or RMS limit at the refined resolution beyond
+//! the tolerances below does not pass.
+
+use crate::aero::FidelitySpec;
+use crate::flutter::{PkProblem, Verdict};
+use crate::gust::GustSettings;
+use crate::report::results::ResolutionCheck;
+use crate::study::{ModesSpec, Study};
+use anyhow::{Context, Result};
+use std::time::Instant;
+
+/// A refined flutter speed may fall this fraction below the margin speed before the check fails
+/// (the p-k crossing is refined to 1e-10; one percent is the spread of the flutter speeds of the
+/// converged lattices of the AGARD wing's study in the README).
+pub const FLUTTER_TOLERANCE: f64 = 0.01;
+
+/// A refined RMS may exceed its limit by this fraction before the check fails (the 400-box
+/// lattice moves the flagship's RMS by 2.1 %).
+pub const RMS_TOLERANCE: f64 = 0.02;
+
+/// Speeds of the flutter points: from a fifth of the flight speed up to this factor of it.
+pub const SEARCH_FACTOR: f64 = 2.0;
+
+/// What the design must meet: a flutter-free speed (the margin speed, or the flight speed) and,
+/// when constrained, an RMS limit on one output (SI).
+#[derive(Clone, Copy, Debug)]
+pub struct Requirement {
+    pub stable_to_m_s: f64,
+    pub rms: Option<(usize, f64)>,
+}
+
+/// The study at the refined resolution and its words, or why there is none.
+fn refined_study(study: &Study, modes_used: usize, dofs: usize) -> Result<(Study, String), String> {
+    let mut s = study.clone();
+    let refined_modes = (2 * modes_used).min(dofs);
+    s.spec.structure.modes = ModesSpec::Count(refined_modes);
+    let aero = s
+        .spec
+        .aero
+        .as_mut()
+        .ok_or_else(|| "the study has no aerodynamic model".to_string())?;
+    let model = match &mut aero.fidelity {
+        FidelitySpec::Dlm(d) => {
+            d.n_chord *= 2;
+            d.n_span *= 2;
+            format!("DLM {} × {} boxes", d.n_chord, d.n_span)
+        }
+        FidelitySpec::Lfd(_) => {
+            return Err(
+                "the LFD's check on the next mesh level is not run yet: only the DLM lattice is refined"
+                    .into(),
+            )
+        }
+    };
+    // the second fidelity is not part of the check
+    aero.compare_with = None;
+    s.check_memory(1).map_err(|e| {
+        format!(
+            "the refined model ({model}, {refined_modes} modes) does not fit: {}",
+            e.reason
+        )
+    })?;
+    Ok((s, format!("{model}, {refined_modes} modes")))
+}
+
+/// The words of a study's aerodynamic model and mode count.
+fn model_words(study: &Study, modes: usize) -> String {
+    match study.spec.aero.as_ref().map(|a| &a.fidelity) {
+        Some(FidelitySpec::Dlm(d)) => {
+            format!("DLM {} × {} boxes, {modes} modes", d.n_chord, d.n_span)
+        }
+        Some(FidelitySpec::Lfd(_)) => format!("LFD, {modes} modes"),
+        None => format!("{modes} modes"),
+    }
+}
+
+/// The flutter verdict and point of one design's model from a fifth of the flight speed up to
+/// [`SEARCH_FACTOR`] times it.
+fn flutter_of(a: &crate::pipeline::Aeroelastic) -> Result<(Verdict, f64)> {
+    let v = a.aero.flight.velocity;
+    let speeds: Vec<f64> = (0..=90)
+        .map(|i| v * (0.2 + (SEARCH_FACTOR - 0.2) * i as f64 / 90.0))
+        .collect();
+    let r = PkProblem::new(&a.modes, &a.table, a.aero.flight.density)
+        .sweep(&speeds)
+        .map_err(|e| anyhow::anyhow!("flutter: {e}"))?;
+    Ok((Verdict::of(&r), v))
+}
+
+/// The RMS of every output, or why there is none (the model is unstable at the flight speed).
+fn rms_of(
+    a: crate::pipeline::Aeroelastic,
+    settings: Option<&GustSettings>,
+) -> Result<std::result::Result<Vec<f64>, String>> {
+    let Some(settings) = settings else {
+        return Ok(Ok(Vec::new()));
+    };
+    if let Err(e) = crate::flutter::check_stability(&a.modes, &a.table, &a.aero.flight) {
+        return Ok(Err(format!("{e:#}")));
+    }
+    Ok(Ok(crate::pipeline::respond(a, settings)?.rms_m))
+}
+
+/// The resolution check of design `x`: its flutter point and RMS at the study's resolution and at
+/// the refined one, and whether the refined model still meets `req`.
+pub fn check(
+    study: &Study,
+    x: &[f64],
+    settings: Option<&GustSettings>,
+    req: Requirement,
+) -> Result<ResolutionCheck> {
+    let t0 = Instant::now();
+    let base = crate::pipeline::aeroelastic(study, x).context("resolution check")?;
+    let modes = base.modes.len();
+    let dofs = study.retained_dofs(&base.plate);
+    let (verdict, flight_speed) = flutter_of(&base)?;
+    let rms = rms_of(base, settings)?;
+    let mut out = ResolutionCheck {
+        model: model_words(study, modes),
+        refined_model: None,
+        flight_speed_m_s: flight_speed,
+        stable_to_m_s: req.stable_to_m_s,
+        flutter: verdict.words(flight_speed),
+        flutter_speed_m_s: verdict.unstable_from(),
+        refined_flutter: None,
+        refined_flutter_speed_m_s: None,
+        rms_m: rms.as_ref().ok().cloned().unwrap_or_default(),
+        refined_rms_m: Vec::new(),
+        refined_unstable: None,
+        rms_limit: req.rms,
+        flutter_tolerance: FLUTTER_TOLERANCE,
+        rms_tolerance: RMS_TOLERANCE,
+        passed: false,
+        not_run: None,
+        time_s: 0.0,
+    };
+    let (refined, words) = match refined_study(study, modes, dofs) {
+        Ok(r) => r,
+        Err(why) => {
+            out.not_run = Some(why);
+            out.passed = true;
+            out.time_s = t0.elapsed().as_secs_f64();
+            return Ok(out);
+        }
+    };
+    let fine = crate::pipeline::aeroelastic(&refined, x).context("resolution check, refined")?;
+    let (fine_verdict, _) = flutter_of(&fine)?;
+    let fine_rms = rms_of(fine, settings)?;
+    out.refined_model = Some(words);
+    out.refined_flutter = Some(fine_verdict.words(flight_speed));
+    out.refined_flutter_speed_m_s = fine_verdict.unstable_from();
+    match fine_rms {
+        Ok(r) => out.refined_rms_m = r,
+        Err(why) => out.refined_unstable = Some(why),
+    }
+    let flutter_ok = fine_verdict.stable_up_to(req.stable_to_m_s * (1.0 - FLUTTER_TOLERANCE));
+    let rms_ok = match req.rms {
+        Some((i, limit)) => out
+            .refined_rms_m
+            .get(i)
+            .is_some_and(|r| *r <= limit * (1.0 + RMS_TOLERANCE)),
+        None => true,
+    };
+    out.passed = flutter_ok && rms_ok && out.refined_unstable.is_none();
+    out.time_s = t0.elapsed().as_secs_f64();
+    Ok(out)
+}
