@@ -1181,6 +1181,18 @@ fn reruns_and_thread_counts_give_identical_results() {
     };
     let a = run("2", "a");
     assert!(a["history"].as_array().unwrap().len() > 5);
+    // the 4 × 6 lattice's optimum fails the resolution check (8 × 12 boxes, 12 modes): the run
+    // exits 3 (accepted above) and the summary says so in bold
+    assert_eq!(
+        a["resolution_check"]["passed"], false,
+        "{}",
+        a["resolution_check"]
+    );
+    let md = std::fs::read_to_string(dir.join("a/opt_det/summary.md")).unwrap();
+    assert!(
+        md.contains("**The design fails at the refined resolution**"),
+        "{md}"
+    );
     assert_eq!(a, run("2", "b"), "a rerun differs");
     assert_eq!(a, run("1", "c"), "one thread differs from two");
     std::fs::remove_dir_all(&dir).unwrap();

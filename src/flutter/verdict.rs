@@ -85,12 +85,12 @@ impl Verdict {
         self.unstable_from().is_none_or(|u| u > v)
     }
 
-    /// The verdict in words, with speeds relative to `flight_speed_m_s`: "flutters at V = 149.5
-    /// m/s (0.87 × the flight speed), mode 7, 104.7 Hz".
+    /// The verdict in words (a verb phrase: "the design …"), with speeds relative to
+    /// `flight_speed_m_s`: "flutters at V = 149.5 m/s (0.87 × the flight speed), mode 7, 104.7 Hz".
     pub fn words(&self, flight_speed_m_s: f64) -> String {
         match self {
             Verdict::Stable { up_to_m_s } => format!(
-                "no flutter up to V = {up_to_m_s:.1} m/s ({:.2} × the flight speed)",
+                "does not flutter up to V = {up_to_m_s:.1} m/s ({:.2} × the flight speed)",
                 up_to_m_s / flight_speed_m_s
             ),
             Verdict::Flutters {
@@ -121,7 +121,7 @@ impl Verdict {
 }
 
 /// A flutter point's words ("flutters at V = … m/s (… × the flight speed), mode …, … Hz"), or
-/// "no flutter up to …" for a point without a crossing: for results that keep only the point.
+/// "does not flutter up to …" for a point without a crossing: for results that keep only the point.
 pub fn point_words(
     speed_m_s: Option<f64>,
     frequency_hz: Option<f64>,

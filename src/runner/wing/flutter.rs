@@ -15,12 +15,33 @@ pub fn flutter(study: &Study, json: bool, reports: &Path) -> Result<()> {
     let mut study = study.clone();
     study.cache_dir = Some(dir.clone());
     let study = &study;
-    let (doc, r, velocities) = flutter_analysis(study, &dir)?;
+    let (mut doc, r, velocities) = flutter_analysis(study, &dir)?;
+    // the same sweep at the refined resolution, beside it in flutter.json
+    doc["resolution_check"] = super::resolution::flutter_sweep(study, &velocities, &r)?;
+    write_atomic(
+        &dir.join("flutter.json"),
+        serde_json::to_string_pretty(&doc)?.as_bytes(),
+    )?;
     if json {
         println!("{}", serde_json::to_string_pretty(&doc)?);
         return Ok(());
     }
     print_flutter(study, &r, &velocities, &doc);
+    let c = &doc["resolution_check"];
+    match c["refined_model"].as_str() {
+        Some(m) => println!(
+            "resolution check: with {m} the design {}{}",
+            c["refined_flutter"].as_str().unwrap_or(""),
+            c["change_percent"]
+                .as_f64()
+                .map(|p| format!(" ({p:+.2} % in flutter speed)"))
+                .unwrap_or_default()
+        ),
+        None => println!(
+            "resolution check not run: {}",
+            c["not_run"].as_str().unwrap_or("")
+        ),
+    }
     println!(
         "V-g/V-f figures and flutter.json written to {}",
         study.report_dir(reports).display()

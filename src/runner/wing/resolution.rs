@@ -168,3 +168,42 @@ pub fn check(
     out.time_s = t0.elapsed().as_secs_f64();
     Ok(out)
 }
+
+/// The resolution check of `gustkit flutter`: the study's p-k sweep over `velocities` again at the
+/// refined resolution. The flutter speeds at both, their difference and the verdicts' words, for
+/// flutter.json and the console (a sweep has no margin to fail: it reports).
+pub fn flutter_sweep(
+    study: &Study,
+    velocities: &[f64],
+    base: &crate::flutter::FlutterResult,
+) -> Result<serde_json::Value> {
+    let t0 = Instant::now();
+    let plate = study.build_model()?;
+    let modes = base.curves.len();
+    let flight = study.flight_condition()?.velocity;
+    let verdict = Verdict::of(base);
+    let mut doc = serde_json::json!({
+        "model": model_words(study, modes),
+        "flutter": verdict.words(flight),
+        "flutter_speed_m_s": verdict.unstable_from(),
+    });
+    match refined_study(study, modes, study.retained_dofs(&plate)) {
+        Err(why) => doc["not_run"] = why.into(),
+        Ok((refined, words)) => {
+            let fine = crate::pipeline::aeroelastic(&refined, &study.initial_design()?.to_vec())
+                .context("resolution check, refined")?;
+            let r = PkProblem::new(&fine.modes, &fine.table, fine.aero.flight.density)
+                .sweep(velocities)
+                .map_err(|e| anyhow::anyhow!("resolution check, refined: flutter: {e}"))?;
+            let v = Verdict::of(&r);
+            doc["refined_model"] = words.into();
+            doc["refined_flutter"] = v.words(flight).into();
+            doc["refined_flutter_speed_m_s"] = v.unstable_from().into();
+            if let (Some(a), Some(b)) = (verdict.unstable_from(), v.unstable_from()) {
+                doc["change_percent"] = (100.0 * (b / a - 1.0)).into();
+            }
+        }
+    }
+    doc["time_s"] = t0.elapsed().as_secs_f64().into();
+    Ok(doc)
+}
