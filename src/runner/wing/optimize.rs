@@ -621,7 +621,24 @@ fn cross_evaluate(
 }
 
 /// Speeds of the flutter check: from a fifth of the flight speed up to this factor of it.
-const FLUTTER_CHECK_FACTOR: f64 = 2.0;
+pub(crate) const FLUTTER_CHECK_FACTOR: f64 = 2.0;
+
+/// The p-k sweep of a modal model with its GAF table at 91 speeds from a fifth of the flight
+/// speed up to `v_max`.
+pub(crate) fn flutter_sweep(
+    modes: &crate::structure::Modes,
+    table: &gustkit_core::GafTable,
+    flight: &gustkit_core::FlightCondition,
+    v_max: f64,
+) -> Result<crate::flutter::FlutterResult> {
+    let v = flight.velocity;
+    let speeds: Vec<f64> = (0..=90)
+        .map(|i| v * 0.2 + (v_max - 0.2 * v) * i as f64 / 90.0)
+        .collect();
+    crate::flutter::PkProblem::new(modes, table, flight.density)
+        .sweep(&speeds)
+        .map_err(|e| anyhow::anyhow!("flutter check: {e}"))
+}
 
 /// Where the p-k sweep of a modal model with its GAF table crosses zero damping, from a fifth of
 /// the flight speed up to `v_max`.
@@ -631,13 +648,7 @@ fn flutter_point(
     flight: &gustkit_core::FlightCondition,
     v_max: f64,
 ) -> Result<FlutterPoint> {
-    let v = flight.velocity;
-    let speeds: Vec<f64> = (0..=90)
-        .map(|i| v * 0.2 + (v_max - 0.2 * v) * i as f64 / 90.0)
-        .collect();
-    let r = crate::flutter::PkProblem::new(modes, table, flight.density)
-        .sweep(&speeds)
-        .map_err(|e| anyhow::anyhow!("flutter check: {e}"))?;
+    let r = flutter_sweep(modes, table, flight, v_max)?;
     Ok(FlutterPoint {
         speed_m_s: r.flutter_speed_m_s,
         frequency_hz: r.flutter_frequency_hz,

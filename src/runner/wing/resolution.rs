@@ -21,9 +21,6 @@ pub const FLUTTER_TOLERANCE: f64 = 0.01;
 /// lattice moves the flagship's RMS by 2.1 %).
 pub const RMS_TOLERANCE: f64 = 0.02;
 
-/// Speeds of the flutter points: from a fifth of the flight speed up to this factor of it.
-pub const SEARCH_FACTOR: f64 = 2.0;
-
 /// What the design must meet: a flutter-free speed (the margin speed, or the flight speed) and,
 /// when constrained, an RMS limit on one output (SI).
 #[derive(Clone, Copy, Debug)]
@@ -77,17 +74,13 @@ fn model_words(study: &Study, modes: usize) -> String {
     }
 }
 
-/// The flutter verdict and point of one design's model from a fifth of the flight speed up to
-/// [`SEARCH_FACTOR`] times it.
+/// The flutter verdict of one design's model from a fifth of the flight speed up to the flutter
+/// check's factor of it (the optimization report's sweep), and the flight speed.
 fn flutter_of(a: &crate::pipeline::Aeroelastic) -> Result<(Verdict, f64)> {
-    let v = a.aero.flight.velocity;
-    let speeds: Vec<f64> = (0..=90)
-        .map(|i| v * (0.2 + (SEARCH_FACTOR - 0.2) * i as f64 / 90.0))
-        .collect();
-    let r = PkProblem::new(&a.modes, &a.table, a.aero.flight.density)
-        .sweep(&speeds)
-        .map_err(|e| anyhow::anyhow!("flutter: {e}"))?;
-    Ok((Verdict::of(&r), v))
+    let f = &a.aero.flight;
+    let v_max = super::optimize::FLUTTER_CHECK_FACTOR * f.velocity;
+    let r = super::optimize::flutter_sweep(&a.modes, &a.table, f, v_max)?;
+    Ok((Verdict::of(&r), f.velocity))
 }
 
 /// The RMS of every output, or why there is none (the model is unstable at the flight speed).
