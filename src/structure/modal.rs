@@ -550,6 +550,7 @@ pub fn solve_below(
         .take_while(|m| m.lambda <= lambda_cut)
         .count()
         .max(min.min(max));
+    // λ = ω²: a relative gap of 2e-6 in λ is 1e-6 in frequency
     while keep > 0
         && keep < modes.modes.len()
         && modes.modes[keep].lambda <= modes.modes[keep - 1].lambda * (1.0 + 2e-6)

@@ -18,6 +18,10 @@ pub use schema::{
 };
 
 use crate::aero::AeroModel;
+use crate::gust::{GustSettings, Output, Quantity, QuantityName};
+use crate::structure::{airfoil_thickness, Clamp, Orthotropic, PlateMesh, PlateModel};
+use crate::wing::{Airfoil, DesignVector, Planform};
+use std::path::{Path, PathBuf};
 
 /// How the modes of a design are chosen (SI): a fixed count, or every mode with ω ≤ `omega_cut`,
 /// at least `min` and at most `max`.
@@ -30,10 +34,6 @@ pub enum ModeRule {
         max: usize,
     },
 }
-use crate::gust::{GustSettings, Output, Quantity, QuantityName};
-use crate::structure::{airfoil_thickness, Clamp, Orthotropic, PlateMesh, PlateModel};
-use crate::wing::{Airfoil, DesignVector, Planform};
-use std::path::{Path, PathBuf};
 
 /// The schema version this build reads.
 pub const SCHEMA_VERSION: u32 = 1;
