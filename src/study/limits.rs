@@ -107,13 +107,18 @@ pub fn check(
     } else {
         String::new()
     };
+    // the whole run's figure only where it says more than the largest part's
+    let whole = if copies > 1 || total_gb > 1.05 * largest.bytes / 1e9 {
+        format!("; {context}{copies_note} would take about {}", gb(total_gb))
+    } else {
+        String::new()
+    };
     Err(study.err(
         &largest.path,
         format!(
-            "{} needs about {} of memory; {context}{copies_note} would take about {}, {}",
+            "{} needs about {} of memory{whole}, {}",
             largest.what,
             gb(largest.bytes / 1e9),
-            gb(total_gb),
             over_limit(limit_gb)
         ),
     ))
