@@ -337,6 +337,24 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
             (z0, h0, 0.0, Vec::new(), 0, 0)
         }
     };
+    // the checkpoint of the run's state as it stands, with why it stopped (if it did)
+    macro_rules! checkpoint {
+        ($stopped:expr) => {
+            Checkpoint {
+                problem_id: problem_id.to_string(),
+                params: params.clone(),
+                iteration,
+                evaluations,
+                z: z.clone(),
+                hessian: hess.clone(),
+                penalty,
+                history: history.clone(),
+                elapsed_s: elapsed_before + started.elapsed().as_secs_f64(),
+                problem_state: problem.state(),
+                stopped: $stopped,
+            }
+        };
+    }
     let mut values = problem.values(&scaling.x(&z)).map_err(SqpError::Start)?;
     evaluations += 1;
     let mut grads = problem
@@ -399,19 +417,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                     trial_failure: None,
                     recovery: None,
                 });
-                let stopped = Checkpoint {
-                    problem_id: problem_id.to_string(),
-                    params: params.clone(),
-                    iteration,
-                    evaluations,
-                    z: z.clone(),
-                    hessian: hess.clone(),
-                    penalty,
-                    history: history.clone(),
-                    elapsed_s: elapsed_before + started.elapsed().as_secs_f64(),
-                    problem_state: problem.state(),
-                    stopped: Some(message.clone()),
-                };
+                let stopped = checkpoint!(Some(message.clone()));
                 if let Some(store) = checkpoints.as_mut() {
                     store
                         .save(&stopped)
@@ -626,19 +632,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
         values = v_new;
         grads = grads_new;
         iteration += 1;
-        let checkpoint = Checkpoint {
-            problem_id: problem_id.to_string(),
-            params: params.clone(),
-            iteration,
-            evaluations,
-            z: z.clone(),
-            hessian: hess.clone(),
-            penalty,
-            history: history.clone(),
-            elapsed_s: elapsed_before + started.elapsed().as_secs_f64(),
-            problem_state: problem.state(),
-            stopped: None,
-        };
+        let checkpoint = checkpoint!(None);
         if let Some(store) = checkpoints.as_mut() {
             store
                 .save(&checkpoint)
