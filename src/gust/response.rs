@@ -26,12 +26,15 @@ pub enum GustError {
     #[error("{0}")]
     Input(String),
     #[error(
-        "the frequency grid ends at {omega_max:.3} rad/s and leaves {fraction:.2e} of the gust variance out (limit {limit:.0e}): extend the GAF reduced frequencies or the grid"
+        "the frequency grid ends at {omega_max:.3} rad/s (k = {k_max:.3}) and leaves {fraction:.2e} of the gust variance out (limit gust.max_tail = {limit:.0e}): extend aero.reduced_frequencies to k ≈ {k_needed:.3} or raise gust.max_tail to {fraction:.2e}"
     )]
     GridTooShort {
         omega_max: f64,
+        k_max: f64,
         fraction: f64,
         limit: f64,
+        /// The reduced frequency up to which the grid would leave out no more than the limit.
+        k_needed: f64,
     },
     #[error("the aeroelastic system is singular at {omega:.4} rad/s")]
     Singular { omega: f64 },
@@ -129,10 +132,27 @@ impl<'a> GustProblem<'a> {
         let omega_max = *self.grid.omega.last().expect("grid has points");
         let fraction = self.turbulence.tail_fraction(omega_max, self.velocity);
         if fraction > self.max_tail {
+            // the ω whose tail is the limit, by bisection in log ω (the tail falls monotonically)
+            let (mut lo, mut hi) = (omega_max, omega_max);
+            while self.turbulence.tail_fraction(hi, self.velocity) > self.max_tail && hi < 1e12 {
+                lo = hi;
+                hi *= 2.0;
+            }
+            for _ in 0..60 {
+                let mid = (lo * hi).sqrt();
+                if self.turbulence.tail_fraction(mid, self.velocity) > self.max_tail {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            let to_k = self.table.b_ref / self.velocity;
             return Err(GustError::GridTooShort {
                 omega_max,
+                k_max: omega_max * to_k,
                 fraction,
                 limit: self.max_tail,
+                k_needed: hi * to_k,
             });
         }
         let ks: Vec<f64> = self

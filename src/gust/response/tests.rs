@@ -194,10 +194,24 @@ fn bad_input_is_rejected() {
     assert!(solve(&p).unwrap_err().to_string().contains("sigma_w_m_s"));
     let mut p = base.clone();
     p.grid = FrequencyGrid::log(0.01, 1.0, 100).unwrap();
-    assert!(matches!(
-        solve(&p).unwrap_err(),
-        GustError::GridTooShort { .. }
-    ));
+    let e = solve(&p).unwrap_err();
+    assert!(
+        e.to_string().contains("gust.max_tail") && e.to_string().contains("k ≈"),
+        "{e}"
+    );
+    // the k the error names is the one that passes: the tail beyond it is the limit (to the
+    // bisection's 1e-12), beyond 0.99 of it more than the limit
+    let GustError::GridTooShort { k_needed, .. } = e else {
+        panic!("{e}")
+    };
+    let omega = k_needed * p.velocity / p.table.b_ref;
+    let tail = |w: f64| p.turbulence.tail_fraction(w, p.velocity);
+    assert!(
+        (tail(omega) / p.max_tail - 1.0).abs() < 1e-9,
+        "{}",
+        tail(omega)
+    );
+    assert!(tail(0.99 * omega) > p.max_tail);
     let mut p = base.clone();
     p.grid = FrequencyGrid::log(0.01, 2000.0, 100).unwrap();
     assert!(solve(&p)
