@@ -15,13 +15,7 @@ pub fn flutter(study: &Study, json: bool, reports: &Path) -> Result<()> {
     let mut study = study.clone();
     study.cache_dir = Some(dir.clone());
     let study = &study;
-    let (mut doc, r, velocities) = flutter_analysis(study, &dir)?;
-    // the same sweep at the refined resolution, beside it in flutter.json
-    doc["resolution_check"] = super::resolution::flutter_sweep(study, &velocities, &r)?;
-    write_atomic(
-        &dir.join("flutter.json"),
-        serde_json::to_string_pretty(&doc)?.as_bytes(),
-    )?;
+    let (doc, r, velocities) = flutter_analysis(study, &dir, true)?;
     if json {
         println!("{}", serde_json::to_string_pretty(&doc)?);
         return Ok(());
@@ -49,10 +43,13 @@ pub fn flutter(study: &Study, json: bool, reports: &Path) -> Result<()> {
     Ok(())
 }
 
-/// The p-k sweep of a study with its V-g/V-f figures and `flutter.json` in `dir`.
+/// The p-k sweep of a study with its V-g/V-f figures and `flutter.json` in `dir`; with
+/// `resolution_check`, the same sweep at the refined resolution beside it (`gustkit run` checks
+/// its design on its own).
 pub(crate) fn flutter_analysis(
     study: &Study,
     dir: &Path,
+    resolution_check: bool,
 ) -> Result<(serde_json::Value, crate::flutter::FlutterResult, Vec<f64>)> {
     let file = &study.file;
     let velocities = study.flutter_velocities()?;
@@ -76,7 +73,7 @@ pub(crate) fn flutter_analysis(
             ),
         },
     )?;
-    let doc = serde_json::json!({
+    let mut doc = serde_json::json!({
         "study": study.spec.name,
         "mach": aero.flight.mach,
         "density_kg_m3": aero.flight.density,
@@ -87,6 +84,10 @@ pub(crate) fn flutter_analysis(
         "flutter_mode": r.flutter_mode,
         "curves": r.curves,
     });
+    if resolution_check {
+        let dofs = study.retained_dofs(&plate);
+        doc["resolution_check"] = super::resolution::flutter_sweep(study, &velocities, &r, dofs)?;
+    }
     write_atomic(
         &dir.join("flutter.json"),
         serde_json::to_string_pretty(&doc)?.as_bytes(),

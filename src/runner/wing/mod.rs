@@ -138,7 +138,7 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
     };
     let flutter = match study.spec.flutter {
         Some(_) => {
-            let (doc, r, velocities) = flutter::flutter_analysis(&study, &dir)?;
+            let (doc, r, velocities) = flutter::flutter_analysis(&study, &dir, false)?;
             flutter::print_flutter(&study, &r, &velocities, &doc);
             Some(FlutterSummary {
                 mach: doc["mach"].as_f64().unwrap_or(f64::NAN),
@@ -254,24 +254,9 @@ fn resolution_check(
     let flight = study.flight_condition()?.velocity;
     let (x, req) = match (optimization, &s.optimization) {
         (Some(o), Some(spec)) => {
-            let output = settings
+            let limit = settings
                 .as_ref()
-                .and_then(|g| g.outputs.iter().position(|out| out.name == spec.output));
-            let to_m = s.length_unit.to_m();
-            let limit = output.map(|i| {
-                let disp = matches!(
-                    settings.as_ref().expect("found in it").outputs[i].quantity,
-                    crate::gust::Quantity::Displacement { .. }
-                );
-                (
-                    i,
-                    if disp {
-                        spec.rms_max * to_m
-                    } else {
-                        spec.rms_max
-                    },
-                )
-            });
+                .and_then(|g| optimize::rms_constraint(study, g));
             let margin = spec
                 .flutter_margin
                 .as_ref()

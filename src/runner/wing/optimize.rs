@@ -220,21 +220,12 @@ pub(crate) fn design_spec(
     upper: Vec<f64>,
 ) -> crate::problem::DesignSpec {
     let o = study.spec.optimization.as_ref().expect("caller checked");
-    let output = settings
-        .outputs
-        .iter()
-        .position(|out| out.name == o.output)
-        .expect("checked");
-    let is_disp = matches!(
-        settings.outputs[output].quantity,
-        crate::gust::Quantity::Displacement { .. }
-    );
-    let to_m = study.spec.length_unit.to_m();
+    let (output, rms_limit) = rms_constraint(study, settings).expect("checked");
     crate::problem::DesignSpec {
         lower,
         upper,
         output,
-        rms_limit: if is_disp { o.rms_max * to_m } else { o.rms_max },
+        rms_limit,
         mass0: ev0.mass_kg,
         area0: ev0.area_m2,
         fix_area: o.fix_area,
@@ -246,6 +237,26 @@ pub(crate) fn design_spec(
                 damping_max: m.damping_max,
             }),
     }
+}
+
+/// The constrained gust output of the study's `optimization` section: its index among the
+/// settings' outputs and its RMS limit in SI (a displacement limit is in the study's length unit).
+/// None without an optimization or when the output is not among `settings`.
+pub(crate) fn rms_constraint(
+    study: &Study,
+    settings: &crate::gust::GustSettings,
+) -> Option<(usize, f64)> {
+    let o = study.spec.optimization.as_ref()?;
+    let output = settings
+        .outputs
+        .iter()
+        .position(|out| out.name == o.output)?;
+    let is_disp = matches!(
+        settings.outputs[output].quantity,
+        crate::gust::Quantity::Displacement { .. }
+    );
+    let to_m = study.spec.length_unit.to_m();
+    Some((output, if is_disp { o.rms_max * to_m } else { o.rms_max }))
 }
 
 /// The gust-constrained mass minimization of a study (the `optimization` section).

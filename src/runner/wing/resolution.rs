@@ -29,29 +29,33 @@ pub struct Requirement {
     pub rms: Option<(usize, f64)>,
 }
 
+/// Why a study's model cannot be refined (before anything is evaluated), if it cannot.
+fn not_refinable(study: &Study) -> Option<String> {
+    match study.spec.aero.as_ref().map(|a| &a.fidelity) {
+        None => Some("the study has no aerodynamic model".into()),
+        Some(FidelitySpec::Lfd(_)) => Some(
+            "the LFD's check on the next mesh level is not run yet: only the DLM lattice is refined"
+                .into(),
+        ),
+        Some(FidelitySpec::Dlm(_)) => None,
+    }
+}
+
 /// The study at the refined resolution and its words, or why there is none.
 fn refined_study(study: &Study, modes_used: usize, dofs: usize) -> Result<(Study, String), String> {
     let mut s = study.clone();
     let refined_modes = (2 * modes_used).min(dofs);
     s.spec.structure.modes = ModesSpec::Count(refined_modes);
-    let aero = s
-        .spec
-        .aero
-        .as_mut()
-        .ok_or_else(|| "the study has no aerodynamic model".to_string())?;
-    let model = match &mut aero.fidelity {
-        FidelitySpec::Dlm(d) => {
-            d.n_chord *= 2;
-            d.n_span *= 2;
-            format!("DLM {} × {} boxes", d.n_chord, d.n_span)
-        }
-        FidelitySpec::Lfd(_) => {
-            return Err(
-                "the LFD's check on the next mesh level is not run yet: only the DLM lattice is refined"
-                    .into(),
-            )
-        }
+    if let Some(why) = not_refinable(study) {
+        return Err(why);
+    }
+    let aero = s.spec.aero.as_mut().expect("refinable: it has one");
+    let FidelitySpec::Dlm(d) = &mut aero.fidelity else {
+        unreachable!("refinable: a DLM")
     };
+    d.n_chord *= 2;
+    d.n_span *= 2;
+    let model = format!("DLM {} × {} boxes", d.n_chord, d.n_span);
     // the second fidelity is not part of the check
     aero.compare_with = None;
     s.check_memory(1).map_err(|e| {
@@ -106,6 +110,28 @@ pub fn check(
     req: Requirement,
 ) -> Result<ResolutionCheck> {
     let t0 = Instant::now();
+    if let Some(why) = not_refinable(study) {
+        // nothing to compare with: the design is not analysed again (an LFD analysis is minutes)
+        return Ok(ResolutionCheck {
+            model: model_words(study, study.max_modes()),
+            refined_model: None,
+            flight_speed_m_s: study.flight_condition()?.velocity,
+            stable_to_m_s: req.stable_to_m_s,
+            flutter: "is not analysed again".into(),
+            flutter_speed_m_s: None,
+            refined_flutter: None,
+            refined_flutter_speed_m_s: None,
+            rms_m: Vec::new(),
+            refined_rms_m: Vec::new(),
+            refined_unstable: None,
+            rms_limit: req.rms,
+            flutter_tolerance: FLUTTER_TOLERANCE,
+            rms_tolerance: RMS_TOLERANCE,
+            passed: true,
+            not_run: Some(why),
+            time_s: t0.elapsed().as_secs_f64(),
+        });
+    }
     let base = crate::pipeline::aeroelastic(study, x).context("resolution check")?;
     let modes = base.modes.len();
     let dofs = study.retained_dofs(&base.plate);
@@ -169,9 +195,9 @@ pub fn flutter_sweep(
     study: &Study,
     velocities: &[f64],
     base: &crate::flutter::FlutterResult,
+    dofs: usize,
 ) -> Result<serde_json::Value> {
     let t0 = Instant::now();
-    let plate = study.build_model()?;
     let modes = base.curves.len();
     let flight = study.flight_condition()?.velocity;
     let verdict = Verdict::of(base);
@@ -180,7 +206,7 @@ pub fn flutter_sweep(
         "flutter": verdict.words(flight),
         "flutter_speed_m_s": verdict.unstable_from(),
     });
-    match refined_study(study, modes, study.retained_dofs(&plate)) {
+    match refined_study(study, modes, dofs) {
         Err(why) => doc["not_run"] = why.into(),
         Ok((refined, words)) => {
             let fine = crate::pipeline::aeroelastic(&refined, &study.initial_design()?.to_vec())
