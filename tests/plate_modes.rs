@@ -216,3 +216,101 @@ fn partial_modes_match_the_complete_decomposition() {
         }
     }
 }
+
+/// Isotropic rectangular cantilever plate (clamped root), `nx × ny` elements, thickness of each
+/// element column given chordwise.
+fn rectangular_plate(span: f64, chord: f64, columns: &[f64], ny: usize) -> PlateModel {
+    let nx = columns.len();
+    let mesh = PlateMesh::new(nx, ny, 1, &Clamp::All).unwrap();
+    let thickness = (0..ny).flat_map(|_| columns.iter().copied()).collect();
+    let design = DesignVector {
+        thickness,
+        planform: Planform {
+            span,
+            sweep_c4: 0.0,
+            root_chord: chord,
+            tip_chord: chord,
+        },
+    };
+    PlateModel::new(mesh, Orthotropic::isotropic(70e9, 0.3, 2700.0), design).unwrap()
+}
+
+/// A slender plate (span 1 m, chord 0.08 m, 2 mm) is a beam: Euler–Bernoulli bending at
+/// f_n = (β_n L)² / (2π L²) √(D c / m) with β_n L = 1.875, 4.694, 7.855, 10.996 and St Venant torsion
+/// of a thin strip at f_1 = √(G J / I_p) / (4 L), J = c t³/3, I_p = ρ t c³/12. Beam theory orders the
+/// first five modes B1 B2 B3 T1 B4 (1.7, 10.8, 30.3, 39.5, 59.3 Hz; the next, B5 at 98 Hz, is far);
+/// the names must follow that order and each frequency lie within 10 % of its beam value (the plate
+/// is neither a narrow beam nor a wide plate: 1 − ν² moves bending by 5 %).
+#[test]
+fn slender_plate_modes_are_named_as_the_beam_they_are() {
+    let (span, chord, t, e, nu, rho) = (1.0, 0.08, 0.002, 70e9, 0.3, 2700.0);
+    let model = rectangular_plate(span, chord, &[t; 4], 40);
+    let modes = modal::solve(&model, 5, 0.0, &[Field::Bending]).unwrap();
+    let names = gustkit::structure::shape_name::mode_names(&model, &modes);
+    let bend = (e * t * t / (12.0 * (1.0 - nu * nu) * rho)).sqrt() / (2.0 * std::f64::consts::PI);
+    let g = e / (2.0 * (1.0 + nu));
+    let torsion = (4.0 * g * t * t / (rho * chord * chord)).sqrt() / (4.0 * span);
+    let beam = [
+        1.875f64.powi(2) * bend,
+        4.694f64.powi(2) * bend,
+        7.855f64.powi(2) * bend,
+        torsion,
+        10.996f64.powi(2) * bend,
+    ];
+    let expected = [
+        "1st bending",
+        "2nd bending",
+        "3rd bending",
+        "1st torsion",
+        "4th bending",
+    ];
+    for (i, f) in modes.freq_hz().iter().enumerate() {
+        println!(
+            "mode {}: {f:.2} Hz (beam {:.2} Hz), {}",
+            i + 1,
+            beam[i],
+            names[i]
+        );
+        assert_eq!(names[i], expected[i], "mode {}", i + 1);
+        assert!((f / beam[i] - 1.0).abs() < 0.10, "mode {}: {f} Hz", i + 1);
+    }
+}
+
+/// A square plate whose aft eighth is a tenth as thick has modes living in that strip alone (a
+/// trailing-edge panel). Where at least 80 % of a mode's squared deflection lies on the strip's
+/// nodes, the name must not call it bending or torsion of the wing.
+#[test]
+fn local_trailing_edge_modes_are_not_called_bending() {
+    let mut columns = [0.01; 8];
+    columns[7] = 0.001;
+    let model = rectangular_plate(0.5, 0.5, &columns, 8);
+    let modes = modal::solve(&model, 8, 0.0, &[Field::Bending]).unwrap();
+    let names = gustkit::structure::shape_name::mode_names(&model, &modes);
+    let mut local = 0;
+    for (m, name) in modes.modes.iter().zip(&names) {
+        let (mut strip, mut all) = (0.0, 0.0);
+        for (n, node) in model.mesh.nodes.iter().enumerate() {
+            let w2 = m.shape[gustkit::structure::model::NODAL * n].powi(2);
+            all += w2;
+            if node[0] > 0.8 {
+                strip += w2;
+            }
+        }
+        println!(
+            "{:.2} Hz: {name}, {:.0} % on the strip",
+            m.freq_hz(),
+            100.0 * strip / all
+        );
+        if strip / all > 0.8 {
+            local += 1;
+            assert!(
+                !name.contains("bending") && !name.contains("torsion"),
+                "a local mode named {name}"
+            );
+        }
+    }
+    assert!(
+        local >= 2,
+        "the plate has too few local modes to test the rule"
+    );
+}

@@ -456,46 +456,7 @@ pub fn element_polygons(model: &PlateModel, to_m: f64) -> Vec<Vec<(f64, f64)>> {
         .collect()
 }
 
-/// English ordinal of n ≥ 1 ("1st", "2nd", "3rd", "4th", …, "11th", "21st").
-fn ordinal(n: usize) -> String {
-    let suffix = match (n % 10, n % 100) {
-        (_, 11..=13) => "th",
-        (1, _) => "st",
-        (2, _) => "nd",
-        (3, _) => "rd",
-        _ => "th",
-    };
-    format!("{n}{suffix}")
-}
-
-/// A name for each mode from its shape at the wing tip: torsion where the leading and trailing
-/// edges move in opposite directions (a nodal line along the span), bending where they move
-/// together; in-plane modes of the membrane field are "in-plane". Numbered in frequency order
-/// within each kind ("1st bending", "1st torsion", "2nd bending", …).
-pub fn mode_names(model: &PlateModel, modes: &Modes) -> Vec<String> {
-    let tip = crate::structure::Sampler::new(model, &[[0.0, 1.0], [1.0, 1.0]]);
-    let mut count = [0usize; 3];
-    modes
-        .modes
-        .iter()
-        .map(|m| {
-            let kind = match m.field {
-                Field::Membrane => 2,
-                Field::Bending => {
-                    let w = tip.sample(model, &m.shape);
-                    let (le, te) = (w[0][0], w[1][0]);
-                    usize::from(le * te < 0.0)
-                }
-            };
-            count[kind] += 1;
-            format!(
-                "{} {}",
-                ordinal(count[kind]),
-                ["bending", "torsion", "in-plane"][kind]
-            )
-        })
-        .collect()
-}
+pub use crate::structure::shape_name::mode_names;
 
 impl ModeShapes {
     /// Builds the figure data; lengths are shown in `unit` (`to_m` metres each).

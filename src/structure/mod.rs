@@ -8,6 +8,7 @@ pub mod mesh;
 pub mod modal;
 pub mod model;
 pub mod sensitivity;
+pub mod shape_name;
 
 pub use material::{MaterialError, Orthotropic};
 pub use mesh::{Clamp, PlateMesh};
