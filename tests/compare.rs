@@ -213,11 +213,6 @@ fn compare_refuses_what_it_cannot_compare() {
         write("schema1", r#"{"study": "x", "rms_tip_in": 1.0}"#),
         &["kind: missing", "results schema 1"],
     );
-    // the reference flagship report predates the recorded fidelity
-    check(
-        root.join("reports/reference/agard445_dlm"),
-        &["fidelity: missing", "run the study again"],
-    );
     check(dir.join("nothing"), &["cannot read"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }

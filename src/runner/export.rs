@@ -45,6 +45,22 @@ pub fn gafs(study: &Study, out: &Path) -> Result<()> {
     let study = study.clone();
     let (plate, modes, summary) = analyze(&study)?;
     let aero = study.aero_model(&plate)?;
+    // the CFD fidelity spends its first minute on the steady state with nothing to show: say so
+    println!(
+        "GAFs of {} modes at {} reduced frequencies with the {} fidelity{} …",
+        modes.len(),
+        study
+            .spec
+            .aero
+            .as_ref()
+            .map_or(0, |a| a.reduced_frequencies.len()),
+        aero.name,
+        if aero.name == "lfd" {
+            " (steady Euler solution, then one linear solve per reduced frequency and right-hand side)"
+        } else {
+            ""
+        }
+    );
     let t0 = Instant::now();
     let table = aero
         .gafs(&plate, &modes)
@@ -88,10 +104,14 @@ pub fn gafs(study: &Study, out: &Path) -> Result<()> {
     };
     write_atomic(out, serde_json::to_string_pretty(&doc)?.as_bytes())?;
     println!(
-        "GAFs of {} modes at {} reduced frequencies ({:.1} ms) written to {}",
+        "GAFs of {} modes at {} reduced frequencies ({}) written to {}",
         modes.len(),
         table.k.len(),
-        1e3 * elapsed,
+        if elapsed < 1.0 {
+            format!("{:.0} ms", 1e3 * elapsed)
+        } else {
+            format!("{elapsed:.1} s")
+        },
         out.display()
     );
     Ok(())

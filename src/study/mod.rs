@@ -697,7 +697,20 @@ impl Study {
             .spec
             .flutter
             .as_ref()
-            .ok_or_else(|| self.err("flutter", "missing: the study has no flutter sweep"))?;
+            .ok_or_else(|| {
+                let v = self.spec.flight.as_ref().map_or(100.0, |f| f.velocity_m_s);
+                self.err(
+                    "flutter",
+                    format!(
+                        "missing: the study has no flutter sweep; add for example \"flutter\": \
+                         {{\"velocity_min_m_s\": {:.0}, \"velocity_max_m_s\": {:.0}, \"points\": 60}} \
+                         (speeds in m/s at the study's Mach number and density; here 0.2 to 2 × the \
+                         flight speed)",
+                        0.2 * v,
+                        2.0 * v
+                    ),
+                )
+            })?;
         if self.spec.aero.is_none() {
             return Err(self.err(
                 "aero",
