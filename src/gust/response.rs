@@ -26,15 +26,20 @@ pub enum GustError {
     #[error("{0}")]
     Input(String),
     #[error(
-        "the frequency grid ends at {omega_max:.3} rad/s (k = {k_max:.3}) and leaves {fraction:.2e} of the gust variance out (limit gust.max_tail = {limit:.0e}): extend aero.reduced_frequencies to k ≈ {k_needed:.3} or raise gust.max_tail to {fraction:.2e}"
+        "the frequency grid ends at {omega_max:.3} rad/s (k = {k_max:.3}) and leaves up to {fraction:.2e} of {what} out (limit gust.max_tail = {limit:.0e}){note}: extend aero.reduced_frequencies to k ≈ {k_needed:.3} (enough whatever the response does) or raise gust.max_tail to {fraction:.2e}"
     )]
     GridTooShort {
         omega_max: f64,
         k_max: f64,
         fraction: f64,
         limit: f64,
-        /// The reduced frequency up to which the grid would leave out no more than the limit.
+        /// The reduced frequency up to which the grid would leave out no more than the limit of
+        /// the gust variance itself.
         k_needed: f64,
+        /// Whose variance: "the gust variance" or "the variance of output N".
+        what: String,
+        /// Why the gust variance decides, where it does ("" otherwise).
+        note: String,
     },
     #[error("the aeroelastic system is singular at {omega:.4} rad/s")]
     Singular { omega: f64 },
@@ -82,9 +87,16 @@ pub struct GustProblem<'a> {
     pub grid: FrequencyGrid,
     /// Output vectors S (one row an output, one column a mode): y = S η.
     pub outputs: Vec<Vec<f64>>,
-    /// Largest fraction of σ_w² the grid may leave out above its last frequency.
+    /// Largest fraction of a response's variance the grid may leave out above its last
+    /// frequency (of σ_w² itself where the response bound does not apply: see [`TAIL_BEYOND`]).
     pub max_tail: f64,
 }
+
+/// The grid's last frequency must lie this far beyond every natural frequency for the response
+/// bound of the tail: there the inertia grows with ω², so |H_y(ω)| falls beyond the grid and
+/// |H_y(ω_max)|² ∫_{ω_max}^∞ Φ_w dω bounds the variance left out from above. Closer to a
+/// resonance the bound does not hold and the tail of the gust spectrum itself is limited.
+pub const TAIL_BEYOND: f64 = 1.5;
 
 /// The response: per output, RMS, N0 and the PSD on the grid; per ω, η.
 #[derive(Clone, Debug, Default)]
@@ -92,6 +104,9 @@ pub struct GustResponse {
     pub rms: Vec<f64>,
     pub n0: Vec<f64>,
     pub psd: Vec<Vec<f64>>,
+    /// Per output, the upper bound of the fraction of its variance beyond the grid (the gust
+    /// spectrum's own tail fraction where the response bound does not apply).
+    pub tail: Vec<f64>,
     pub eta: Vec<Vec<c64>>,
     h: Vec<Vec<c64>>,
     lus: Vec<SmallLu>,
@@ -129,32 +144,6 @@ impl<'a> GustProblem<'a> {
                 "outputs: every S vector needs one entry a mode".into(),
             ));
         }
-        let omega_max = *self.grid.omega.last().expect("grid has points");
-        let fraction = self.turbulence.tail_fraction(omega_max, self.velocity);
-        if fraction > self.max_tail {
-            // the ω whose tail is the limit, by bisection in log ω (the tail falls monotonically)
-            let (mut lo, mut hi) = (omega_max, omega_max);
-            while self.turbulence.tail_fraction(hi, self.velocity) > self.max_tail && hi < 1e12 {
-                lo = hi;
-                hi *= 2.0;
-            }
-            for _ in 0..60 {
-                let mid = (lo * hi).sqrt();
-                if self.turbulence.tail_fraction(mid, self.velocity) > self.max_tail {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            let to_k = self.table.b_ref / self.velocity;
-            return Err(GustError::GridTooShort {
-                omega_max,
-                k_max: omega_max * to_k,
-                fraction,
-                limit: self.max_tail,
-                k_needed: hi * to_k,
-            });
-        }
         let ks: Vec<f64> = self
             .grid
             .omega
@@ -162,6 +151,74 @@ impl<'a> GustProblem<'a> {
             .map(|w| w * self.table.b_ref / self.velocity)
             .collect();
         SplineWeights::new(&self.table.k, &ks).map_err(GustError::Input)
+    }
+
+    /// The reduced frequency beyond which the gust spectrum itself holds no more than
+    /// `max_tail` of σ_w² (bisection in log ω: the tail falls monotonically).
+    fn k_needed(&self) -> f64 {
+        let omega_max = *self.grid.omega.last().expect("grid has points");
+        let (mut lo, mut hi) = (omega_max, omega_max);
+        while self.turbulence.tail_fraction(hi, self.velocity) > self.max_tail && hi < 1e12 {
+            lo = hi;
+            hi *= 2.0;
+        }
+        for _ in 0..60 {
+            let mid = (lo * hi).sqrt();
+            if self.turbulence.tail_fraction(mid, self.velocity) > self.max_tail {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        hi * self.table.b_ref / self.velocity
+    }
+
+    /// Per output, the bound of the fraction of its variance beyond the grid, from the PSD on
+    /// the grid (`m0`: its integral) and |H_y| at the last point; an error above `max_tail`.
+    fn tail_check(&self, m0: &[f64], h_last: &[f64]) -> Result<Vec<f64>, GustError> {
+        let omega_max = *self.grid.omega.last().expect("grid has points");
+        let gust_tail = self.turbulence.tail_fraction(omega_max, self.velocity);
+        let sigma2 = self.turbulence.sigma().powi(2);
+        let bound_applies = self.omega_n.iter().all(|&wn| omega_max >= TAIL_BEYOND * wn);
+        let fractions: Vec<f64> = m0
+            .iter()
+            .zip(h_last)
+            .map(|(&m0, &h)| {
+                if bound_applies {
+                    let left_out = h * h * gust_tail * sigma2;
+                    left_out / (m0 + left_out).max(f64::MIN_POSITIVE)
+                } else {
+                    gust_tail
+                }
+            })
+            .collect();
+        if let Some((y, &fraction)) = fractions
+            .iter()
+            .enumerate()
+            .find(|(_, &f)| f > self.max_tail)
+        {
+            return Err(GustError::GridTooShort {
+                omega_max,
+                k_max: omega_max * self.table.b_ref / self.velocity,
+                fraction,
+                limit: self.max_tail,
+                k_needed: self.k_needed(),
+                what: if bound_applies {
+                    format!("the variance of output {}", y + 1)
+                } else {
+                    "the gust variance".into()
+                },
+                note: if bound_applies {
+                    String::new()
+                } else {
+                    format!(
+                        "; the grid ends below {TAIL_BEYOND} × the highest natural frequency ({:.1} Hz), so the response's own tail cannot be bounded",
+                        self.omega_n.iter().fold(0.0f64, |a, &b| a.max(b)) / (2.0 * std::f64::consts::PI)
+                    )
+                },
+            });
+        }
+        Ok(fractions)
     }
 
     /// The aeroelastic matrix A(ω) (row-major) and right-hand side q Q_gs at grid point j.
@@ -216,6 +273,8 @@ pub fn solve(p: &GustProblem) -> Result<GustResponse, GustError> {
     let mut n0 = Vec::new();
     let mut psd = Vec::new();
     let mut h = Vec::new();
+    let mut m0s = Vec::new();
+    let mut h_last = Vec::new();
     for s in &p.outputs {
         let hy: Vec<c64> = eta
             .iter()
@@ -235,13 +294,17 @@ pub fn solve(p: &GustProblem) -> Result<GustResponse, GustError> {
             .sum();
         rms.push(m0.sqrt());
         n0.push((m2 / m0).sqrt() / (2.0 * std::f64::consts::PI));
+        m0s.push(m0);
+        h_last.push(hy.last().map_or(0.0, |v| v.norm()));
         psd.push(py);
         h.push(hy);
     }
+    let tail = p.tail_check(&m0s, &h_last)?;
     Ok(GustResponse {
         rms,
         n0,
         psd,
+        tail,
         eta,
         h,
         lus,

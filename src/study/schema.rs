@@ -204,7 +204,8 @@ pub struct GustSpec {
     /// Points of the log-spaced grid up to the highest reduced frequency of the GAF table.
     #[serde(default = "default_points")]
     pub points: usize,
-    /// Largest fraction of the gust variance the grid may leave out above its last frequency.
+    /// Largest fraction of an output's variance the grid may leave out above its last frequency
+    /// (see `gust::response::TAIL_BEYOND` for the bound used).
     #[serde(default = "default_max_tail")]
     pub max_tail: f64,
     /// Response outputs: vertical displacement at plate points (ξ chord fraction, η span fraction).

@@ -220,3 +220,55 @@ fn bad_input_is_rejected() {
         .contains("outside the GAF table"));
     assert!(FrequencyGrid::log(0.0, 1.0, 10).is_err());
 }
+
+/// Von Kármán turbulence beyond the grid: with the grid ending at 250 rad/s (2.3 × the highest
+/// natural frequency) the gust spectrum still holds more than the 1e-3 limit of σ_w² beyond it,
+/// but the response, falling with the inertia, does not. The bound |H_y(ω_max)|² ∫_{ω_max}^∞ Φ_w
+/// must lie above the variance that the grid to 1000 rad/s finds between 250 and 1000 rad/s
+/// (plus that grid's own bounded tail), for every output, and under the limit; a grid ending
+/// below 1.5 × the highest natural frequency falls back to the gust spectrum's own tail.
+#[test]
+fn response_tail_bound_holds_beyond_the_grid() {
+    let (table, wn) = problem_parts();
+    let outputs = vec![vec![1.0, -0.5, 0.3], vec![0.2, 0.9, -0.4]];
+    let mut p = problem(&table, &wn, 4000, outputs.clone());
+    p.turbulence = Turbulence::VonKarman {
+        sigma_w_m_s: 1.0,
+        scale_length_m: 762.0,
+    };
+    p.max_tail = 1e-3;
+    let short_end = 250.0;
+    let gust_tail = p.turbulence.tail_fraction(short_end, p.velocity);
+    assert!(gust_tail > p.max_tail, "{gust_tail}");
+    let mut short = p.clone();
+    short.grid = FrequencyGrid::log(0.01, short_end, 3000).unwrap();
+    let rs = solve(&short).unwrap();
+    let mut long = p.clone();
+    long.grid = FrequencyGrid::log(0.01, 999.0, 4000).unwrap();
+    let rl = solve(&long).unwrap();
+    for y in 0..outputs.len() {
+        let total: f64 = rl.psd[y]
+            .iter()
+            .zip(&long.grid.weights)
+            .map(|(a, b)| a * b)
+            .sum();
+        let beyond: f64 = rl.psd[y]
+            .iter()
+            .zip(&long.grid.weights)
+            .zip(&long.grid.omega)
+            .filter(|(_, &w)| w >= short_end)
+            .map(|((a, b), _)| a * b)
+            .sum();
+        let found = (beyond + rl.tail[y] * total) / total;
+        println!(
+            "output {y}: gust tail {gust_tail:.2e}, bound {:.2e}, found {found:.2e}",
+            rs.tail[y]
+        );
+        assert!(found <= rs.tail[y] && rs.tail[y] <= p.max_tail);
+    }
+    // below 1.5 × the highest natural frequency (110 rad/s): the gust spectrum's tail decides
+    let mut close = p.clone();
+    close.grid = FrequencyGrid::log(0.01, 150.0, 2000).unwrap();
+    let e = solve(&close).unwrap_err();
+    assert!(e.to_string().contains("the gust variance"), "{e}");
+}
