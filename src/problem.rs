@@ -24,6 +24,53 @@ pub struct DesignSpec {
     pub fix_area: bool,
     /// The flutter-margin constraint, if any (the second inequality).
     pub flutter: Option<FlutterMargin>,
+    /// The modal basis kept whole (the last inequality), when the study chooses its modes by the
+    /// cutoff rule: see [`ModeFloor`].
+    pub mode_floor: Option<ModeFloor>,
+}
+
+/// A modal basis chosen by a frequency cutoff, kept so through an optimization: the constraints
+/// see a fixed count of modes (`retained`, the count below the cutoff at the initial design: a
+/// count that changed between iterations would make the constraints jump), and the first mode
+/// they leave out must stay above the cutoff, 1 − ω²_{retained+1} / ω²_cut ≤ 0. So at every
+/// design the retained modes are every mode below the cutoff, and the optimizer cannot thin the
+/// wing until modes it does not see fall into the flutter range. Its gradient is the eigenvalue
+/// derivative φᵀ(∂K − λ ∂M)φ (a simple eigenvalue; where mode retained+1 and retained+2 coincide
+/// the constraint is only directionally differentiable, as the lower of two frequencies is).
+#[derive(Clone, Copy, Debug)]
+pub struct ModeFloor {
+    pub retained: usize,
+    pub omega_cut: f64,
+}
+
+impl ModeFloor {
+    /// The modes of `plate` up to the first one left out, and the constraint's value.
+    pub fn evaluate(
+        &self,
+        study: &Study,
+        plate: &crate::structure::PlateModel,
+    ) -> Result<(crate::structure::Modes, f64), String> {
+        let modes = crate::structure::modal::solve(
+            plate,
+            self.retained + 1,
+            study.spec.structure.damping_ratio,
+            &study.mode_fields(),
+        )
+        .map_err(|e| format!("modal basis floor: {e}"))?;
+        let lambda = modes.modes[self.retained].lambda;
+        Ok((modes, 1.0 - lambda / (self.omega_cut * self.omega_cut)))
+    }
+
+    /// The constraint's gradient in the design variables.
+    pub fn gradient(
+        &self,
+        plate: &crate::structure::PlateModel,
+        modes: &crate::structure::Modes,
+    ) -> Vec<f64> {
+        let mut seed = crate::structure::ModalSeed::zeros(modes);
+        seed.lambda[self.retained] = -1.0 / (self.omega_cut * self.omega_cut);
+        crate::structure::modes_vjp(plate, modes, &seed)
+    }
 }
 
 /// KS weights and the p-k roots of the last flutter-margin evaluation.
@@ -34,7 +81,11 @@ pub struct DesignProblem<'a> {
     pub study: &'a Study,
     pub settings: GustSettings,
     pub spec: DesignSpec,
-    last: Option<(Evaluation, Option<FlutterState>)>,
+    last: Option<(
+        Evaluation,
+        Option<FlutterState>,
+        Option<crate::structure::Modes>,
+    )>,
     /// The largest p-k damping up to the margin speed at every point evaluated (with a flutter
     /// margin): the quantity the KS constraint bounds, for the report.
     pub damping_peaks: Vec<(Vec<f64>, f64)>,
@@ -109,6 +160,12 @@ impl Problem for DesignProblem<'_> {
             self.damping_peaks.push((x.to_vec(), seed.peak()));
             flutter = Some((weights, seed));
         }
+        let mut floor_modes = None;
+        if let Some(floor) = &self.spec.mode_floor {
+            let (modes, c) = floor.evaluate(self.study, &ev.plate)?;
+            ineq.push(c);
+            floor_modes = Some(modes);
+        }
         let v = Values {
             f: ev.mass_kg / self.spec.mass0,
             eq: if self.spec.fix_area {
@@ -118,7 +175,7 @@ impl Problem for DesignProblem<'_> {
             },
             ineq,
         };
-        self.last = Some((ev, flutter));
+        self.last = Some((ev, flutter, floor_modes));
         self.function_times.push(t0.elapsed().as_secs_f64());
         Ok(v)
     }
@@ -126,7 +183,7 @@ impl Problem for DesignProblem<'_> {
         if self.last.as_ref().is_none_or(|e| e.0.x != x) {
             self.values(x)?;
         }
-        let (ev, flutter) = self.last.as_ref().expect("evaluated");
+        let (ev, flutter, floor_modes) = self.last.as_ref().expect("evaluated");
         let n_out = ev.rms_m.len();
         let seeds = |mass: f64, area: f64, rms: f64| OutputSeeds {
             mass,
@@ -154,7 +211,10 @@ impl Problem for DesignProblem<'_> {
             .into_iter();
         self.gradient_times.push(t0.elapsed().as_secs_f64());
         let (f, h) = (g.next().expect("mass"), g.next().expect("area"));
-        let ineq: Vec<Vec<f64>> = g.collect();
+        let mut ineq: Vec<Vec<f64>> = g.collect();
+        if let (Some(floor), Some(modes)) = (&self.spec.mode_floor, floor_modes) {
+            ineq.push(floor.gradient(&ev.plate, modes));
+        }
         Ok(Gradients {
             f,
             eq: if self.spec.fix_area {

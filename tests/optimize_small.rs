@@ -48,6 +48,7 @@ fn small_mass_minimization() {
         area0: ev0.area_m2,
         fix_area: true,
         flutter: None,
+        mode_floor: None,
     };
     let mut problem = DesignProblem::new(&study, settings, spec.clone());
     let params = SqpParams {

@@ -236,6 +236,7 @@ pub(crate) fn design_spec(
                 speed_factor: m.speed_factor,
                 damping_max: m.damping_max,
             }),
+        mode_floor: None,
     }
 }
 
@@ -276,7 +277,24 @@ pub fn optimize(
     let t_ev0 = Instant::now();
     let ev0 = crate::pipeline::evaluate(study, &settings, &x0).context("initial design")?;
     let t_ev0 = t_ev0.elapsed().as_secs_f64();
-    let spec = design_spec(study, &settings, &ev0, lower, upper);
+    let mut spec = design_spec(study, &settings, &ev0, lower, upper);
+    // a basis chosen by the cutoff rule: its count at the initial design, kept whole by a floor
+    // on the first mode left out (crate::problem::ModeFloor)
+    let mut fixed_basis = study.clone();
+    if let crate::study::ModeRule::Cutoff { omega_cut, .. } = study.mode_rule()? {
+        let retained = ev0.modes.len();
+        fixed_basis.spec.structure.modes = crate::study::schema::ModesSpec::Count(retained);
+        spec.mode_floor = Some(crate::problem::ModeFloor {
+            retained,
+            omega_cut,
+        });
+        if !quiet {
+            println!(
+                "modal basis: the {retained} modes below {:.1} Hz at the initial design; the first mode left out must stay above it",
+                omega_cut / (2.0 * std::f64::consts::PI)
+            );
+        }
+    }
     let (output, rms_limit) = (spec.output, spec.rms_limit);
     let is_disp = matches!(
         settings.outputs[output].quantity,
@@ -370,7 +388,7 @@ pub fn optimize(
     let mut store = FileCheckpoint {
         path: dir.join("checkpoint.json"),
     };
-    let mut problem = DesignProblem::new(study, settings.clone(), spec.clone());
+    let mut problem = DesignProblem::new(&fixed_basis, settings.clone(), spec.clone());
     let info = Executor::new(params, &problem_id)
         .resume(checkpoint)
         .initial_hessian(study.warm_start_hessian()?)
