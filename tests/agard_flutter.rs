@@ -102,7 +102,17 @@ fn run_includes_flutter() {
 #[test]
 fn flagship_optimum_branches_stay_apart() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let study = gustkit::study::Study::load(&root.join("studies/agard445_dlm.json")).unwrap();
+    // the flagship's model of that time: 6 modes on 8 × 12 boxes
+    let mut v: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(root.join("studies/agard445_dlm.json")).unwrap(),
+    )
+    .unwrap();
+    v["structure"]["modes"] = 6.into();
+    v["aero"]["fidelity"]["dlm"]["n_chord"] = 8.into();
+    v["aero"]["fidelity"]["dlm"]["n_span"] = 12.into();
+    let study =
+        gustkit::study::Study::from_str(&root.join("flagship_2026_11.json"), &v.to_string())
+            .unwrap();
     let results: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(root.join("tests/data/agard445_dlm_optimum_2026_11.json"))
             .unwrap(),

@@ -81,7 +81,13 @@ fn run_writes_results_and_summary() {
     // design is stable at the flight speed at both resolutions and its RMS moves by less than
     // 10 % (the 6 modes and 400 boxes are the study's own choice, not a converged one)
     let c = &r["resolution_check"];
-    assert_eq!(c["refined_model"], "DLM 32 × 50 boxes, 12 modes", "{c}");
+    // (the table extended so that the 12th mode lies inside it at the flight speed)
+    let refined = c["refined_model"].as_str().unwrap();
+    assert!(
+        refined.starts_with("DLM 32 × 50 boxes, reduced frequencies to ")
+            && refined.ends_with(", 12 modes"),
+        "{c}"
+    );
     assert_eq!(c["passed"], true, "{c}");
     let (rms, fine) = (
         c["rms_m"][0].as_f64().unwrap(),
@@ -1139,6 +1145,8 @@ fn reruns_and_thread_counts_give_identical_results() {
     let mut v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(opt).unwrap()).unwrap();
     v["name"] = "opt_det".into();
+    // a small model: 6 modes on 4 × 6 boxes (the flagship's 11 modes flutter on so few boxes)
+    v["structure"]["modes"] = 6.into();
     v["aero"]["fidelity"]["dlm"]["n_chord"] = 4.into();
     v["aero"]["fidelity"]["dlm"]["n_span"] = 6.into();
     v["gust"]["points"] = 400.into();

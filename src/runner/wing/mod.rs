@@ -277,5 +277,10 @@ fn resolution_check(
             },
         ),
     };
-    Ok(Some(resolution::check(study, &x, settings.as_ref(), req)?))
+    // an optimization's design is checked with the basis its constraints saw
+    let basis = match optimization {
+        Some(_) => optimize::design_basis(study)?.0,
+        None => study.clone(),
+    };
+    Ok(Some(resolution::check(&basis, &x, settings.as_ref(), req)?))
 }

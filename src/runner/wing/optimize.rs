@@ -260,6 +260,31 @@ pub(crate) fn rms_constraint(
     Some((output, if is_disp { o.rms_max * to_m } else { o.rms_max }))
 }
 
+/// The study as its optimization sees it: with a basis chosen by the cutoff rule, the count of
+/// modes below the cutoff at the initial design, kept whole by a floor on the first mode left out
+/// ([`crate::problem::ModeFloor`]); otherwise the study itself and no floor. The final design is
+/// reported and checked with the same basis.
+pub(crate) fn design_basis(study: &Study) -> Result<(Study, Option<crate::problem::ModeFloor>)> {
+    let crate::study::ModeRule::Cutoff { omega_cut, .. } = study.mode_rule()? else {
+        return Ok((study.clone(), None));
+    };
+    let plate = study
+        .model_at(crate::wing::DesignVector::from_slice(
+            &study.initial_design()?.to_vec(),
+        ))
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let retained = study.solve_modes(&plate).context("initial design")?.len();
+    let mut fixed = study.clone();
+    fixed.spec.structure.modes = crate::study::schema::ModesSpec::Count(retained);
+    Ok((
+        fixed,
+        Some(crate::problem::ModeFloor {
+            retained,
+            omega_cut,
+        }),
+    ))
+}
+
 /// The gust-constrained mass minimization of a study (the `optimization` section).
 pub fn optimize(
     study: &Study,
@@ -278,22 +303,14 @@ pub fn optimize(
     let ev0 = crate::pipeline::evaluate(study, &settings, &x0).context("initial design")?;
     let t_ev0 = t_ev0.elapsed().as_secs_f64();
     let mut spec = design_spec(study, &settings, &ev0, lower, upper);
-    // a basis chosen by the cutoff rule: its count at the initial design, kept whole by a floor
-    // on the first mode left out (crate::problem::ModeFloor)
-    let mut fixed_basis = study.clone();
-    if let crate::study::ModeRule::Cutoff { omega_cut, .. } = study.mode_rule()? {
-        let retained = ev0.modes.len();
-        fixed_basis.spec.structure.modes = crate::study::schema::ModesSpec::Count(retained);
-        spec.mode_floor = Some(crate::problem::ModeFloor {
-            retained,
-            omega_cut,
-        });
-        if !quiet {
-            println!(
-                "modal basis: the {retained} modes below {:.1} Hz at the initial design; the first mode left out must stay above it",
-                omega_cut / (2.0 * std::f64::consts::PI)
-            );
-        }
+    let (fixed_basis, floor) = design_basis(study)?;
+    spec.mode_floor = floor;
+    if let (Some(f), false) = (floor, quiet) {
+        println!(
+            "modal basis: the {} modes below {:.1} Hz at the initial design; the first mode left out must stay above it",
+            f.retained,
+            f.omega_cut / (2.0 * std::f64::consts::PI)
+        );
     }
     let (output, rms_limit) = (spec.output, spec.rms_limit);
     let is_disp = matches!(
@@ -407,7 +424,7 @@ pub fn optimize(
         threads: rayon::current_num_threads(),
     };
     let t_ev = Instant::now();
-    let ev = crate::pipeline::evaluate(study, &settings, &info.x).context("final design")?;
+    let ev = crate::pipeline::evaluate(&fixed_basis, &settings, &info.x).context("final design")?;
     let t_ev = t_ev.elapsed().as_secs_f64();
     // the largest p-k damping of each iterate (re-evaluated for iterates of an earlier session)
     let mut peaks = std::mem::take(&mut problem.damping_peaks);
@@ -418,7 +435,7 @@ pub fn optimize(
         if let Some((_, g)) = peaks.iter().rev().find(|(px, _)| px.as_slice() == x) {
             return Ok(Some(*g));
         }
-        let e = crate::pipeline::evaluate(study, &settings, x)?;
+        let e = crate::pipeline::evaluate(&fixed_basis, &settings, x)?;
         let g = e.flutter_damping(m)?.2.peak();
         peaks.push((x.to_vec(), g));
         Ok(Some(g))
