@@ -36,8 +36,8 @@ impl Figure for ModeShapes {
             let mut chart = ChartBuilder::on(cell)
                 .caption(title, ("sans-serif", 18))
                 .margin(8)
-                .x_label_area_size(30)
-                .y_label_area_size(40)
+                .x_label_area_size(45)
+                .y_label_area_size(58)
                 .build_cartesian_2d(cx - half..cx + half, cy - half..cy + half)
                 .map_err(err)?;
             chart
@@ -476,8 +476,8 @@ impl Figure for ThicknessMaps {
             let mut chart = ChartBuilder::on(cell)
                 .caption(title, ("sans-serif", 18))
                 .margin(8)
-                .x_label_area_size(30)
-                .y_label_area_size(45)
+                .x_label_area_size(45)
+                .y_label_area_size(58)
                 .build_cartesian_2d(cx - half..cx + half, cy - half..cy + half)
                 .map_err(err)?;
             chart

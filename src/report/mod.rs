@@ -6,6 +6,7 @@ pub mod folder;
 pub mod results;
 pub mod run;
 pub mod sweep;
+pub mod text_boxes;
 pub mod vtk;
 
 use anyhow::{Context, Result};
@@ -72,6 +73,20 @@ pub trait Figure {
     fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()>
     where
         DB::ErrorType: 'static;
+}
+
+/// Where a report's figures go: files ([`FigureFiles`]) or, in tests, a check of what they draw.
+pub trait FigureSink {
+    fn figure(&mut self, stem: &str, fig: &impl Figure) -> Result<()>;
+}
+
+/// Figures saved as PNG and SVG in a folder ([`save_figure`]).
+pub struct FigureFiles<'a>(pub &'a Path);
+
+impl FigureSink for FigureFiles<'_> {
+    fn figure(&mut self, stem: &str, fig: &impl Figure) -> Result<()> {
+        save_figure(self.0, stem, fig)
+    }
 }
 
 /// Saves a figure as `dir/stem.png` and `dir/stem.svg`, both atomically.

@@ -4,7 +4,7 @@
 
 use super::figures::{gaf_panels, Convergence, PsdPlot, ThicknessMaps, VgVf};
 use super::results::{FidelityComparison, FlutterSummary, GustResults, ModeRow, RunResults};
-use super::{from_json, save_figure};
+use super::{from_json, FigureFiles, FigureSink};
 use crate::flutter::FlutterResult;
 use anyhow::Result;
 use std::path::Path;
@@ -274,12 +274,11 @@ pub fn comparison_text(
 }
 
 /// Writes results.json, summary.md and every figure of `r` into `dir` (each file atomically).
-pub fn render(dir: &Path, r: &RunResults) -> Result<()> {
-    save_figure(dir, "modes", &r.mode_shapes)?;
+pub fn figures(r: &RunResults, sink: &mut impl FigureSink) -> Result<()> {
+    sink.figure("modes", &r.mode_shapes)?;
     if let Some(g) = &r.gust {
         let panels = g.psd.iter().map(|s| vec![s.clone()]).collect();
-        save_figure(
-            dir,
+        sink.figure(
             "psd",
             &PsdPlot {
                 title: format!("{}: gust response PSD", r.study),
@@ -288,8 +287,7 @@ pub fn render(dir: &Path, r: &RunResults) -> Result<()> {
         )?;
     }
     if let Some(f) = &r.flutter {
-        save_figure(
-            dir,
+        sink.figure(
             "flutter_vg",
             &VgVf {
                 result: &f.result,
@@ -301,21 +299,19 @@ pub fn render(dir: &Path, r: &RunResults) -> Result<()> {
         )?;
     }
     if let Some(o) = &r.optimization {
-        save_figure(dir, "convergence", &Convergence::new(&r.study, o))?;
+        sink.figure("convergence", &Convergence::new(&r.study, o))?;
         let mut initial = o.initial.psd.clone();
         initial.label = format!("{} initial", initial.label);
         let mut fin = o.final_.psd.clone();
         fin.label = format!("{} final", fin.label);
-        save_figure(
-            dir,
+        sink.figure(
             "psd_optimization",
             &PsdPlot {
                 title: format!("{}: PSD at the initial and final designs", r.study),
                 panels: vec![vec![initial, fin]],
             },
         )?;
-        save_figure(
-            dir,
+        sink.figure(
             "thickness",
             &ThicknessMaps {
                 title: format!("{}: planform and thickness", r.study),
@@ -336,8 +332,7 @@ pub fn render(dir: &Path, r: &RunResults) -> Result<()> {
         )?;
     }
     if let Some(c) = &r.comparison {
-        save_figure(
-            dir,
+        sink.figure(
             "gafs_fidelities",
             &gaf_panels(
                 format!(
@@ -362,8 +357,7 @@ pub fn render(dir: &Path, r: &RunResults) -> Result<()> {
                     vec![own, other]
                 })
                 .collect();
-            save_figure(
-                dir,
+            sink.figure(
                 "psd_fidelities",
                 &PsdPlot {
                     title: format!("{}: gust response PSD with both fidelities", r.study),
@@ -372,8 +366,7 @@ pub fn render(dir: &Path, r: &RunResults) -> Result<()> {
             )?;
         }
         if let (Some(f), Some(other)) = (&r.flutter, &c.flutter_other) {
-            save_figure(
-                dir,
+            sink.figure(
                 &format!("flutter_vg_{}", c.other),
                 &VgVf {
                     result: other,
@@ -385,6 +378,12 @@ pub fn render(dir: &Path, r: &RunResults) -> Result<()> {
             )?;
         }
     }
+    Ok(())
+}
+
+/// Every figure of a wing run into `dir`, then results.json and summary.md.
+pub fn render(dir: &Path, r: &RunResults) -> Result<()> {
+    figures(r, &mut FigureFiles(dir))?;
     crate::report::write_results(dir, r, &summary(r))
 }
 
