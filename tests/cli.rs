@@ -77,6 +77,12 @@ fn run_writes_results_and_summary() {
     assert!(outs[0]["rms"].as_f64().unwrap() > 0.0);
     assert_eq!(outs[1]["unit"], "N m");
     assert!(md.contains("## Gust response"));
+    // the unit rule: results.json in SI, the summary's lengths in the study's unit (inches here)
+    let rms_in = outs[0]["rms"].as_f64().unwrap() / 0.0254;
+    assert!(
+        md.contains(&format!("| tip_te_w | {rms_in:.6e} | in |")),
+        "{rms_in} in: {md}"
+    );
     // the resolution check: twice the modes on a lattice refined by two each way; the initial
     // design is stable at the flight speed at both resolutions and its RMS moves by less than
     // 10 % (the 6 modes and 400 boxes are the study's own choice, not a converged one)

@@ -3,7 +3,9 @@
 //! be re-drawn without re-running anything.
 
 use super::figures::{gaf_panels, Convergence, PsdPlot, ThicknessMaps, VgVf};
-use super::results::{FidelityComparison, FlutterSummary, GustResults, ModeRow, RunResults};
+use super::results::{
+    FidelityComparison, FlutterSummary, GustResults, ModeRow, PsdSeries, RunResults,
+};
 use super::{from_json, FigureFiles, FigureSink};
 use crate::flutter::FlutterResult;
 use anyhow::Result;
@@ -96,10 +98,8 @@ pub fn summary(r: &RunResults) -> String {
             g.mach, g.velocity_m_s, g.density_kg_m3, g.q_inf_pa, g.turbulence, g.n_omega, g.omega_max_rad_s
         );
         for o in &g.outputs {
-            md += &format!(
-                "| {} | {:.6e} | {} | {:.3} |\n",
-                o.name, o.rms, o.unit, o.n0_hz
-            );
+            let (rms, unit) = r.length_unit.display(o.rms, &o.unit, 1);
+            md += &format!("| {} | {rms:.6e} | {unit} | {:.3} |\n", o.name, o.n0_hz);
         }
         if let Some(c) = &g.calibration {
             md += &format!(
@@ -201,7 +201,7 @@ pub fn summary(r: &RunResults) -> String {
         md += &format!("\n## Resolution check\n\n{}\n", resolution_words(c));
     }
     if let Some(c) = &r.comparison {
-        md += &comparison_text(c, r.gust.as_ref(), r.flutter.as_ref());
+        md += &comparison_text(c, r.gust.as_ref(), r.flutter.as_ref(), r.length_unit);
         md += "\n![GAFs of both fidelities](gafs_fidelities.png)\n";
         if !c.psd_other.is_empty() {
             md += "\n![PSD with both fidelities](psd_fidelities.png)\n";
@@ -223,6 +223,7 @@ pub fn comparison_text(
     c: &FidelityComparison,
     gust: Option<&GustResults>,
     flutter: Option<&FlutterSummary>,
+    length_unit: crate::study::LengthUnit,
 ) -> String {
     let (a, b) = (&c.fidelity, &c.other);
     let mut md = format!("\n## The {a} beside the {b} (aero.compare_with)\n\nThe initial design analysed with both fidelities.\n");
@@ -233,13 +234,12 @@ pub fn comparison_text(
                     "\n| output | RMS, {a} | RMS, {b} | {a} / {b} − 1 | unit |\n|---|---:|---:|---:|---|\n"
                 );
                 for (o, other) in g.outputs.iter().zip(rms) {
+                    let (own, unit) = length_unit.display(o.rms, &o.unit, 1);
+                    let (other_shown, _) = length_unit.display(*other, &o.unit, 1);
                     md += &format!(
-                        "| {} | {:.6e} | {:.6e} | {:+.1} % | {} |\n",
+                        "| {} | {own:.6e} | {other_shown:.6e} | {:+.1} % | {unit} |\n",
                         o.name,
-                        o.rms,
-                        other,
                         100.0 * (o.rms / other - 1.0),
-                        o.unit
                     );
                 }
             }
@@ -273,11 +273,31 @@ pub fn comparison_text(
     md
 }
 
-/// Writes results.json, summary.md and every figure of `r` into `dir` (each file atomically).
+/// A PSD series as a person reads it: a displacement's PSD in the study's length unit squared
+/// ([`crate::study::LengthUnit::display`]); results.json keeps SI.
+fn shown(s: &PsdSeries, unit: crate::study::LengthUnit) -> PsdSeries {
+    let (_, shown_unit) = unit.display(1.0, &s.unit, 2);
+    PsdSeries {
+        label: s.label.clone(),
+        unit: shown_unit,
+        omega_rad_s: s.omega_rad_s.clone(),
+        psd: s
+            .psd
+            .iter()
+            .map(|&v| unit.display(v, &s.unit, 2).0)
+            .collect(),
+    }
+}
+
+/// Every figure of a wing run, into `sink` (files, or a test's check of what they draw).
 pub fn figures(r: &RunResults, sink: &mut impl FigureSink) -> Result<()> {
     sink.figure("modes", &r.mode_shapes)?;
     if let Some(g) = &r.gust {
-        let panels = g.psd.iter().map(|s| vec![s.clone()]).collect();
+        let panels = g
+            .psd
+            .iter()
+            .map(|s| vec![shown(s, r.length_unit)])
+            .collect();
         sink.figure(
             "psd",
             &PsdPlot {
@@ -300,9 +320,9 @@ pub fn figures(r: &RunResults, sink: &mut impl FigureSink) -> Result<()> {
     }
     if let Some(o) = &r.optimization {
         sink.figure("convergence", &Convergence::new(&r.study, o))?;
-        let mut initial = o.initial.psd.clone();
+        let mut initial = shown(&o.initial.psd, r.length_unit);
         initial.label = format!("{} initial", initial.label);
-        let mut fin = o.final_.psd.clone();
+        let mut fin = shown(&o.final_.psd, r.length_unit);
         fin.label = format!("{} final", fin.label);
         sink.figure(
             "psd_optimization",
@@ -351,7 +371,8 @@ pub fn figures(r: &RunResults, sink: &mut impl FigureSink) -> Result<()> {
                 .iter()
                 .zip(&c.psd_other)
                 .map(|(own, other)| {
-                    let (mut own, mut other) = (own.clone(), other.clone());
+                    let (mut own, mut other) =
+                        (shown(own, r.length_unit), shown(other, r.length_unit));
                     own.label = format!("{}, {}", own.label, c.fidelity);
                     other.label = format!("{}, {}", other.label, c.other);
                     vec![own, other]
@@ -381,7 +402,7 @@ pub fn figures(r: &RunResults, sink: &mut impl FigureSink) -> Result<()> {
     Ok(())
 }
 
-/// Every figure of a wing run into `dir`, then results.json and summary.md.
+/// Writes results.json, summary.md and every figure of `r` into `dir` (each file atomically).
 pub fn render(dir: &Path, r: &RunResults) -> Result<()> {
     figures(r, &mut FigureFiles(dir))?;
     crate::report::write_results(dir, r, &summary(r))

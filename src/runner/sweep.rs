@@ -55,7 +55,8 @@ fn sweep_metrics(
             let x = study.initial_design()?.to_vec();
             let ev = crate::pipeline::evaluate(study, &settings, &x)?;
             for (o, rms) in settings.outputs.iter().zip(&ev.rms_m) {
-                out.push(metric(&format!("RMS {}", o.name), o.quantity.unit(), *rms));
+                let (rms, unit) = study.spec.length_unit.display(*rms, o.quantity.unit(), 1);
+                out.push(metric(&format!("RMS {}", o.name), &unit, rms));
             }
         }
         if optimize_case {

@@ -310,6 +310,17 @@ impl LengthUnit {
             LengthUnit::Ft => 0.3048,
         }
     }
+
+    /// The unit rule of everything a person reads (summary, console, figures, CSV): a length in
+    /// the study's unit, every other quantity in SI. `value` in `si_unit` ("m" is converted, any
+    /// other unit kept) raised to `power` (2 for a PSD of the quantity); the value and unit to show.
+    pub fn display(self, value: f64, si_unit: &str, power: i32) -> (f64, String) {
+        if si_unit == "m" {
+            (value / self.to_m().powi(power), self.name().to_string())
+        } else {
+            (value, si_unit.to_string())
+        }
+    }
 }
 
 /// Planform and section.

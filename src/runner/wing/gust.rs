@@ -41,7 +41,8 @@ pub(crate) fn gust_results(study: &Study) -> Result<(GustResults, crate::pipelin
         })
         .collect();
     for o in &outputs {
-        println!("RMS {}: {:.6e} {}", o.name, o.rms, o.unit);
+        let (rms, unit) = study.spec.length_unit.display(o.rms, &o.unit, 1);
+        println!("RMS {}: {rms:.6e} {unit}", o.name);
     }
     let spec = study.spec.gust.as_ref().expect("checked by gust_settings");
     let calibration = match &spec.calibration {

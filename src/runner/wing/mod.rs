@@ -174,7 +174,12 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
             let c = fidelities::compare_fidelities(&study, &other, gust_evaluation.as_ref())?;
             print!(
                 "{}",
-                report::run::comparison_text(&c, gust.as_ref(), flutter.as_ref())
+                report::run::comparison_text(
+                    &c,
+                    gust.as_ref(),
+                    flutter.as_ref(),
+                    study.spec.length_unit,
+                )
             );
             Some(c)
         }
