@@ -276,16 +276,12 @@ pub fn comparison_text(
 /// A PSD series as a person reads it: a displacement's PSD in the study's length unit squared
 /// ([`crate::study::LengthUnit::display`]); results.json keeps SI.
 fn shown(s: &PsdSeries, unit: crate::study::LengthUnit) -> PsdSeries {
-    let (_, shown_unit) = unit.display(1.0, &s.unit, 2);
+    let (scale, shown_unit) = unit.display(1.0, &s.unit, 2);
     PsdSeries {
         label: s.label.clone(),
-        unit: shown_unit,
+        unit: shown_unit.to_string(),
         omega_rad_s: s.omega_rad_s.clone(),
-        psd: s
-            .psd
-            .iter()
-            .map(|&v| unit.display(v, &s.unit, 2).0)
-            .collect(),
+        psd: s.psd.iter().map(|v| v * scale).collect(),
     }
 }
 

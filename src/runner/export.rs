@@ -49,11 +49,7 @@ pub fn gafs(study: &Study, out: &Path) -> Result<()> {
     println!(
         "GAFs of {} modes at {} reduced frequencies with the {} fidelity{} …",
         modes.len(),
-        study
-            .spec
-            .aero
-            .as_ref()
-            .map_or(0, |a| a.reduced_frequencies.len()),
+        aero.k.len(),
         aero.name,
         if aero.name == "lfd" {
             " (steady Euler solution, then one linear solve per reduced frequency and right-hand side)"

@@ -56,7 +56,7 @@ fn sweep_metrics(
             let ev = crate::pipeline::evaluate(study, &settings, &x)?;
             for (o, rms) in settings.outputs.iter().zip(&ev.rms_m) {
                 let (rms, unit) = study.spec.length_unit.display(*rms, o.quantity.unit(), 1);
-                out.push(metric(&format!("RMS {}", o.name), &unit, rms));
+                out.push(metric(&format!("RMS {}", o.name), unit, rms));
             }
         }
         if optimize_case {

@@ -314,11 +314,11 @@ impl LengthUnit {
     /// The unit rule of everything a person reads (summary, console, figures, CSV): a length in
     /// the study's unit, every other quantity in SI. `value` in `si_unit` ("m" is converted, any
     /// other unit kept) raised to `power` (2 for a PSD of the quantity); the value and unit to show.
-    pub fn display(self, value: f64, si_unit: &str, power: i32) -> (f64, String) {
+    pub fn display(self, value: f64, si_unit: &str, power: i32) -> (f64, &str) {
         if si_unit == "m" {
-            (value / self.to_m().powi(power), self.name().to_string())
+            (value / self.to_m().powi(power), self.name())
         } else {
-            (value, si_unit.to_string())
+            (value, si_unit)
         }
     }
 }

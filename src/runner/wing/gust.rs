@@ -1,7 +1,6 @@
 //! The gust response of a wing study at its design (paper Eqs. 16–18) and the σ_w calibration
 //! it records.
 
-use super::unit_label;
 use crate::report::figures::PsdSeries;
 use crate::report::results::{GustResults, OutputRow};
 use crate::study::Study;
@@ -58,12 +57,11 @@ pub(crate) fn gust_results(study: &Study) -> Result<(GustResults, crate::pipelin
                         c.output
                     )
                 })?;
-            let (to_unit, unit) = match settings.outputs[i].quantity {
-                crate::gust::Quantity::Displacement { .. } => {
-                    (1.0 / study.spec.length_unit.to_m(), unit_label(study))
-                }
-                crate::gust::Quantity::RootBendingMoment => (1.0, "N m"),
-            };
+            let (to_unit, unit) =
+                study
+                    .spec
+                    .length_unit
+                    .display(1.0, settings.outputs[i].quantity.unit(), 1);
             let rms = ev.rms_m[i] * to_unit;
             let sigma = settings.turbulence.sigma();
             println!(

@@ -68,17 +68,12 @@ pub fn analyze(study: &Study) -> Result<(PlateModel, Modes, ModalSummary)> {
     Ok((model, modes, summary))
 }
 
-/// Name of the study's display length unit.
-pub(crate) fn unit_label(study: &Study) -> &'static str {
-    study.spec.length_unit.name()
-}
-
 /// The mode-shape figure data of a model.
 fn mode_shapes(study: &Study, model: &PlateModel, modes: &Modes) -> ModeShapes {
     ModeShapes::new(
         model,
         modes,
-        unit_label(study),
+        study.spec.length_unit.name(),
         study.spec.length_unit.to_m(),
     )
 }

@@ -2,7 +2,6 @@
 //! observer, the atomic checkpoint of every iteration, `--resume`, and the results it reports.
 
 use super::gust::psd_series;
-use super::unit_label;
 use crate::flutter::margin::{DAMPING_SCALE, KS_RHO};
 use crate::optim::{Checkpointing, Control, Executor};
 use crate::report::results::{
@@ -313,17 +312,12 @@ pub fn optimize(
         );
     }
     let (output, rms_limit) = (spec.output, spec.rms_limit);
-    let is_disp = matches!(
-        settings.outputs[output].quantity,
-        crate::gust::Quantity::Displacement { .. }
-    );
-    let to_m = study.spec.length_unit.to_m();
-    // the report shows a displacement RMS in the study's own length unit
-    let (unit_scale, unit) = if is_disp {
-        (1.0 / to_m, unit_label(study))
-    } else {
-        (1.0, "N m")
-    };
+    // the report shows a displacement RMS in the study's own length unit (the unit rule)
+    let (unit_scale, unit) =
+        study
+            .spec
+            .length_unit
+            .display(1.0, settings.outputs[output].quantity.unit(), 1);
     let params = crate::optim::SqpParams {
         max_iterations: o.max_iterations,
         tolerance: o.tolerance,
@@ -523,11 +517,7 @@ pub fn optimize(
         evaluations: info.evaluations,
         wall_time_s,
         output: o.output.clone(),
-        rms_limit: if is_disp {
-            rms_limit * unit_scale
-        } else {
-            rms_limit
-        },
+        rms_limit: rms_limit * unit_scale,
         unit: unit.to_string(),
         fix_area: o.fix_area,
         flutter_margin: spec.flutter.map(|m| (m.speed_factor, m.damping_max)),

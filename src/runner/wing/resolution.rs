@@ -242,11 +242,12 @@ pub fn flutter_sweep(
         "flutter": verdict.words(flight),
         "flutter_speed_m_s": verdict.unstable_from(),
     });
-    match refined_study(study, &study.initial_design()?.to_vec(), modes, dofs) {
+    let x = study.initial_design()?.to_vec();
+    match refined_study(study, &x, modes, dofs) {
         Err(why) => doc["not_run"] = why.into(),
         Ok((refined, words)) => {
-            let fine = crate::pipeline::aeroelastic(&refined, &study.initial_design()?.to_vec())
-                .context("resolution check, refined")?;
+            let fine =
+                crate::pipeline::aeroelastic(&refined, &x).context("resolution check, refined")?;
             let r = PkProblem::new(&fine.modes, &fine.table, fine.aero.flight.density)
                 .sweep(velocities)
                 .map_err(|e| anyhow::anyhow!("resolution check, refined: flutter: {e}"))?;
