@@ -323,3 +323,29 @@ fn command_line_values() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("is a folder"));
     assert_eq!(std::fs::read_dir(&out).unwrap().count(), 0, "no stray file");
 }
+
+/// `gustkit flutter` on a study without a `flutter` section: one line naming the field, the keys
+/// to add and a range from the study's flight speed (the minimal wing flies at 170 m/s: 34 to
+/// 340 m/s), and no report folder.
+#[test]
+fn flutter_without_a_flutter_section_names_what_to_add() {
+    let dir = scratch().join("no_flutter");
+    let study = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/minimal_wing.json");
+    let o = Command::new(env!("CARGO_BIN_EXE_gustkit"))
+        .args(["flutter", study.to_str().unwrap(), "--reports"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    for w in [
+        "minimal_wing.json: flutter: missing",
+        "\"velocity_min_m_s\": 34",
+        "\"velocity_max_m_s\": 340",
+        "\"points\": 60",
+    ] {
+        assert!(err.contains(w), "want {w}: {err}");
+    }
+    assert!(!dir.join("minimal_wing").exists());
+}

@@ -8,6 +8,8 @@ use std::path::Path;
 
 /// `gustkit flutter`: p-k sweep of a study at its flight Mach number and density.
 pub fn flutter(study: &Study, json: bool, reports: &Path) -> Result<()> {
+    // a study without a usable sweep is refused before its report folder is made
+    study.flutter_velocities()?;
     let dir = study.report_dir(reports);
     std::fs::create_dir_all(&dir)
         .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
