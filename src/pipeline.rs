@@ -12,8 +12,11 @@
 use crate::aero::AeroModel;
 use crate::flutter::margin::{ks_max, zeros_like, DampingRoot, FlutterMargin, KS_RHO, PK_STEPS};
 use crate::flutter::{check_stability, PkProblem};
-use crate::gust::{self, FrequencyGrid, GustProblem, GustResponse, GustSettings, Quantity};
+use crate::gust::{
+    self, FrequencyGrid, GustProblem, GustResponse, GustSettings, Quantity, ResidualGafs,
+};
 use crate::structure::modal::SAMPLED;
+use crate::structure::residual::{residual_shapes, residual_shapes_vjp};
 use crate::structure::{
     mass_grad, modes_vjp, root_bending_moment, root_bending_moment_vjp, ModalSeed, Modes,
     PlateModel, Sampler,
@@ -41,7 +44,57 @@ pub struct Evaluation {
     pub response: GustResponse,
     samplers: Vec<Option<Sampler>>,
     outputs_s: Vec<Vec<f64>>,
+    /// The outputs' residual shapes and their GAF rows (mode acceleration), if the study asks.
+    pub residual: Option<Residual>,
     settings: GustSettings,
+}
+
+/// The mode-acceleration part of a model: each output's residual shape (nodal) and GAF rows.
+#[derive(Clone, Debug)]
+pub struct Residual {
+    pub shapes: Vec<Vec<f64>>,
+    pub gafs: ResidualGafs,
+}
+
+/// The samplers of the gust outputs: a point's for a displacement, none for the root moment.
+fn output_samplers(plate: &PlateModel, settings: &GustSettings) -> Vec<Option<Sampler>> {
+    settings
+        .outputs
+        .iter()
+        .map(|o| match o.quantity {
+            Quantity::Displacement { point } => Some(Sampler::new(plate, &[point])),
+            Quantity::RootBendingMoment => None,
+        })
+        .collect()
+}
+
+/// The modes followed by the residual shapes, as the aerodynamic model takes them.
+fn with_residual<'a>(modes: &'a Modes, shapes: &'a [Vec<f64>]) -> Vec<&'a [f64]> {
+    let mut all = crate::transfer::mode_shapes(modes);
+    all.extend(shapes.iter().map(Vec::as_slice));
+    all
+}
+
+/// The GAF table of the modes and, with mode acceleration, the residual rows, from one call of
+/// the aerodynamic model (its factorizations shared).
+fn tables(
+    plate: &PlateModel,
+    modes: &Modes,
+    aero: &AeroModel,
+    settings: Option<&GustSettings>,
+) -> Result<(GafTable, Option<Residual>)> {
+    let Some(settings) = settings.filter(|s| s.mode_acceleration) else {
+        let table = aero
+            .gafs(plate, modes)
+            .map_err(|e| anyhow::anyhow!("aerodynamics: {e}"))?;
+        return Ok((table, None));
+    };
+    let shapes = residual_shapes(plate, modes, &output_samplers(plate, settings));
+    let all = aero
+        .gafs_of_shapes(plate, &with_residual(modes, &shapes))
+        .map_err(|e| anyhow::anyhow!("aerodynamics: {e}"))?;
+    let (table, gafs) = ResidualGafs::split(&all, modes.len());
+    Ok((table, Some(Residual { shapes, gafs })))
 }
 
 impl Evaluation {
@@ -85,6 +138,7 @@ impl Evaluation {
             grid: self.grid.clone(),
             outputs: self.outputs_s.clone(),
             max_tail: self.settings.max_tail,
+            residual: self.residual.as_ref().map(|r| &r.gafs),
         }
     }
 }
@@ -124,15 +178,28 @@ pub struct Aeroelastic {
     pub modes: Modes,
     pub aero: AeroModel,
     pub table: GafTable,
+    /// The residual rows of the gust outputs, where the model was made for a gust response by
+    /// the mode-acceleration method ([`respond`] makes them otherwise).
+    pub residual: Option<Residual>,
 }
 
 /// Evaluates a design of the study.
 pub fn evaluate(study: &Study, settings: &GustSettings, x: &[f64]) -> Result<Evaluation> {
-    respond(aeroelastic(study, x)?, settings)
+    respond(aeroelastic_for(study, x, Some(settings))?, settings)
 }
 
 /// The aeroelastic model of a design: plate, modes, aerodynamic model, GAFs.
 pub fn aeroelastic(study: &Study, x: &[f64]) -> Result<Aeroelastic> {
+    aeroelastic_for(study, x, None)
+}
+
+/// [`aeroelastic`], with the residual rows of the outputs of `settings` where they ask for the
+/// mode-acceleration method.
+pub fn aeroelastic_for(
+    study: &Study,
+    x: &[f64],
+    settings: Option<&GustSettings>,
+) -> Result<Aeroelastic> {
     let plate = study
         .model_at(DesignVector::from_slice(x))
         .map_err(|e: StudyError| anyhow::anyhow!("design: {}", e.reason))?;
@@ -147,15 +214,14 @@ pub fn aeroelastic(study: &Study, x: &[f64]) -> Result<Aeroelastic> {
         },
     );
     let (modes, aero) = (modes?, aero?);
-    let table = aero
-        .gafs(&plate, &modes)
-        .map_err(|e| anyhow::anyhow!("aerodynamics: {e}"))?;
+    let (table, residual) = tables(&plate, &modes, &aero, settings)?;
     Ok(Aeroelastic {
         x: x.to_vec(),
         plate,
         modes,
         aero,
         table,
+        residual,
     })
 }
 
@@ -168,18 +234,17 @@ pub fn respond(a: Aeroelastic, settings: &GustSettings) -> Result<Evaluation> {
         modes,
         aero,
         table,
+        residual,
     } = a;
+    let residual = match residual {
+        Some(r) => Some(r),
+        None if settings.mode_acceleration => tables(&plate, &modes, &aero, Some(settings))?.1,
+        None => None,
+    };
     let f = &aero.flight;
     let omega_max = table.k.last().copied().unwrap_or(0.0) * f.velocity / f.b_ref;
     let grid = FrequencyGrid::log(settings.omega_min, omega_max, settings.points)?;
-    let samplers: Vec<Option<Sampler>> = settings
-        .outputs
-        .iter()
-        .map(|o| match o.quantity {
-            Quantity::Displacement { point } => Some(Sampler::new(&plate, &[point])),
-            Quantity::RootBendingMoment => None,
-        })
-        .collect();
+    let samplers = output_samplers(&plate, settings);
     let outputs_s: Vec<Vec<f64>> = samplers
         .iter()
         .map(|s| match s {
@@ -206,6 +271,7 @@ pub fn respond(a: Aeroelastic, settings: &GustSettings) -> Result<Evaluation> {
         response: GustResponse::default(),
         samplers,
         outputs_s,
+        residual,
         settings: settings.clone(),
     };
     // the stability check and the response side by side (the p-k's few roots a speed leave a
@@ -243,6 +309,7 @@ pub fn gradients(ev: &Evaluation, all: &[OutputSeeds]) -> Result<Vec<Vec<f64>>> 
         modal_seed: ModalSeed,
         p_bar: [f64; N_PLANFORM],
         table_bar: Option<GafTable>,
+        rows_bar: Option<ResidualGafs>,
     }
     let mut partials = Vec::with_capacity(all.len());
     for seeds in all {
@@ -259,6 +326,7 @@ pub fn gradients(ev: &Evaluation, all: &[OutputSeeds]) -> Result<Vec<Vec<f64>>> 
         }
         let mut modal_seed = ModalSeed::zeros(&ev.modes);
         let mut p_bar = [0.0; N_PLANFORM];
+        let mut rows_bar = None;
         let rms_seeded = seeds.rms.iter().any(|s| *s != 0.0);
         let table_bar = if rms_seeded || seeds.damping.is_some() {
             let mut table_bar = zeros_like(&ev.table);
@@ -279,7 +347,7 @@ pub fn gradients(ev: &Evaluation, all: &[OutputSeeds]) -> Result<Vec<Vec<f64>>> 
                 }
             }
             if rms_seeded {
-                rms_seeds(
+                rows_bar = rms_seeds(
                     ev,
                     seeds,
                     &mut table_bar,
@@ -297,18 +365,34 @@ pub fn gradients(ev: &Evaluation, all: &[OutputSeeds]) -> Result<Vec<Vec<f64>>> 
             modal_seed,
             p_bar,
             table_bar,
+            rows_bar,
         });
     }
     // stage 2: GAFs → mode shapes on the aerodynamic surface, aerodynamic geometry, transfer
+    // (with mode acceleration, the shapes are the modes followed by the residual shapes)
+    let n_modes = ev.modes.len();
     let tables: Vec<GafTable> = partials
         .iter()
-        .filter_map(|p| p.table_bar.clone())
+        .filter_map(|p| {
+            let t = p.table_bar.as_ref()?;
+            Some(match &ev.residual {
+                None => t.clone(),
+                Some(r) => {
+                    let zero = ResidualGafs::zeros(t.k.len(), r.shapes.len(), n_modes);
+                    ResidualGafs::join(t, p.rows_bar.as_ref().unwrap_or(&zero))
+                }
+            })
+        })
         .collect();
     let mut aero = if tables.is_empty() {
         Vec::new()
     } else {
+        let shapes = match &ev.residual {
+            None => crate::transfer::mode_shapes(&ev.modes),
+            Some(r) => with_residual(&ev.modes, &r.shapes),
+        };
         ev.aero
-            .gafs_vjp_many(&ev.plate, &ev.modes, &tables)
+            .gafs_vjp_many_shapes(&ev.plate, &shapes, &tables)
             .map_err(|e| anyhow::anyhow!("aerodynamics reverse mode: {e}"))?
     }
     .into_iter();
@@ -317,8 +401,22 @@ pub fn gradients(ev: &Evaluation, all: &[OutputSeeds]) -> Result<Vec<Vec<f64>>> 
     for mut p in partials {
         if p.table_bar.is_some() {
             let (shapes, pb) = aero.next().expect("one aerodynamic gradient per table");
-            for (m, s) in shapes.iter().enumerate() {
+            for (m, s) in shapes.iter().take(n_modes).enumerate() {
                 add_into(&mut p.modal_seed.shape[m], s);
+            }
+            if shapes.len() > n_modes {
+                // residual shapes → modes, stiffness, mass, output geometry
+                let (seed, direct) =
+                    residual_shapes_vjp(&ev.plate, &ev.modes, &ev.samplers, &shapes[n_modes..]);
+                for m in 0..n_modes {
+                    p.modal_seed.lambda[m] += seed.lambda[m];
+                    if !seed.shape[m].is_empty() {
+                        add_into(&mut p.modal_seed.shape[m], &seed.shape[m]);
+                    }
+                }
+                for (gi, v) in p.g.iter_mut().zip(direct) {
+                    *gi += v;
+                }
             }
             for k in 0..N_PLANFORM {
                 p.p_bar[k] += pb[k];
@@ -339,7 +437,8 @@ pub fn gradients(ev: &Evaluation, all: &[OutputSeeds]) -> Result<Vec<Vec<f64>>> 
 }
 
 /// The gust-response part of the reverse sweep: RMS seeds → seeds on the GAF table, on ω_n², on
-/// the output mode samples (mode shapes, planform) and direct design terms.
+/// the output mode samples (mode shapes, planform) and direct design terms; returns the seeds on
+/// the residual rows (mode acceleration).
 fn rms_seeds(
     ev: &Evaluation,
     seeds: &OutputSeeds,
@@ -347,7 +446,7 @@ fn rms_seeds(
     modal_seed: &mut ModalSeed,
     p_bar: &mut [f64; N_PLANFORM],
     g: &mut [f64],
-) -> Result<()> {
+) -> Result<Option<ResidualGafs>> {
     let gg = gust::rms_vjp(&ev.problem(), &ev.response, &seeds.rms)?;
     add_table(table_bar, &gg.table);
     for (l, v) in modal_seed.lambda.iter_mut().zip(&gg.lambda) {
@@ -382,7 +481,7 @@ fn rms_seeds(
             }
         }
     }
-    Ok(())
+    Ok(gg.residual)
 }
 
 /// acc += t over both parts of a GAF table.

@@ -15,7 +15,7 @@ pub use registry::{
 };
 
 use crate::structure::{Modes, PlateModel};
-use crate::transfer::ModeTransfer;
+use crate::transfer::{mode_shapes, ModeTransfer};
 use crate::wing::N_PLANFORM;
 use gustkit_core::{AeroError, AerodynamicsReverse, FlightCondition, GafTable, ModalSurface};
 
@@ -87,8 +87,17 @@ impl AeroModel {
 
     /// GAFs of the plate's modes at the study's reduced frequencies.
     pub fn gafs(&self, plate: &PlateModel, modes: &Modes) -> Result<GafTable, AeroError> {
-        self.fidelity
-            .gafs(&self.flight, &self.modal_surface(plate, modes), &self.k)
+        self.gafs_of_shapes(plate, &mode_shapes(modes))
+    }
+
+    /// GAFs of any nodal shapes (the modes followed by residual shapes, say).
+    pub fn gafs_of_shapes(
+        &self,
+        plate: &PlateModel,
+        shapes: &[&[f64]],
+    ) -> Result<GafTable, AeroError> {
+        let surface = self.transfer.shapes_on_surface(plate, shapes);
+        self.fidelity.gafs(&self.flight, &surface, &self.k)
     }
 
     /// The fidelity's reverse mode, or the error that says it has none.
@@ -126,14 +135,24 @@ impl AeroModel {
         modes: &Modes,
         seeds: &[GafTable],
     ) -> Result<Vec<ShapeSeeds>, AeroError> {
+        self.gafs_vjp_many_shapes(plate, &mode_shapes(modes), seeds)
+    }
+
+    /// [`AeroModel::gafs_vjp_many`] for the GAFs of any nodal shapes ([`AeroModel::gafs_of_shapes`]).
+    pub fn gafs_vjp_many_shapes(
+        &self,
+        plate: &PlateModel,
+        shapes: &[&[f64]],
+        seeds: &[GafTable],
+    ) -> Result<Vec<ShapeSeeds>, AeroError> {
         let reverse = self.reverse()?;
-        let surface = self.modal_surface(plate, modes);
+        let surface = self.transfer.shapes_on_surface(plate, shapes);
         let gs = reverse.gafs_vjp_many(&self.flight, &surface, &self.k, seeds)?;
         Ok(gs
             .iter()
             .map(|g| {
                 let (shapes, mut p_bar) =
-                    self.transfer.modes_on_surface_vjp(plate, modes, &g.modes);
+                    self.transfer.shapes_on_surface_vjp(plate, shapes, &g.modes);
                 for (gq, row) in g.geometry.iter().zip(&self.geometry_jacobian) {
                     for k in 0..N_PLANFORM {
                         p_bar[k] += gq * row[k];

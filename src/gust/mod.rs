@@ -9,6 +9,6 @@ pub mod small_lu;
 
 pub use psd::Turbulence;
 pub use response::{
-    rms_vjp, solve, FrequencyGrid, GustError, GustGradient, GustProblem, GustResponse,
+    rms_vjp, solve, FrequencyGrid, GustError, GustGradient, GustProblem, GustResponse, ResidualGafs,
 };
 pub use settings::{GustSettings, Output, Quantity, QuantityName};

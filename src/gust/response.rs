@@ -5,12 +5,16 @@
 //!   H_y(ω) = Sᵀ η / U  (response per unit gust velocity),   PSD_y = |H_y|² Φ_w(ω)   (Eq. 17)
 //!   RMS_y = √(∫ PSD_y dω),   N0_y = (1/2π) √(∫ ω² PSD_y dω / ∫ PSD_y dω)          (Eq. 18)
 //! with mass-normalized modes (M̄ = I, K̄ = diag ω_n², C̄ = diag 2ζω_n) and the trapezoidal rule on
-//! the grid.
+//! the grid. With the mode-acceleration method (residual flexibility, see
+//! `structure::residual`) an output adds the quasi-static response of the modes left out:
+//!   H_y(ω) = [Sᵀ η + q_inf (Q_ws(ik) η + Q_wg(ik))] / U,
+//! Q_ws, Q_wg the GAF rows of the output's residual shape w ([`ResidualGafs`]).
 //!
 //! Reverse mode (conjugate convention of gustkit_core::aero): for J = Σ_y RMS̄_y RMS_y,
 //!   H̄_j = RMS̄ w_j Φ_j H_j / RMS,  η̄ = S H̄ / U,  solve Aᴴ λ = η̄,
 //!   Q̄_gs(ω) = q λ,  Q̄_ss(ω) = q λ ηᴴ,  ω̄²_n,m = Re(−conj(λ_m) η_m (1 + iω ζ/ω_n,m)),
 //!   S̄ = Re(conj(H̄) η) / U,
+//! and with residual rows η̄ += q conj(Q_ws) H̄ / U, Q̄_ws = q H̄ conj(η) / U, Q̄_wg = q H̄ / U;
 //! and the table seeds are the transposed spline weights applied to Q̄(ω).
 
 use super::interp::SplineWeights;
@@ -74,6 +78,79 @@ impl FrequencyGrid {
     }
 }
 
+/// The GAF rows of the outputs' residual shapes (mode acceleration): per table reduced frequency
+/// and output, Q_ws (one entry a retained mode: the force on the residual shape w of each mode's
+/// motion) and Q_wg (of the gust), in the normalization of the GAF table.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResidualGafs {
+    pub q_ws: Vec<Vec<Vec<c64>>>,
+    pub q_wg: Vec<Vec<c64>>,
+}
+
+impl ResidualGafs {
+    /// Zero rows for `n_k` reduced frequencies, `n_outputs` outputs and `n_modes` modes.
+    pub fn zeros(n_k: usize, n_outputs: usize, n_modes: usize) -> Self {
+        let z = c64::new(0.0, 0.0);
+        Self {
+            q_ws: vec![vec![vec![z; n_modes]; n_outputs]; n_k],
+            q_wg: vec![vec![z; n_outputs]; n_k],
+        }
+    }
+
+    /// Splits a table of the modes followed by one residual shape an output into the modes' own
+    /// table and the residual rows (the residual shapes' columns, their own motion, are not used).
+    pub fn split(table: &GafTable, n_modes: usize) -> (GafTable, Self) {
+        let n_out = table.n_modes() - n_modes;
+        let mut modal = table.clone();
+        let mut rows = Self::zeros(table.k.len(), n_out, n_modes);
+        for i in 0..table.k.len() {
+            modal.q_ss[i] = table.q_ss[i][..n_modes]
+                .iter()
+                .map(|row| row[..n_modes].to_vec())
+                .collect();
+            modal.q_gs[i] = table.q_gs[i][..n_modes].to_vec();
+            for y in 0..n_out {
+                rows.q_ws[i][y] = table.q_ss[i][n_modes + y][..n_modes].to_vec();
+                rows.q_wg[i][y] = table.q_gs[i][n_modes + y];
+            }
+        }
+        (modal, rows)
+    }
+
+    /// Reverse of [`ResidualGafs::split`]: seeds on the modes' table and on the rows as seeds on
+    /// the whole table.
+    pub fn join(modal: &GafTable, rows: &Self) -> GafTable {
+        let n_modes = modal.n_modes();
+        let n_out = rows.q_wg.first().map_or(0, Vec::len);
+        let n = n_modes + n_out;
+        let z = c64::new(0.0, 0.0);
+        let mut t = modal.clone();
+        for i in 0..modal.k.len() {
+            t.q_ss[i] = (0..n)
+                .map(|a| {
+                    (0..n)
+                        .map(|b| match (a < n_modes, b < n_modes) {
+                            (true, true) => modal.q_ss[i][a][b],
+                            (false, true) => rows.q_ws[i][a - n_modes][b],
+                            _ => z,
+                        })
+                        .collect()
+                })
+                .collect();
+            t.q_gs[i] = (0..n)
+                .map(|a| {
+                    if a < n_modes {
+                        modal.q_gs[i][a]
+                    } else {
+                        rows.q_wg[i][a - n_modes]
+                    }
+                })
+                .collect();
+        }
+        t
+    }
+}
+
 /// Everything Eq. 16–18 needs, in SI.
 #[derive(Clone, Debug)]
 pub struct GustProblem<'a> {
@@ -87,6 +164,8 @@ pub struct GustProblem<'a> {
     pub grid: FrequencyGrid,
     /// Output vectors S (one row an output, one column a mode): y = S η.
     pub outputs: Vec<Vec<f64>>,
+    /// The outputs' residual rows (mode acceleration), or none (mode displacement).
+    pub residual: Option<&'a ResidualGafs>,
     /// Largest fraction of a response's variance the grid may leave out above its last
     /// frequency (of σ_w² itself where the response bound does not apply: see [`TAIL_BEYOND`]).
     pub max_tail: f64,
@@ -121,6 +200,8 @@ pub struct GustGradient {
     pub lambda: Vec<f64>,
     /// ∂J/∂S.
     pub outputs: Vec<Vec<f64>>,
+    /// Seeds on the residual rows (conjugate convention), where the problem has them.
+    pub residual: Option<ResidualGafs>,
 }
 
 impl<'a> GustProblem<'a> {
@@ -143,6 +224,19 @@ impl<'a> GustProblem<'a> {
             return Err(GustError::Input(
                 "outputs: every S vector needs one entry a mode".into(),
             ));
+        }
+        if let Some(r) = self.residual {
+            let ny = self.outputs.len();
+            if r.q_wg.len() != self.table.k.len()
+                || r.q_wg.iter().any(|v| v.len() != ny)
+                || r.q_ws.len() != self.table.k.len()
+                || r.q_ws.iter().flatten().any(|v| v.len() != nm)
+            {
+                return Err(GustError::Input(
+                    "residual rows: one row an output, one entry a mode, at every reduced frequency"
+                        .into(),
+                ));
+            }
         }
         let ks: Vec<f64> = self
             .grid
@@ -221,6 +315,32 @@ impl<'a> GustProblem<'a> {
         Ok(fractions)
     }
 
+    /// Output y's effective row S_y + q Q_ws,y(ω) and offset q Q_wg,y(ω) at spline weights `w`
+    /// (S_y and zero without residual rows).
+    fn output_row(&self, w: &[f64], y: usize) -> (Vec<c64>, c64) {
+        let s = &self.outputs[y];
+        match self.residual {
+            None => (
+                s.iter().map(|v| c64::new(*v, 0.0)).collect(),
+                c64::new(0.0, 0.0),
+            ),
+            Some(r) => {
+                let mut row: Vec<c64> = s.iter().map(|v| c64::new(*v, 0.0)).collect();
+                let mut off = c64::new(0.0, 0.0);
+                for (i, wi) in w.iter().enumerate() {
+                    if *wi == 0.0 {
+                        continue;
+                    }
+                    for (rv, q) in row.iter_mut().zip(&r.q_ws[i][y]) {
+                        *rv += q * (self.q_inf * wi);
+                    }
+                    off += r.q_wg[i][y] * (self.q_inf * wi);
+                }
+                (row, off)
+            }
+        }
+    }
+
     /// The aeroelastic matrix A(ω) (row-major) and right-hand side q Q_gs at grid point j.
     fn system(&self, w: &[f64], omega: f64) -> (Vec<c64>, Vec<c64>) {
         let nm = self.omega_n.len();
@@ -275,10 +395,14 @@ pub fn solve(p: &GustProblem) -> Result<GustResponse, GustError> {
     let mut h = Vec::new();
     let mut m0s = Vec::new();
     let mut h_last = Vec::new();
-    for s in &p.outputs {
+    for y in 0..p.outputs.len() {
         let hy: Vec<c64> = eta
             .iter()
-            .map(|e| e.iter().zip(s).map(|(a, b)| a * b).sum::<c64>() / p.velocity)
+            .zip(&weights.weights)
+            .map(|(e, w)| {
+                let (row, off) = p.output_row(w, y);
+                (e.iter().zip(&row).map(|(a, b)| a * b).sum::<c64>() + off) / p.velocity
+            })
             .collect();
         let py: Vec<f64> = hy
             .iter()
@@ -337,18 +461,34 @@ pub fn rms_vjp(
     let mut table = GafTable::zeros(&flight_like, &p.table.k, nm);
     let mut lambda = vec![0.0; nm];
     let mut outputs = vec![vec![0.0; nm]; p.outputs.len()];
+    let mut residual = p
+        .residual
+        .map(|_| ResidualGafs::zeros(nk, p.outputs.len(), nm));
     for (j, &omega) in p.grid.omega.iter().enumerate() {
         let phi = p.turbulence.psd(omega, p.velocity);
-        // η̄ = Σ_y S_y H̄_y / U
+        // η̄ = Σ_y conj(S̃_y) H̄_y / U
         let mut eta_bar = vec![c64::new(0.0, 0.0); nm];
-        for (y, s) in p.outputs.iter().enumerate() {
+        for y in 0..p.outputs.len() {
             if rms_bar[y] == 0.0 || r.rms[y] == 0.0 {
                 continue;
             }
             let hbar = r.h[y][j] * (rms_bar[y] * p.grid.weights[j] * phi / r.rms[y]);
+            let (row, _) = p.output_row(&weights.weights[j], y);
             for m in 0..nm {
-                eta_bar[m] += hbar * (s[m] / p.velocity);
+                eta_bar[m] += hbar * row[m].conj() / p.velocity;
                 outputs[y][m] += (hbar.conj() * r.eta[j][m]).re / p.velocity;
+            }
+            if let Some(res) = residual.as_mut() {
+                let s = hbar * (p.q_inf / p.velocity);
+                for (i, wi) in weights.weights[j].iter().enumerate() {
+                    if *wi == 0.0 {
+                        continue;
+                    }
+                    for m in 0..nm {
+                        res.q_ws[i][y][m] += s * r.eta[j][m].conj() * *wi;
+                    }
+                    res.q_wg[i][y] += s * *wi;
+                }
             }
         }
         let lam = r.lus[j].solve_adjoint(&eta_bar);
@@ -375,16 +515,19 @@ pub fn rms_vjp(
         table,
         lambda,
         outputs,
+        residual,
     })
 }
 
-/// Forward mode of the RMS values along perturbations of the GAF table, of ω_n² and of S.
+/// Forward mode of the RMS values along perturbations of the GAF table, of ω_n², of S and of the
+/// residual rows (where the problem has them).
 pub fn rms_jvp(
     p: &GustProblem,
     r: &GustResponse,
     d_table: &GafTable,
     d_lambda: &[f64],
     d_outputs: &[Vec<f64>],
+    d_residual: Option<&ResidualGafs>,
 ) -> Result<Vec<f64>, GustError> {
     let weights = p.check()?;
     let nm = p.omega_n.len();
@@ -408,11 +551,19 @@ pub fn rms_jvp(
             .collect();
         let deta = r.lus[j].solve(&rhs);
         let phi = p.turbulence.psd(omega, p.velocity);
-        for (y, s) in p.outputs.iter().enumerate() {
-            let dh: c64 = (0..nm)
-                .map(|m| deta[m] * s[m] + eta[m] * d_outputs[y][m])
-                .sum::<c64>()
-                / p.velocity;
+        for y in 0..p.outputs.len() {
+            let (row, _) = p.output_row(w, y);
+            let mut dh: c64 = (0..nm)
+                .map(|m| deta[m] * row[m] + eta[m] * d_outputs[y][m])
+                .sum::<c64>();
+            if let Some(d) = d_residual {
+                for (i, wi) in w.iter().enumerate() {
+                    let dq: c64 =
+                        (0..nm).map(|m| d.q_ws[i][y][m] * eta[m]).sum::<c64>() + d.q_wg[i][y];
+                    dh += dq * (p.q_inf * wi);
+                }
+            }
+            let dh = dh / p.velocity;
             d_ms[y] += p.grid.weights[j] * phi * 2.0 * (r.h[y][j].conj() * dh).re;
         }
     }

@@ -37,6 +37,8 @@ pub struct GustSettings {
     pub omega_min: f64,
     pub points: usize,
     pub max_tail: f64,
+    /// Outputs by the mode-acceleration method (residual flexibility of the modes left out).
+    pub mode_acceleration: bool,
     pub outputs: Vec<Output>,
 }
 

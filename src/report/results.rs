@@ -44,6 +44,9 @@ pub struct GustResults {
     /// Number of circular frequencies of the response grid and the largest, rad/s.
     pub n_omega: usize,
     pub omega_max_rad_s: f64,
+    /// Outputs by the mode-acceleration method (residual flexibility of the modes left out).
+    #[serde(default)]
+    pub mode_acceleration: bool,
     pub outputs: Vec<OutputRow>,
     /// The response PSD of every output (SI).
     pub psd: Vec<PsdSeries>,

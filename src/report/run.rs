@@ -94,8 +94,13 @@ pub fn summary(r: &RunResults) -> String {
     );
     if let Some(g) = &r.gust {
         md += &format!(
-            "\n## Gust response\n\nM = {}, V = {} m/s, ρ = {} kg/m³, q = {:.1} Pa; {}; {} frequencies on a log grid up to {:.1} rad/s.\n\n| output | RMS | unit | N0 [Hz] |\n|---|---:|---|---:|\n",
-            g.mach, g.velocity_m_s, g.density_kg_m3, g.q_inf_pa, g.turbulence, g.n_omega, g.omega_max_rad_s
+            "\n## Gust response\n\nM = {}, V = {} m/s, ρ = {} kg/m³, q = {:.1} Pa; {}; {} frequencies on a log grid up to {:.1} rad/s; outputs by the {}.\n\n| output | RMS | unit | N0 [Hz] |\n|---|---:|---|---:|\n",
+            g.mach, g.velocity_m_s, g.density_kg_m3, g.q_inf_pa, g.turbulence, g.n_omega, g.omega_max_rad_s,
+            if g.mode_acceleration {
+                "mode-acceleration method (each adds the residual flexibility of the modes left out)"
+            } else {
+                "mode-displacement method"
+            }
         );
         for o in &g.outputs {
             let (rms, unit) = r.length_unit.display(o.rms, &o.unit, 1);

@@ -7,6 +7,7 @@ mod material;
 pub mod mesh;
 pub mod modal;
 pub mod model;
+pub mod residual;
 pub mod sensitivity;
 pub mod shape_name;
 

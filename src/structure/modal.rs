@@ -70,6 +70,8 @@ pub struct FieldEigen {
     /// Stiffness and mass over the field's free DOFs.
     k: Mat<f64>,
     m: Mat<f64>,
+    /// Cholesky factor L of K = L Lᵀ (the modal analysis makes it; static solves reuse it).
+    chol: Mat<f64>,
     /// The lowest eigenvalues λ_j, ascending.
     pub lambda: Vec<f64>,
     /// Mass-normalized eigenvectors φ_j (columns, in the order of `lambda`).
@@ -86,6 +88,7 @@ impl Clone for FieldEigen {
             field: self.field,
             k: self.k.clone(),
             m: self.m.clone(),
+            chol: self.chol.clone(),
             lambda: self.lambda.clone(),
             phi: self.phi.clone(),
             bandwidth: self.bandwidth,
@@ -109,6 +112,21 @@ impl FieldEigen {
     /// Mass-normalized mode of column c.
     pub fn mode_vector(&self, c: usize) -> Vec<f64> {
         self.phi.col(c).iter().copied().collect()
+    }
+
+    /// K⁻¹ r over the field's free DOFs (the static deflection under loads r), by the Cholesky
+    /// factor the modal analysis made.
+    pub fn static_solve(&self, r: &[f64]) -> Vec<f64> {
+        let mut x = Mat::<f64>::from_fn(r.len(), 1, |i, _| r[i]);
+        solve_lower_triangular_in_place(self.chol.as_ref(), x.as_mut(), Par::Seq);
+        solve_upper_triangular_in_place(self.chol.transpose(), x.as_mut(), Par::Seq);
+        x.col(0).iter().copied().collect()
+    }
+
+    /// M v over the field's free DOFs.
+    pub fn mass_times(&self, v: &[f64]) -> Vec<f64> {
+        let x = Mat::<f64>::from_fn(v.len(), 1, |i, _| v[i]);
+        (&self.m * &x).col(0).iter().copied().collect()
     }
 
     /// Makes Nelson's factorizations of the given columns (in parallel) before they are used.
@@ -231,6 +249,7 @@ fn solve_field_with(
         bandwidth: half_bandwidth(&k, &m),
         k,
         m,
+        chol,
         lambda: mu.iter().map(|v| 1.0 / v).collect(),
         phi,
         nelson: (0..n_want).map(|_| OnceLock::new()).collect(),

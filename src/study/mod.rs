@@ -827,6 +827,7 @@ impl Study {
             omega_min: g.omega_min_rad_s,
             points: g.points,
             max_tail: g.max_tail,
+            mode_acceleration: g.mode_acceleration,
             outputs,
         })
     }

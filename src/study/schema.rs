@@ -208,6 +208,11 @@ pub struct GustSpec {
     /// (see `gust::response::TAIL_BEYOND` for the bound used).
     #[serde(default = "default_max_tail")]
     pub max_tail: f64,
+    /// The mode-acceleration method (Nastran's MODACC): each output adds the quasi-static
+    /// response of the modes left out through its residual flexibility, so the RMS converges
+    /// with far fewer modes; `false` (the default) is the mode-displacement method.
+    #[serde(default)]
+    pub mode_acceleration: bool,
     /// Response outputs: vertical displacement at plate points (ξ chord fraction, η span fraction).
     pub outputs: Vec<OutputSpec>,
     /// How σ_w was chosen, if by calibration: `gustkit run` reports the RMS it gives against the

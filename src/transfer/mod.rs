@@ -13,6 +13,11 @@ use crate::structure::{Modes, PlateModel, Sampler};
 use crate::wing::N_PLANFORM;
 use gustkit_core::ModalSurface;
 
+/// The nodal shapes of the retained modes.
+pub fn mode_shapes(modes: &Modes) -> Vec<&[f64]> {
+    modes.modes.iter().map(|m| m.shape.as_slice()).collect()
+}
+
 /// Mode-shape transfer onto a fixed list of aerodynamic points.
 #[derive(Clone, Debug)]
 pub struct ModeTransfer {
@@ -33,9 +38,14 @@ impl ModeTransfer {
 
     /// Mode shapes at the points: displacement (u, v, w) and streamwise slope (0, 0, ∂w/∂x).
     pub fn modes_on_surface(&self, model: &PlateModel, modes: &Modes) -> ModalSurface {
-        let mut out = ModalSurface::zeros(modes.len(), self.n_points());
-        for (m, mode) in modes.modes.iter().enumerate() {
-            for (p, s) in self.sampler.sample(model, &mode.shape).iter().enumerate() {
+        self.shapes_on_surface(model, &mode_shapes(modes))
+    }
+
+    /// Any nodal shapes (modes, residual shapes) at the points, as [`Self::modes_on_surface`].
+    pub fn shapes_on_surface(&self, model: &PlateModel, shapes: &[&[f64]]) -> ModalSurface {
+        let mut out = ModalSurface::zeros(shapes.len(), self.n_points());
+        for (m, shape) in shapes.iter().enumerate() {
+            for (p, s) in self.sampler.sample(model, shape).iter().enumerate() {
                 out.disp[m][p] = [s[3], s[4], s[0]];
                 out.disp_x[m][p] = [0.0, 0.0, s[1]];
             }
@@ -51,19 +61,28 @@ impl ModeTransfer {
         modes: &Modes,
         seed: &ModalSurface,
     ) -> (Vec<Vec<f64>>, [f64; N_PLANFORM]) {
+        self.shapes_on_surface_vjp(model, &mode_shapes(modes), seed)
+    }
+
+    /// Reverse mode of [`ModeTransfer::shapes_on_surface`].
+    pub fn shapes_on_surface_vjp(
+        &self,
+        model: &PlateModel,
+        shapes: &[&[f64]],
+        seed: &ModalSurface,
+    ) -> (Vec<Vec<f64>>, [f64; N_PLANFORM]) {
         let mut p_bar = [0.0; N_PLANFORM];
-        let shapes = modes
-            .modes
+        let shapes = shapes
             .iter()
             .enumerate()
-            .map(|(m, mode)| {
+            .map(|(m, shape)| {
                 let s: Vec<[f64; SAMPLED]> = (0..self.n_points())
                     .map(|p| {
                         let (d, dx) = (seed.disp[m][p], seed.disp_x[m][p]);
                         [d[2], dx[2], 0.0, d[0], d[1]]
                     })
                     .collect();
-                let (nodal, pb) = self.sampler.sample_vjp(model, &mode.shape, &s);
+                let (nodal, pb) = self.sampler.sample_vjp(model, shape, &s);
                 for k in 0..N_PLANFORM {
                     p_bar[k] += pb[k];
                 }

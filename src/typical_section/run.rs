@@ -92,6 +92,7 @@ fn analyze(
             shapes.iter().map(|s| s[1]).collect(),
         ],
         max_tail: g.max_tail,
+        residual: None,
     };
     let r = gust::solve(&problem).map_err(|e| anyhow::anyhow!("{name}: gust response: {e}"))?;
     let f = &spec.flutter;

@@ -42,6 +42,7 @@ fn single_mode_white_noise_closed_form() {
             grid: FrequencyGrid::log(1e-3, 1e7, n).unwrap(),
             outputs: vec![vec![1.0]],
             max_tail: 1e-3,
+            residual: None,
         };
         let r = solve(&p).unwrap();
         let err = (r.rms[0] - exact).abs() / exact;
@@ -95,6 +96,7 @@ fn problem<'a>(
         grid: FrequencyGrid::log(0.01, 999.0, points).unwrap(),
         outputs,
         max_tail: 1e-2,
+        residual: None,
     }
 }
 
@@ -136,7 +138,7 @@ fn rms_vjp_dot_product_test() {
             .map(|(a, b)| a * b)
             .sum::<f64>();
     }
-    let d = rms_jvp(&p, &r, &dt, &dl, &ds).unwrap();
+    let d = rms_jvp(&p, &r, &dt, &dl, &ds, None).unwrap();
     let forward = rms_bar[0] * d[0] + rms_bar[1] * d[1];
     println!("forward {forward:.15e} reverse {pairing:.15e}");
     assert!((forward - pairing).abs() < 1e-11 * forward.abs());
@@ -177,6 +179,151 @@ fn rms_vjp_dot_product_test() {
         (fd - forward).abs() < 1e-6 * forward.abs(),
         "{fd} vs {forward}"
     );
+}
+
+/// Random residual rows for the three-mode problem's table and two outputs.
+fn random_rows(table: &GafTable, seed: u64) -> ResidualGafs {
+    let nk = table.k.len();
+    let v = rand_vec(2 * nk * 2 * 4, seed);
+    let mut it = v.chunks(2).map(|c| C::new(c[0], c[1]) * 1e-4);
+    let mut r = ResidualGafs::zeros(nk, 2, 3);
+    for i in 0..nk {
+        for y in 0..2 {
+            for m in 0..3 {
+                r.q_ws[i][y][m] = it.next().unwrap();
+            }
+            r.q_wg[i][y] = it.next().unwrap();
+        }
+    }
+    r
+}
+
+/// With residual rows (mode acceleration) the reverse mode still pairs with the forward mode in
+/// every input, the rows included, and the forward mode with a central difference; rows of zeros
+/// give the mode-displacement response bit for bit.
+#[test]
+fn residual_rows_dot_product_test() {
+    let (table, wn) = problem_parts();
+    let outs = vec![vec![1.0, -0.5, 0.3], vec![0.2, 0.9, -0.4]];
+    let rows = random_rows(&table, 21);
+    let mut p = problem(&table, &wn, 400, outs.clone());
+    let plain = solve(&p).unwrap();
+    let zeros = ResidualGafs::zeros(table.k.len(), 2, 3);
+    p.residual = Some(&zeros);
+    assert_eq!(solve(&p).unwrap().rms, plain.rms);
+    p.residual = Some(&rows);
+    let r = solve(&p).unwrap();
+    // the rows change the answer by a fair amount (the test would not see a dropped term)
+    assert!(
+        (r.rms[1] - plain.rms[1]).abs() > 0.05 * plain.rms[1],
+        "{:?} {:?}",
+        r.rms,
+        plain.rms
+    );
+    let rms_bar = [0.7, -1.3];
+    let g = rms_vjp(&p, &r, &rms_bar).unwrap();
+    let g_rows = g.residual.as_ref().expect("seeds on the rows");
+    let mut dt = table.clone();
+    let rv = rand_vec(2 * table.k.len() * 12, 31);
+    let mut it = rv.chunks(2).map(|c| C::new(c[0], c[1]));
+    let mut pairing = 0.0;
+    for ik in 0..table.k.len() {
+        for m in 0..3 {
+            for n in 0..3 {
+                dt.q_ss[ik][m][n] = it.next().unwrap();
+                pairing += (g.table.q_ss[ik][m][n].conj() * dt.q_ss[ik][m][n]).re;
+            }
+            dt.q_gs[ik][m] = it.next().unwrap();
+            pairing += (g.table.q_gs[ik][m].conj() * dt.q_gs[ik][m]).re;
+        }
+    }
+    let dr = random_rows(&table, 32);
+    for ik in 0..table.k.len() {
+        for y in 0..2 {
+            for m in 0..3 {
+                pairing += (g_rows.q_ws[ik][y][m].conj() * dr.q_ws[ik][y][m]).re;
+            }
+            pairing += (g_rows.q_wg[ik][y].conj() * dr.q_wg[ik][y]).re;
+        }
+    }
+    let dl = rand_vec(3, 33);
+    let ds = vec![rand_vec(3, 34), rand_vec(3, 35)];
+    pairing += g.lambda.iter().zip(&dl).map(|(a, b)| a * b).sum::<f64>();
+    for y in 0..2 {
+        pairing += g.outputs[y]
+            .iter()
+            .zip(&ds[y])
+            .map(|(a, b)| a * b)
+            .sum::<f64>();
+    }
+    let d = rms_jvp(&p, &r, &dt, &dl, &ds, Some(&dr)).unwrap();
+    let forward = rms_bar[0] * d[0] + rms_bar[1] * d[1];
+    println!("forward {forward:.15e} reverse {pairing:.15e}");
+    assert!((forward - pairing).abs() < 1e-11 * forward.abs());
+    // the rows' part of the forward mode against a central difference along the rows alone
+    let h = 1e-5;
+    let shifted = |s: f64| {
+        let mut rr = rows.clone();
+        for ik in 0..table.k.len() {
+            for y in 0..2 {
+                for m in 0..3 {
+                    rr.q_ws[ik][y][m] += dr.q_ws[ik][y][m] * s;
+                }
+                rr.q_wg[ik][y] += dr.q_wg[ik][y] * s;
+            }
+        }
+        let pp = GustProblem {
+            residual: Some(&rr),
+            ..p.clone()
+        };
+        let out = solve(&pp).unwrap();
+        rms_bar[0] * out.rms[0] + rms_bar[1] * out.rms[1]
+    };
+    let fd = (shifted(h) - shifted(-h)) / (2.0 * h);
+    let zero_t = GafTable {
+        q_ss: vec![vec![vec![C::new(0.0, 0.0); 3]; 3]; table.k.len()],
+        q_gs: vec![vec![C::new(0.0, 0.0); 3]; table.k.len()],
+        ..table.clone()
+    };
+    let d_rows = rms_jvp(
+        &p,
+        &r,
+        &zero_t,
+        &[0.0; 3],
+        &[vec![0.0; 3], vec![0.0; 3]],
+        Some(&dr),
+    )
+    .unwrap();
+    let forward_rows = rms_bar[0] * d_rows[0] + rms_bar[1] * d_rows[1];
+    assert!(
+        (fd - forward_rows).abs() < 1e-6 * forward_rows.abs(),
+        "{fd} vs {forward_rows}"
+    );
+}
+
+/// Splitting a table of modes and residual shapes and joining the pieces gives the table back
+/// where the residual shapes' own columns are zero.
+#[test]
+fn residual_split_and_join_are_inverse() {
+    let (table, _) = problem_parts();
+    let (modal, rows) = ResidualGafs::split(&table, 2);
+    assert_eq!(modal.n_modes(), 2);
+    assert_eq!(rows.q_wg[3][0], table.q_gs[3][2]);
+    assert_eq!(rows.q_ws[3][0][1], table.q_ss[3][2][1]);
+    let back = ResidualGafs::join(&modal, &rows);
+    for ik in 0..table.k.len() {
+        for a in 0..3 {
+            for b in 0..3 {
+                let want = if b == 2 {
+                    C::new(0.0, 0.0)
+                } else {
+                    table.q_ss[ik][a][b]
+                };
+                assert_eq!(back.q_ss[ik][a][b], want);
+            }
+        }
+        assert_eq!(back.q_gs[ik], table.q_gs[ik]);
+    }
 }
 
 #[test]

@@ -89,6 +89,7 @@ pub(crate) fn gust_results(study: &Study) -> Result<(GustResults, crate::pipelin
         q_inf_pa: f.q_inf(),
         turbulence: settings.turbulence,
         n_omega: ev.grid.omega.len(),
+        mode_acceleration: ev.residual.is_some(),
         omega_max_rad_s: ev.grid.omega.last().copied().unwrap_or(0.0),
         psd: (0..outputs.len()).map(|i| psd_series(&ev, i)).collect(),
         outputs,
