@@ -46,7 +46,7 @@ fn last_k(history: &[f64]) -> String {
 }
 
 /// Damping and frequency of one mode against speed.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct ModeCurve {
     pub mode: usize,
     pub velocity_m_s: Vec<f64>,
@@ -61,7 +61,7 @@ pub struct ModeCurve {
 }
 
 /// The result of a p-k sweep.
-#[derive(Clone, Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct FlutterResult {
     pub flutter_speed_m_s: Option<f64>,
     pub flutter_frequency_hz: Option<f64>,

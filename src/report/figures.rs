@@ -2,6 +2,7 @@
 
 use super::results::{HistoryRow, OptimizationResults};
 pub use super::results::{ModeShapes, PsdSeries};
+use super::style::{legend_below, legend_right, series_color, tick, LegendEntry};
 use super::{diverging, Figure};
 use anyhow::{anyhow, Result};
 use plotters::coord::Shift;
@@ -45,6 +46,8 @@ impl Figure for ModeShapes {
                 .disable_mesh()
                 .x_desc(format!("x [{}]", self.unit))
                 .y_desc(format!("y [{}]", self.unit))
+                .x_label_formatter(&tick)
+                .y_label_formatter(&tick)
                 .label_style(("sans-serif", 14))
                 .axis_desc_style(("sans-serif", 14))
                 .draw()
@@ -86,8 +89,14 @@ impl Figure for VgVf<'_> {
     {
         let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing V-g/V-f: {e}");
         area.fill(&WHITE).map_err(err)?;
-        let (top, bottom) = area.split_vertically(425);
         let curves = &self.result.curves;
+        let entries: Vec<LegendEntry> = curves
+            .iter()
+            .enumerate()
+            .map(|(i, c)| LegendEntry::line(format!("mode {}", c.mode), series_color(i)))
+            .collect();
+        let plot = legend_right(area, &entries, 40)?;
+        let (top, bottom) = plot.split_vertically(425);
         let vmin = curves
             .iter()
             .flat_map(|c| c.velocity_m_s.iter())
@@ -148,12 +157,14 @@ impl Figure for VgVf<'_> {
                 .configure_mesh()
                 .x_desc("velocity [m/s]")
                 .y_desc(ylabel)
+                .x_label_formatter(&tick)
+                .y_label_formatter(&tick)
                 .label_style(("sans-serif", 14))
                 .axis_desc_style(("sans-serif", 14))
                 .draw()
                 .map_err(err)?;
             for (i, c) in curves.iter().enumerate() {
-                let color = Palette99::pick(i).to_rgba();
+                let color = series_color(i);
                 let ys = if is_g { &c.damping_g } else { &c.frequency_hz };
                 // dampings beyond the axis are drawn on its edge and marked by a triangle
                 let clipped = |y: f64| y.clamp(ylo, yhi);
@@ -178,11 +189,7 @@ impl Figure for VgVf<'_> {
                             .zip(ys.iter().map(|y| clipped(*y))),
                         color.stroke_width(2),
                     ))
-                    .map_err(err)?
-                    .label(format!("mode {}", c.mode))
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-                    });
+                    .map_err(err)?;
             }
             if let (Some(v), Some(f)) = (
                 self.result.flutter_speed_m_s,
@@ -191,15 +198,6 @@ impl Figure for VgVf<'_> {
                 let y = if is_g { 0.0 } else { f };
                 chart
                     .draw_series(std::iter::once(Circle::new((v, y), 6, BLACK.filled())))
-                    .map_err(err)?;
-            }
-            if is_g {
-                chart
-                    .configure_series_labels()
-                    .background_style(WHITE.mix(0.8))
-                    .border_style(BLACK)
-                    .label_font(("sans-serif", 14))
-                    .draw()
                     .map_err(err)?;
             }
         }
@@ -236,6 +234,12 @@ impl Figure for PsdPlot {
         area.fill(&WHITE).map_err(err)?;
         let cells = area.split_evenly((self.panels.len().max(1), 1));
         for (i, (cell, series)) in cells.iter().zip(&self.panels).enumerate() {
+            let entries: Vec<LegendEntry> = series
+                .iter()
+                .enumerate()
+                .map(|(j, s)| LegendEntry::line(s.label.clone(), series_color(j)))
+                .collect();
+            let cell = &legend_right(cell, &entries, if i == 0 { 40 } else { 10 })?;
             let curves: Vec<Vec<(f64, f64)>> = series
                 .iter()
                 .map(|s| {
@@ -279,27 +283,14 @@ impl Figure for PsdPlot {
                 .axis_desc_style(("sans-serif", 14))
                 .draw()
                 .map_err(err)?;
-            for (j, (s, pts)) in series.iter().zip(&curves).enumerate() {
-                let color = Palette99::pick(j).to_rgba();
+            for (j, pts) in curves.iter().enumerate() {
                 chart
                     .draw_series(LineSeries::new(
                         pts.iter().map(|p| (p.0, p.1.max(pmin))),
-                        color.stroke_width(2),
+                        series_color(j).stroke_width(2),
                     ))
-                    .map_err(err)?
-                    .label(s.label.clone())
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-                    });
+                    .map_err(err)?;
             }
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 14))
-                .draw()
-                .map_err(err)?;
         }
         Ok(())
     }
@@ -307,11 +298,14 @@ impl Figure for PsdPlot {
 
 /// Convergence history of an optimization (like paper Fig. 6): objective and constraints against
 /// iteration, each normalized by its reference (mass by the initial mass, RMS by its limit, area
-/// by the initial area), with the feasible limit drawn.
+/// by the initial area), with the feasible limit drawn; below it the KKT residual and the
+/// constraint violation on a log axis (what says whether and how the run converged).
 pub struct Convergence {
     title: String,
     /// (label, points) per curve.
     curves: Vec<(String, Vec<(f64, f64)>)>,
+    /// (label, points) of the KKT residual and the violation (zeros are left out on the log axis).
+    residuals: Vec<(String, Vec<(f64, f64)>)>,
 }
 
 impl Convergence {
@@ -347,16 +341,21 @@ impl Convergence {
                 it(&|h| 1.0 + (h.flutter_damping.unwrap_or(g_max) - g_max) / scale),
             ));
         }
+        let residuals = vec![
+            ("KKT residual".to_string(), it(&|h| h.kkt)),
+            ("constraint violation".to_string(), it(&|h| h.violation)),
+        ];
         Self {
             title: format!("{study}: optimization history"),
             curves,
+            residuals,
         }
     }
 }
 
 impl Figure for Convergence {
     fn size(&self) -> (u32, u32) {
-        (1000, 520)
+        (1000, 900)
     }
 
     fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()>
@@ -365,20 +364,35 @@ impl Figure for Convergence {
     {
         let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing convergence: {e}");
         area.fill(&WHITE).map_err(err)?;
+        let area = area.titled(&self.title, ("sans-serif", 20)).map_err(err)?;
+        let (upper, lower) = area.split_vertically(560);
         let pts = || self.curves.iter().flat_map(|c| c.1.iter());
         let n = pts().map(|p| p.0).fold(1.0, f64::max);
         let ylo = pts().map(|p| p.1).fold(1.0, f64::min).min(0.9);
         let yhi = pts().map(|p| p.1).fold(1.0, f64::max).max(1.1);
         let pad = 0.05 * (yhi - ylo);
-        // headroom above the curves for the legend (one line of it per curve)
-        let legend = 0.07 * self.curves.len() as f64 * (yhi - ylo);
-        let mut chart = ChartBuilder::on(area)
-            .caption(&self.title, ("sans-serif", 20))
+        // the constraints sit on 1 together at an optimum: wide pale lines under narrow dark
+        // ones, with different markers, keep each visible where they coincide
+        let width = |i: usize| {
+            if i == 0 {
+                2
+            } else {
+                2 + 2 * (self.curves.len() - i) as u32
+            }
+        };
+        let entries: Vec<LegendEntry> = self
+            .curves
+            .iter()
+            .enumerate()
+            .map(|(i, c)| LegendEntry::line(c.0.clone(), series_color(i)))
+            .collect();
+        let plot = legend_below(&upper, &entries)?;
+        let mut chart = ChartBuilder::on(&plot)
             .margin(12)
             .margin_right(30)
             .x_label_area_size(35)
             .y_label_area_size(60)
-            .build_cartesian_2d(0.0..n, ylo - pad..yhi + pad + legend)
+            .build_cartesian_2d(0.0..n, ylo - pad..yhi + pad)
             .map_err(err)?;
         chart
             .configure_mesh()
@@ -387,6 +401,7 @@ impl Figure for Convergence {
             // integer iterations: at most one label per iteration
             .x_labels((n as usize).clamp(1, 10) + 1)
             .x_label_formatter(&|v| format!("{v:.0}"))
+            .y_label_formatter(&tick)
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 14))
             .draw()
@@ -397,27 +412,69 @@ impl Figure for Convergence {
                 BLACK.mix(0.4).stroke_width(1),
             ))
             .map_err(err)?;
-        for (i, (label, p)) in self.curves.iter().enumerate() {
-            let color = Palette99::pick(i).to_rgba();
+        for (i, (_, p)) in self.curves.iter().enumerate() {
+            let color = series_color(i);
+            let line = if i == 0 { color } else { color.mix(0.6) };
             chart
-                .draw_series(LineSeries::new(p.iter().copied(), color.stroke_width(2)))
-                .map_err(err)?
-                .label(label.clone())
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-                });
+                .draw_series(LineSeries::new(
+                    p.iter().copied(),
+                    line.stroke_width(width(i)),
+                ))
+                .map_err(err)?;
             chart
                 .draw_series(p.iter().map(|q| Circle::new(*q, 3, color.filled())))
                 .map_err(err)?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 14))
-            .draw()
-            .map_err(err)?;
+        // KKT residual and violation
+        let entries: Vec<LegendEntry> = self
+            .residuals
+            .iter()
+            .enumerate()
+            .map(|(i, c)| LegendEntry::line(c.0.clone(), series_color(i + 5)))
+            .collect();
+        let plot = legend_below(&lower, &entries)?;
+        let positive = || {
+            self.residuals
+                .iter()
+                .flat_map(|c| c.1.iter())
+                .filter(|p| p.1 > 0.0 && p.1.is_finite())
+        };
+        let rlo = positive().map(|p| p.1).fold(f64::MAX, f64::min);
+        let rhi = positive().map(|p| p.1).fold(0.0, f64::max);
+        if rhi > 0.0 {
+            let mut chart = ChartBuilder::on(&plot)
+                .margin(12)
+                .margin_right(30)
+                .x_label_area_size(35)
+                .y_label_area_size(60)
+                .build_cartesian_2d(0.0..n, (rlo * 0.5..rhi * 2.0).log_scale())
+                .map_err(err)?;
+            chart
+                .configure_mesh()
+                .x_desc("iteration")
+                .y_desc("KKT residual, violation")
+                .x_labels((n as usize).clamp(1, 10) + 1)
+                .x_label_formatter(&|v| format!("{v:.0}"))
+                .y_label_formatter(&|v| format!("{v:.0e}"))
+                .label_style(("sans-serif", 14))
+                .axis_desc_style(("sans-serif", 14))
+                .draw()
+                .map_err(err)?;
+            for (i, (_, p)) in self.residuals.iter().enumerate() {
+                let color = series_color(i + 5);
+                let kept: Vec<(f64, f64)> = p
+                    .iter()
+                    .copied()
+                    .filter(|q| q.1 > 0.0 && q.1.is_finite())
+                    .collect();
+                chart
+                    .draw_series(LineSeries::new(kept.iter().copied(), color.stroke_width(2)))
+                    .map_err(err)?;
+                chart
+                    .draw_series(kept.iter().map(|q| Circle::new(*q, 2, color.filled())))
+                    .map_err(err)?;
+            }
+        }
         Ok(())
     }
 }
@@ -485,6 +542,8 @@ impl Figure for ThicknessMaps {
                 .disable_mesh()
                 .x_desc(format!("x [{}] (flow →)", self.unit))
                 .y_desc(format!("y [{}]", self.unit))
+                .x_label_formatter(&tick)
+                .y_label_formatter(&tick)
                 .label_style(("sans-serif", 14))
                 .axis_desc_style(("sans-serif", 14))
                 .draw()
@@ -517,6 +576,7 @@ impl Figure for ThicknessMaps {
             .disable_mesh()
             .disable_y_axis()
             .x_desc(format!("element thickness [{}]", self.unit))
+            .x_label_formatter(&tick)
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 14))
             .draw()
@@ -546,6 +606,8 @@ pub struct LinePlot {
     pub log_y: bool,
     /// Draw the y axis downwards (pressure coefficients).
     pub flip_y: bool,
+    /// Series drawn as dots instead of lines (one that may lie on another line stays visible).
+    pub dotted: Vec<usize>,
 }
 
 impl Figure for LinePlot {
@@ -574,6 +636,19 @@ impl Figure for LinePlot {
             pts().map(|p| p.1).fold(f64::MIN, f64::max),
         );
         let x1 = if x1 > x0 { x1 } else { x0 + 1.0 };
+        let entries: Vec<LegendEntry> = self
+            .series
+            .iter()
+            .enumerate()
+            .map(|(i, (label, _))| {
+                if self.dotted.contains(&i) {
+                    LegendEntry::marker(label.clone(), series_color(i))
+                } else {
+                    LegendEntry::line(label.clone(), series_color(i))
+                }
+            })
+            .collect();
+        let area = &legend_right(area, &entries, 40)?;
         let mut chart = ChartBuilder::on(area);
         chart
             .caption(&self.title, ("sans-serif", 20))
@@ -588,29 +663,29 @@ impl Figure for LinePlot {
             c.configure_mesh()
                 .x_desc(self.x_label.as_str())
                 .y_desc(self.y_label.as_str())
+                .x_label_formatter(&tick)
                 .y_label_formatter(&|v| format!("{v:.0e}"))
                 .label_style(("sans-serif", 14))
                 .axis_desc_style(("sans-serif", 14))
                 .draw()
                 .map_err(err)?;
-            for (i, (label, p)) in self.series.iter().enumerate() {
-                let color = Palette99::pick(i).to_rgba();
-                c.draw_series(LineSeries::new(
-                    p.iter().filter(keep).copied(),
-                    color.stroke_width(2),
-                ))
-                .map_err(err)?
-                .label(label.clone())
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-                });
+            for (i, (_, p)) in self.series.iter().enumerate() {
+                let color = series_color(i);
+                if self.dotted.contains(&i) {
+                    c.draw_series(
+                        p.iter()
+                            .filter(keep)
+                            .map(|q| Circle::new(*q, 3, color.filled())),
+                    )
+                    .map_err(err)?;
+                } else {
+                    c.draw_series(LineSeries::new(
+                        p.iter().filter(keep).copied(),
+                        color.stroke_width(2),
+                    ))
+                    .map_err(err)?;
+                }
             }
-            c.configure_series_labels()
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 14))
-                .draw()
-                .map_err(err)?;
         } else {
             let pad = 0.05 * (y1 - y0).max(1e-12);
             let (lo, hi) = (y0 - pad, y1 + pad);
@@ -621,29 +696,29 @@ impl Figure for LinePlot {
             c.configure_mesh()
                 .x_desc(self.x_label.as_str())
                 .y_desc(self.y_label.as_str())
-                .y_label_formatter(&move |v| format!("{:.3}", f(*v)))
+                .x_label_formatter(&tick)
+                .y_label_formatter(&move |v| tick(&f(*v)))
                 .label_style(("sans-serif", 14))
                 .axis_desc_style(("sans-serif", 14))
                 .draw()
                 .map_err(err)?;
-            for (i, (label, p)) in self.series.iter().enumerate() {
-                let color = Palette99::pick(i).to_rgba();
-                c.draw_series(LineSeries::new(
-                    p.iter().filter(keep).map(|q| (q.0, f(q.1))),
-                    color.stroke_width(2),
-                ))
-                .map_err(err)?
-                .label(label.clone())
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-                });
+            for (i, (_, p)) in self.series.iter().enumerate() {
+                let color = series_color(i);
+                if self.dotted.contains(&i) {
+                    c.draw_series(
+                        p.iter()
+                            .filter(keep)
+                            .map(|q| Circle::new((q.0, f(q.1)), 3, color.filled())),
+                    )
+                    .map_err(err)?;
+                } else {
+                    c.draw_series(LineSeries::new(
+                        p.iter().filter(keep).map(|q| (q.0, f(q.1))),
+                        color.stroke_width(2),
+                    ))
+                    .map_err(err)?;
+                }
             }
-            c.configure_series_labels()
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 14))
-                .draw()
-                .map_err(err)?;
         }
         Ok(())
     }
@@ -689,6 +764,7 @@ pub fn line_plot(title: String, x_label: &str, y_label: &str, series: Vec<Series
         series,
         log_y: false,
         flip_y: false,
+        dotted: Vec::new(),
     }
 }
 
@@ -785,6 +861,9 @@ pub fn cp_sections(csv: &str) -> Result<Panels> {
                 vec![("upper".into(), upper), ("lower".into(), lower)],
             );
             plot.flip_y = true;
+            // on a symmetric section at zero incidence the surfaces coincide: the lower one as
+            // dots over the upper one's line keeps both visible
+            plot.dotted = vec![1];
             plot
         })
         .collect();

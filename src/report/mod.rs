@@ -5,6 +5,7 @@ pub mod figures;
 pub mod folder;
 pub mod results;
 pub mod run;
+pub mod style;
 pub mod sweep;
 pub mod text_boxes;
 pub mod vtk;
@@ -53,7 +54,7 @@ pub fn from_json<T: serde::de::DeserializeOwned>(
 }
 
 /// Registers the embedded DejaVu Sans font with plotters once (no system font libraries needed).
-fn register_fonts() {
+pub(crate) fn register_fonts() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
         // the embedded font is a valid TrueType file; a failure here would only lose text

@@ -304,6 +304,9 @@ pub struct FlutterCheck {
     pub more_modes: Option<usize>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub final_more_modes: Option<FlutterPoint>,
+    /// The final design's p-k sweep (the V-g and V-f figure of the final design).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub final_sweep: Option<crate::flutter::FlutterResult>,
 }
 
 fn default_ks_rho() -> f64 {

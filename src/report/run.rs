@@ -321,6 +321,22 @@ pub fn figures(r: &RunResults, sink: &mut impl FigureSink) -> Result<()> {
     }
     if let Some(o) = &r.optimization {
         sink.figure("convergence", &Convergence::new(&r.study, o))?;
+        if let Some(sweep) = o
+            .flutter_check
+            .as_ref()
+            .and_then(|c| c.final_sweep.as_ref())
+        {
+            sink.figure(
+                "flutter_vg_final",
+                &VgVf {
+                    result: sweep,
+                    title: format!(
+                        "{}: p-k of the final design at the flight Mach number and density",
+                        r.study
+                    ),
+                },
+            )?;
+        }
         let mut initial = shown(&o.initial.psd, r.length_unit);
         initial.label = format!("{} initial", initial.label);
         let mut fin = shown(&o.final_.psd, r.length_unit);

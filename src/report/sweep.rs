@@ -1,6 +1,7 @@
 //! The results of `gustkit sweep` (sweep_results.json) and the table, CSV and figure rendered from
 //! them alone.
 
+use super::style::{legend_right, series_color, tick, LegendEntry};
 use super::{save_figure, write_atomic, Figure};
 use anyhow::{anyhow, Result};
 use plotters::coord::Shift;
@@ -217,7 +218,6 @@ impl Figure for SweepPlot<'_> {
         area.fill(&WHITE).map_err(err)?;
         let r = self.results;
         let names = r.plotted_metrics();
-        let panels = area.split_evenly((names.len().max(1), 1));
         // groups: cases sharing the fidelity and the values of every parameter but the first
         type Key = (Option<String>, Vec<f64>);
         let mut groups: Vec<(Key, Vec<&CaseResult>)> = Vec::new();
@@ -234,6 +234,48 @@ impl Figure for SweepPlot<'_> {
                 None => groups.push((key, vec![c])),
             }
         }
+        let labels: Vec<String> = groups
+            .iter()
+            .map(|(key, _)| {
+                let label = key
+                    .0
+                    .iter()
+                    .cloned()
+                    .chain(
+                        r.parameters[1..]
+                            .iter()
+                            .zip(&key.1)
+                            .map(|(p, v)| format!("{p} = {v}")),
+                    )
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                if label.is_empty() && zip && r.parameters.len() > 1 {
+                    format!("{} with {}", r.parameters[0], r.parameters[1..].join(", "))
+                } else {
+                    label
+                }
+            })
+            .collect();
+        let any_failed = names.iter().any(|(name, _)| {
+            r.cases
+                .iter()
+                .any(|c| SweepResults::value(c, name).is_none())
+        });
+        let mut entries: Vec<LegendEntry> = Vec::new();
+        if groups.len() > 1 || any_failed {
+            entries.extend(
+                labels
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, l)| !l.is_empty())
+                    .map(|(gi, l)| LegendEntry::line(l.clone(), series_color(gi))),
+            );
+            if any_failed {
+                entries.push(LegendEntry::marker("failed case (×)", RED.to_rgba()));
+            }
+        }
+        let plot = legend_right(area, &entries, 10)?;
+        let panels = plot.split_evenly((names.len().max(1), 1));
         let xs = || r.cases.iter().map(|c| c.values[0]);
         let (x0, x1) = (xs().fold(f64::MAX, f64::min), xs().fold(f64::MIN, f64::max));
         let (x0, x1) = if x1 > x0 {
@@ -270,43 +312,22 @@ impl Figure for SweepPlot<'_> {
                 .configure_mesh()
                 .x_desc(r.parameters[0].as_str())
                 .y_desc(format!("{name} [{unit}]"))
-                .y_label_formatter(&|v| format!("{v:.digits$}"))
+                .x_label_formatter(&tick)
+                .y_label_formatter(&|v| tick(&format!("{v:.digits$}").parse().unwrap_or(*v)))
                 .label_style(("sans-serif", 14))
                 .axis_desc_style(("sans-serif", 14))
                 .draw()
                 .map_err(err)?;
-            for (gi, (key, cases)) in groups.iter().enumerate() {
-                let color = Palette99::pick(gi).to_rgba();
+            for (gi, (_, cases)) in groups.iter().enumerate() {
+                let color = series_color(gi);
                 let mut pts: Vec<(f64, f64)> = cases
                     .iter()
                     .filter_map(|c| SweepResults::value(c, name).map(|y| (c.values[0], y)))
                     .collect();
                 pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-                let label = key
-                    .0
-                    .iter()
-                    .cloned()
-                    .chain(
-                        r.parameters[1..]
-                            .iter()
-                            .zip(&key.1)
-                            .map(|(p, v)| format!("{p} = {v}")),
-                    )
-                    .collect::<Vec<_>>()
-                    .join(", ");
-                let label = if label.is_empty() && zip && r.parameters.len() > 1 {
-                    format!("{} with {}", r.parameters[0], r.parameters[1..].join(", "))
-                } else {
-                    label
-                };
-                let series = chart
+                chart
                     .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
                     .map_err(err)?;
-                if !label.is_empty() {
-                    series.label(label).legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-                    });
-                }
                 chart
                     .draw_series(pts.iter().map(|p| Circle::new(*p, 4, color.filled())))
                     .map_err(err)?;
@@ -325,17 +346,6 @@ impl Figure for SweepPlot<'_> {
                             .iter()
                             .map(|x| Cross::new((*x, y0 - 0.5 * pad), 6, RED.stroke_width(2))),
                     )
-                    .map_err(err)?
-                    .label("failed case")
-                    .legend(|(x, y)| Cross::new((x + 9, y), 5, RED.stroke_width(2)));
-            }
-            if groups.len() > 1 || !failed.is_empty() {
-                chart
-                    .configure_series_labels()
-                    .background_style(WHITE.mix(0.8))
-                    .border_style(BLACK)
-                    .label_font(("sans-serif", 14))
-                    .draw()
                     .map_err(err)?;
             }
         }

@@ -1,12 +1,13 @@
-//! Where a figure's text lands: a plotters backend that draws nothing but records the box of
-//! every text it is given (the same layout, anchor and rotation the real backends use), so that
-//! a test can find titles and labels drawn over each other.
+//! Where a figure's text and data land: a plotters backend that draws nothing but records the box
+//! of every text it is given (the same layout, anchor and rotation the real backends use), every
+//! polyline and dot, and every legend box (a filled rectangle framed at once by an unfilled one of
+//! the same corners), so that a test can find labels drawn over each other and legends over data.
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters_backend::{
     text_anchor::{HPos, VPos},
-    BackendColor, BackendCoord, BackendTextStyle, DrawingErrorKind,
+    BackendColor, BackendCoord, BackendStyle, BackendTextStyle, DrawingErrorKind,
 };
 
 /// A text and its box in pixels: left, top, right, bottom.
@@ -16,10 +17,23 @@ pub struct TextBox {
     pub rect: [i32; 4],
 }
 
-/// The recording backend (the drawing area owns it; the boxes are shared with the caller).
+/// What the recorder saw, in drawing order.
+#[derive(Clone, Debug, Default)]
+pub struct Drawn {
+    pub texts: Vec<TextBox>,
+    /// Polylines and dots (a dot: one point), each with its place in the drawing order.
+    pub marks: Vec<(usize, Vec<(i32, i32)>)>,
+    /// Legend boxes (left, top, right, bottom), each with its place in the drawing order.
+    pub legends: Vec<(usize, [i32; 4])>,
+    /// The last filled rectangle and its place (a legend box if a frame follows).
+    last_fill: Option<(usize, [i32; 4])>,
+    order: usize,
+}
+
+/// The recording backend (the drawing area owns it; what it saw is shared with the caller).
 struct Recorder {
     size: (u32, u32),
-    boxes: std::rc::Rc<std::cell::RefCell<Vec<TextBox>>>,
+    drawn: std::rc::Rc<std::cell::RefCell<Drawn>>,
 }
 
 impl DrawingBackend for Recorder {
@@ -39,6 +53,54 @@ impl DrawingBackend for Recorder {
         _point: BackendCoord,
         _color: BackendColor,
     ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        Ok(())
+    }
+    fn draw_path<S: BackendStyle, I: IntoIterator<Item = BackendCoord>>(
+        &mut self,
+        path: I,
+        style: &S,
+    ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        if style.color().alpha > 0.0 {
+            let mut d = self.drawn.borrow_mut();
+            d.order += 1;
+            let o = d.order;
+            d.marks.push((o, path.into_iter().collect()));
+        }
+        Ok(())
+    }
+    fn draw_circle<S: BackendStyle>(
+        &mut self,
+        center: BackendCoord,
+        _radius: u32,
+        style: &S,
+        _fill: bool,
+    ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        if style.color().alpha > 0.0 {
+            let mut d = self.drawn.borrow_mut();
+            d.order += 1;
+            let o = d.order;
+            d.marks.push((o, vec![center]));
+        }
+        Ok(())
+    }
+    fn draw_rect<S: BackendStyle>(
+        &mut self,
+        upper_left: BackendCoord,
+        bottom_right: BackendCoord,
+        _style: &S,
+        fill: bool,
+    ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        let rect = [upper_left.0, upper_left.1, bottom_right.0, bottom_right.1];
+        let mut d = self.drawn.borrow_mut();
+        d.order += 1;
+        let o = d.order;
+        if fill {
+            d.last_fill = Some((o, rect));
+        } else if let Some((fo, fr)) = d.last_fill.take() {
+            if fr == rect && fo + 1 == o {
+                d.legends.push((fo, rect));
+            }
+        }
         Ok(())
     }
     fn draw_text<S: BackendTextStyle>(
@@ -67,7 +129,7 @@ impl DrawingBackend for Recorder {
         let t = style.transform();
         let (ax, ay) = t.transform(dx, dy);
         let (bx, by) = t.transform(dx + w, dy + h);
-        self.boxes.borrow_mut().push(TextBox {
+        self.drawn.borrow_mut().texts.push(TextBox {
             text: text.to_string(),
             rect: [
                 pos.0 + ax.min(bx),
@@ -80,18 +142,76 @@ impl DrawingBackend for Recorder {
     }
 }
 
-/// Every text box of `fig` as drawn at its own size.
-pub fn text_boxes(fig: &impl super::Figure) -> anyhow::Result<Vec<TextBox>> {
+/// Everything `fig` draws at its own size, as the recorder saw it.
+pub fn drawn(fig: &impl super::Figure) -> anyhow::Result<Drawn> {
     super::register_fonts();
-    let boxes = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
+    let drawn = std::rc::Rc::new(std::cell::RefCell::new(Drawn::default()));
     let area: DrawingArea<Recorder, Shift> = Recorder {
         size: fig.size(),
-        boxes: boxes.clone(),
+        drawn: drawn.clone(),
     }
     .into_drawing_area();
     fig.draw(&area)?;
     drop(area);
-    let out = boxes.borrow().clone();
+    let out = drawn.borrow().clone();
+    Ok(out)
+}
+
+/// Every text box of `fig` as drawn at its own size.
+pub fn text_boxes(fig: &impl super::Figure) -> anyhow::Result<Vec<TextBox>> {
+    Ok(drawn(fig)?.texts)
+}
+
+/// Whether the segment a–b passes through the open interior of `r` (Liang–Barsky clipping).
+fn segment_enters(a: (i32, i32), b: (i32, i32), r: [i32; 4]) -> bool {
+    let (x0, y0) = (a.0 as f64, a.1 as f64);
+    let (dx, dy) = ((b.0 - a.0) as f64, (b.1 - a.1) as f64);
+    let (l, t, rr, bt) = (
+        r[0] as f64 + 0.5,
+        r[1] as f64 + 0.5,
+        r[2] as f64 - 0.5,
+        r[3] as f64 - 0.5,
+    );
+    let (mut u0, mut u1) = (0.0f64, 1.0f64);
+    for (p, q) in [(-dx, x0 - l), (dx, rr - x0), (-dy, y0 - t), (dy, bt - y0)] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return false;
+            }
+        } else {
+            let u = q / p;
+            if p < 0.0 {
+                u0 = u0.max(u);
+            } else {
+                u1 = u1.min(u);
+            }
+        }
+    }
+    u0 < u1
+}
+
+/// Data a legend box hides or cuts: every mark drawn before the box with a point or segment in
+/// it (the box's white fill covers it), and every line drawn after it that crosses its edge (a
+/// legend's own keys lie wholly inside it). Returns (legend box, the mark's first point) pairs.
+pub fn legends_over_data(fig: &impl super::Figure) -> anyhow::Result<Vec<([i32; 4], (i32, i32))>> {
+    let d = drawn(fig)?;
+    let inside = |p: &(i32, i32), r: [i32; 4]| p.0 > r[0] && p.0 < r[2] && p.1 > r[1] && p.1 < r[3];
+    let mut out = Vec::new();
+    for &(lo, r) in &d.legends {
+        for (mo, pts) in &d.marks {
+            let Some(first) = pts.first() else { continue };
+            let hit = if *mo < lo {
+                pts.iter().any(|p| inside(p, r))
+                    || pts.windows(2).any(|s| segment_enters(s[0], s[1], r))
+            } else {
+                !pts.iter().all(|p| inside(p, r))
+                    && pts.windows(2).any(|s| segment_enters(s[0], s[1], r))
+            };
+            if hit {
+                out.push((r, *first));
+            }
+        }
+    }
     Ok(out)
 }
 

@@ -116,6 +116,7 @@ pub fn render(dir: &Path, r: &SectionResults) -> Result<()> {
                 series,
                 log_y: true,
                 flip_y: false,
+                dotted: Vec::new(),
             },
         )?;
         save_figure(

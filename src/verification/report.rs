@@ -184,6 +184,7 @@ fn cp_plot(title: &str, ps: &[&PressureDistribution]) -> LinePlot {
         series,
         log_y: false,
         flip_y: true,
+        dotted: Vec::new(),
     }
 }
 
@@ -214,6 +215,7 @@ pub fn render(dir: &Path, r: &CfdResults) -> Result<()> {
                 series,
                 log_y: true,
                 flip_y: false,
+                dotted: Vec::new(),
             },
         )?;
         let ps: Vec<&PressureDistribution> = s.pressure.iter().collect();
@@ -234,6 +236,7 @@ pub fn render(dir: &Path, r: &CfdResults) -> Result<()> {
                 series: vec![("C_L".into(), t.lift_history.clone())],
                 log_y: false,
                 flip_y: false,
+                dotted: Vec::new(),
             },
         )?;
         save_figure(
@@ -256,6 +259,7 @@ pub fn render(dir: &Path, r: &CfdResults) -> Result<()> {
                 series: vec![("C_L".into(), m.lift_history.clone())],
                 log_y: false,
                 flip_y: false,
+                dotted: Vec::new(),
             },
         )?;
     }
@@ -276,6 +280,7 @@ pub fn render(dir: &Path, r: &CfdResults) -> Result<()> {
                 ],
                 log_y: false,
                 flip_y: false,
+                dotted: Vec::new(),
             },
         )?;
     }

@@ -700,13 +700,19 @@ fn flutter_check(
 ) -> Result<FlutterCheck> {
     let flight = &ev.aero.flight;
     let v_max = FLUTTER_CHECK_FACTOR * flight.velocity;
+    let final_sweep = flutter_sweep(&ev.modes, &ev.table, flight, v_max)?;
     Ok(FlutterCheck {
         flight_speed_m_s: flight.velocity,
         searched_up_to_m_s: v_max,
         initial: flutter_point(&ev0.modes, &ev0.table, &ev0.aero.flight, v_max)?,
-        final_: flutter_point(&ev.modes, &ev.table, flight, v_max)?,
+        final_: FlutterPoint {
+            speed_m_s: final_sweep.flutter_speed_m_s,
+            frequency_hz: final_sweep.flutter_frequency_hz,
+            mode: final_sweep.flutter_mode,
+        },
         modes: ev.modes.len(),
         more_modes: None,
         final_more_modes: None,
+        final_sweep: Some(final_sweep),
     })
 }
