@@ -120,3 +120,153 @@ impl WingBuilder for DlmSpec {
         })
     }
 }
+
+/// Boxes per wavelength the doublet-lattice needs: the box chord at most 0.08 V/f, the rule of
+/// MSC Nastran's aeroelastic guide (about 12.5 boxes a wavelength of the highest frequency f
+/// analysed at speed V), so the downwash of the highest retained mode is resolved.
+pub const BOX_PER_WAVELENGTH: f64 = 0.08;
+
+/// The lattice rule checked on a study's DLM: its longest box against 0.08 V/f.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+pub struct LatticeRule {
+    /// The longest chordwise box (at the longer of the root and tip chords), m.
+    pub box_length_m: f64,
+    /// 0.08 V/f, m.
+    pub limit_m: f64,
+    /// The highest frequency the lattice must resolve (the mode cutoff, or the highest retained
+    /// mode), Hz, and what it is.
+    pub frequency_hz: f64,
+    pub frequency_is: String,
+    /// The speed it is resolved at (the flight speed), m/s.
+    pub velocity_m_s: f64,
+    pub n_chord: usize,
+    /// The fewest chordwise boxes (same spacing) that meet the rule.
+    pub n_chord_needed: usize,
+}
+
+impl LatticeRule {
+    pub fn met(&self) -> bool {
+        self.box_length_m <= self.limit_m * (1.0 + 1e-9)
+    }
+
+    /// One sentence, lengths in the study's unit; in bold when the rule is not met.
+    pub fn words(&self, unit: crate::study::LengthUnit) -> String {
+        let (b, u) = unit.display(self.box_length_m, "m", 1);
+        let (l, _) = unit.display(self.limit_m, "m", 1);
+        let head = format!(
+            "DLM lattice: the longest box is {b:.4} {u} ({} chordwise), {} 0.08 V/f = {l:.4} {u} at f = {:.1} Hz ({}) and V = {:.1} m/s (MSC's rule: about 12.5 boxes a wavelength)",
+            self.n_chord,
+            if self.met() { "within" } else { "longer than" },
+            self.frequency_hz,
+            self.frequency_is,
+            self.velocity_m_s,
+        );
+        if self.met() {
+            head
+        } else {
+            format!(
+                "**{head}: the highest retained modes are not resolved; raise aero.fidelity.dlm.n_chord to {} or more**",
+                self.n_chord_needed
+            )
+        }
+    }
+}
+
+/// The longest box of `n` chordwise boxes of a chord `c` with this spacing.
+fn longest_box(spacing: gustkit_dlm::Spacing, n: usize, c: f64) -> f64 {
+    spacing
+        .edges(n)
+        .windows(2)
+        .map(|w| (w[1] - w[0]) * c)
+        .fold(0.0, f64::max)
+}
+
+/// The lattice rule of `spec` on `planform` for frequency `f_hz` (what it is: `f_is`) at speed
+/// `velocity`.
+pub fn lattice_rule(
+    spec: &DlmSpec,
+    planform: &Planform,
+    velocity: f64,
+    f_hz: f64,
+    f_is: &str,
+) -> LatticeRule {
+    let c = planform.root_chord.max(planform.tip_chord);
+    let limit = BOX_PER_WAVELENGTH * velocity / f_hz;
+    let needed = (1..=100_000)
+        .find(|&n| longest_box(spec.chord_spacing, n, c) <= limit)
+        .unwrap_or(100_000);
+    LatticeRule {
+        box_length_m: longest_box(spec.chord_spacing, spec.n_chord, c),
+        limit_m: limit,
+        frequency_hz: f_hz,
+        frequency_is: f_is.to_string(),
+        velocity_m_s: velocity,
+        n_chord: spec.n_chord,
+        n_chord_needed: needed,
+    }
+}
+
+#[cfg(test)]
+mod lattice_tests {
+    use super::*;
+
+    /// The flagship: 16 boxes on the 0.5587 m root chord are 0.0349 m, within 0.08 × 172.8 /
+    /// 226.4 = 0.0611 m (10 boxes would do); the transport wing's 8 boxes on 5 m are 0.625 m
+    /// against 0.321 m at 58 Hz and 233 m/s (16 needed). Cosine spacing's longest box is at
+    /// mid-chord, sin(π/n)/2 of the chord.
+    #[test]
+    fn the_rule_on_the_flagship_and_the_transport_wing() {
+        let spec = |n: usize, spacing| DlmSpec {
+            n_chord: n,
+            n_span: 24,
+            chord_spacing: spacing,
+            span_spacing: gustkit_dlm::Spacing::Uniform,
+            symmetry: gustkit_dlm::Symmetry::Symmetric,
+        };
+        let agard = Planform {
+            span: 0.762,
+            sweep_c4: 45f64.to_radians(),
+            root_chord: 0.558_698_4,
+            tip_chord: 0.368_198_4,
+        };
+        let r = lattice_rule(
+            &spec(16, Default::default()),
+            &agard,
+            172.8,
+            226.4,
+            "cutoff",
+        );
+        assert!((r.box_length_m - 0.558_698_4 / 16.0).abs() < 1e-12);
+        assert!((r.limit_m - 0.08 * 172.8 / 226.4).abs() < 1e-12);
+        assert!(r.met());
+        assert_eq!(r.n_chord_needed, 10);
+        let transport = Planform {
+            span: 15.0,
+            sweep_c4: 28f64.to_radians(),
+            root_chord: 5.0,
+            tip_chord: 1.6,
+        };
+        let t = lattice_rule(
+            &spec(8, Default::default()),
+            &transport,
+            233.0,
+            58.0,
+            "cutoff",
+        );
+        assert!(!t.met());
+        assert_eq!(t.n_chord_needed, 16);
+        assert!(t
+            .words(crate::study::LengthUnit::M)
+            .contains("n_chord to 16"));
+        let cosine = lattice_rule(
+            &spec(40, gustkit_dlm::Spacing::Cosine),
+            &transport,
+            233.0,
+            58.0,
+            "cutoff",
+        );
+        // exactly c sin(π/n)/2 at mid-chord
+        let exact = 0.5 * (std::f64::consts::PI / 40.0).sin() * 5.0;
+        assert!((cosine.box_length_m - exact).abs() < 1e-12);
+    }
+}

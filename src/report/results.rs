@@ -346,6 +346,9 @@ pub struct RunResults {
     /// The resolution check of the final design (the initial one without an optimization).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub resolution_check: Option<ResolutionCheck>,
+    /// The DLM lattice against 0.08 V/f at the highest frequency it must resolve.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lattice_rule: Option<crate::aero::dlm::LatticeRule>,
     pub run_time_s: f64,
 }
 

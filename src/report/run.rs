@@ -92,6 +92,9 @@ pub fn summary(r: &RunResults) -> String {
         r.n_design_variables,
         frequency_table(&r.modes),
     );
+    if let Some(l) = &r.lattice_rule {
+        md += &format!("\n{}.\n", l.words(r.length_unit));
+    }
     if let Some(g) = &r.gust {
         md += &format!(
             "\n## Gust response\n\nM = {}, V = {} m/s, ρ = {} kg/m³, q = {:.1} Pa; {}; {} frequencies on a log grid up to {:.1} rad/s; outputs by the {}.\n\n| output | RMS | unit | N0 [Hz] |\n|---|---:|---|---:|\n",

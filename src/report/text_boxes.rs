@@ -190,10 +190,13 @@ fn segment_enters(a: (i32, i32), b: (i32, i32), r: [i32; 4]) -> bool {
     u0 < u1
 }
 
+/// A legend box (left, top, right, bottom) and the first point of a mark it hides or cuts.
+pub type LegendOverData = ([i32; 4], (i32, i32));
+
 /// Data a legend box hides or cuts: every mark drawn before the box with a point or segment in
 /// it (the box's white fill covers it), and every line drawn after it that crosses its edge (a
 /// legend's own keys lie wholly inside it). Returns (legend box, the mark's first point) pairs.
-pub fn legends_over_data(fig: &impl super::Figure) -> anyhow::Result<Vec<([i32; 4], (i32, i32))>> {
+pub fn legends_over_data(fig: &impl super::Figure) -> anyhow::Result<Vec<LegendOverData>> {
     let d = drawn(fig)?;
     let inside = |p: &(i32, i32), r: [i32; 4]| p.0 > r[0] && p.0 < r[2] && p.1 > r[1] && p.1 < r[3];
     let mut out = Vec::new();

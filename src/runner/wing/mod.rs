@@ -124,6 +124,10 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
     );
     write_atomic(&dir.join("modes.vtk"), vtk.as_bytes())?;
     println!("{}", frequency_table(&summary.modes));
+    let lattice_rule = lattice_rule(&study, &model, &modes)?;
+    if let Some(l) = &lattice_rule {
+        println!("{}", l.words(study.spec.length_unit));
+    }
     let (gust, gust_evaluation) = match study.spec.gust {
         Some(_) => {
             let (g, ev) = gust::gust_results(&study)?;
@@ -210,6 +214,7 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
         optimization,
         comparison,
         resolution_check,
+        lattice_rule,
         run_time_s: t0.elapsed().as_secs_f64(),
     };
     report::run::render(&dir, &results)?;
@@ -234,6 +239,43 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
         )),
         _ => crate::runner::Outcome::Done,
     })
+}
+
+/// The DLM lattice of the study's initial design against 0.08 V/f (MSC's rule), f the mode
+/// cutoff (or, with a fixed count, the highest retained mode) and V the flight speed; none for
+/// another fidelity or without a flight condition.
+fn lattice_rule(
+    study: &Study,
+    model: &PlateModel,
+    modes: &Modes,
+) -> Result<Option<crate::aero::dlm::LatticeRule>> {
+    let Some(crate::aero::FidelitySpec::Dlm(spec)) = study.spec.aero.as_ref().map(|a| &a.fidelity)
+    else {
+        return Ok(None);
+    };
+    if study.spec.flight.is_none() {
+        return Ok(None);
+    }
+    let velocity = study.flight_condition()?.velocity;
+    let (f, what) = match study.mode_rule()? {
+        crate::study::ModeRule::Cutoff { omega_cut, .. } => {
+            (omega_cut / (2.0 * std::f64::consts::PI), "the mode cutoff")
+        }
+        crate::study::ModeRule::Count(_) => (
+            modes.freq_hz().last().copied().unwrap_or(0.0),
+            "the highest retained mode",
+        ),
+    };
+    if !(f > 0.0) {
+        return Ok(None);
+    }
+    Ok(Some(crate::aero::dlm::lattice_rule(
+        spec,
+        model.planform(),
+        velocity,
+        f,
+        what,
+    )))
 }
 
 /// The resolution check of a run: the optimization's final design against its margin speed and
