@@ -10,7 +10,7 @@
 //! respect to a complex state z is conj(Q̄)ᵀ, not Q̄ᵀ.
 
 use crate::aero::AeroModel;
-use crate::flutter::margin::{ks_max, zeros_like, DampingRoot, FlutterMargin, KS_RHO, PK_STEPS};
+use crate::flutter::margin::{ks_max, ks_rho, zeros_like, DampingRoot, FlutterMargin, PK_STEPS};
 use crate::flutter::{check_stability, PkProblem};
 use crate::gust::{
     self, FrequencyGrid, GustProblem, GustResponse, GustSettings, Quantity, ResidualGafs,
@@ -111,7 +111,7 @@ impl Evaluation {
             .roots_up_to(velocity, PK_STEPS)
             .map_err(|e| anyhow::anyhow!("flutter margin at {velocity:.2} m/s: {e}"))?;
         let g: Vec<f64> = roots.iter().map(|r| r.g).collect();
-        let (ks, weights) = ks_max(&g, KS_RHO);
+        let (ks, weights) = ks_max(&g, ks_rho(g.len()));
         Ok((
             ks,
             weights,

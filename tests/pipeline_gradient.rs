@@ -154,7 +154,7 @@ fn flutter_margin_gradient_with_twenty_modes() {
 }
 
 fn check_flutter_margin_gradient(study: &Study) {
-    use gustkit::flutter::margin::{ks_max, FlutterMargin, KS_RHO, PK_STEPS};
+    use gustkit::flutter::margin::{ks_max, ks_rho, FlutterMargin, PK_STEPS};
     let settings = study.gust_settings().unwrap();
     let x0 = study.initial_design().unwrap().to_vec();
     let margin = FlutterMargin {
@@ -195,7 +195,7 @@ fn check_flutter_margin_gradient(study: &Study) {
             .roots_up_to(margin.speed_factor * a.aero.flight.velocity, PK_STEPS)
             .unwrap();
         let g: Vec<f64> = roots.iter().map(|r| r.g).collect();
-        ks_max(&g, KS_RHO).0
+        ks_max(&g, ks_rho(g.len())).0
     };
     for k in [5, 50, 99, n, n + 1, n + 2, n + 3] {
         let rep = fd_check(&f, &x0, k, g[k], g[k].abs().max(1e-2 * gnorm));

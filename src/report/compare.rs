@@ -265,18 +265,21 @@ fn thickness(runs: &[ComparedRun]) -> ThicknessMaps {
 
 /// The PSD of each optimum: with the run's own fidelity, and with the other where the run
 /// cross-evaluated it.
+/// The PSDs in the first run's length unit (the unit rule: what a person reads in the study's
+/// unit, results in SI).
 fn psd(runs: &[ComparedRun]) -> PsdPlot {
+    let unit = runs[0].results.length_unit;
     let mut series = Vec::new();
     for r in runs {
         let o = r.opt();
         let own = r.results.fidelity.clone().unwrap_or_default();
-        let mut s = o.final_.psd.clone();
+        let mut s = super::run::shown(&o.final_.psd, unit);
         s.label = format!("{} optimum, {own}", r.results.study);
         series.push(s);
         if let Some(c) = &o.cross_evaluation {
             for d in c.designs.iter().filter(|d| d.design == "final") {
                 for e in d.evaluations.iter().filter(|e| e.fidelity != own) {
-                    if let Some(mut s) = e.psd.clone() {
+                    if let Some(mut s) = e.psd.as_ref().map(|p| super::run::shown(p, unit)) {
                         s.label = format!("{} optimum, {}", r.results.study, e.fidelity);
                         series.push(s);
                     }

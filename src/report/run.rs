@@ -283,7 +283,7 @@ pub fn comparison_text(
 
 /// A PSD series as a person reads it: a displacement's PSD in the study's length unit squared
 /// ([`crate::study::LengthUnit::display`]); results.json keeps SI.
-fn shown(s: &PsdSeries, unit: crate::study::LengthUnit) -> PsdSeries {
+pub(crate) fn shown(s: &PsdSeries, unit: crate::study::LengthUnit) -> PsdSeries {
     let (scale, shown_unit) = unit.display(1.0, &s.unit, 2);
     PsdSeries {
         label: s.label.clone(),

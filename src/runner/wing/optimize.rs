@@ -2,7 +2,7 @@
 //! observer, the atomic checkpoint of every iteration, `--resume`, and the results it reports.
 
 use super::gust::psd_series;
-use crate::flutter::margin::{DAMPING_SCALE, KS_RHO};
+use crate::flutter::margin::{ks_rho, DAMPING_SCALE, PK_STEPS};
 use crate::optim::{Checkpointing, Control, Executor};
 use crate::report::results::{
     element_polygons, CrossDesign, CrossEvaluation, DesignSnapshot, FidelityEvaluation,
@@ -521,7 +521,7 @@ pub fn optimize(
         unit: unit.to_string(),
         fix_area: o.fix_area,
         flutter_margin: spec.flutter.map(|m| (m.speed_factor, m.damping_max)),
-        ks_rho: KS_RHO,
+        ks_rho: ks_rho(ev0.modes.len() * PK_STEPS),
         damping_scale: DAMPING_SCALE,
         reference: o.reference.clone(),
         design_variable_names: (0..x0.len()).map(|i| design.name(i)).collect(),
