@@ -134,7 +134,7 @@ pub fn summary(r: &RunResults) -> String {
             o.rms_limit,
             o.unit,
             match o.flutter_margin {
-                Some((f, g)) => format!(", every p-k root damped (g ≤ {g}) at {f} × the flight speed (KS aggregate, ρ = {})", o.ks_rho),
+                Some((f, g)) => format!(", every p-k root damped (g ≤ {g}) at {f} × the flight speed (KS aggregate, ρ = {:.0})", o.ks_rho),
                 None => String::new(),
             } + if o.fix_area { ", planform area fixed" } else { "" },
             o.design_variable_names.len(),
