@@ -3,7 +3,7 @@
 //! eight geometry parameters with respect to the planform variables (dual numbers through the
 //! planform map).
 
-use super::registry::{
+use super::contract::{
     BuildError, Capabilities, SurfaceBinding, WingBuilder, WingContext, WingFidelity,
 };
 use crate::wing::{planform_point, Planform, N_PLANFORM};
@@ -148,28 +148,6 @@ impl LatticeRule {
     pub fn met(&self) -> bool {
         self.box_length_m <= self.limit_m * (1.0 + 1e-9)
     }
-
-    /// One sentence, lengths in the study's unit; in bold when the rule is not met.
-    pub fn words(&self, unit: crate::study::LengthUnit) -> String {
-        let (b, u) = unit.display(self.box_length_m, "m", 1);
-        let (l, _) = unit.display(self.limit_m, "m", 1);
-        let head = format!(
-            "DLM lattice: the longest box is {b:.4} {u} ({} chordwise), {} 0.08 V/f = {l:.4} {u} at f = {:.1} Hz ({}) and V = {:.1} m/s (MSC's rule: about 12.5 boxes a wavelength)",
-            self.n_chord,
-            if self.met() { "within" } else { "longer than" },
-            self.frequency_hz,
-            self.frequency_is,
-            self.velocity_m_s,
-        );
-        if self.met() {
-            head
-        } else {
-            format!(
-                "**{head}: the highest retained modes are not resolved; raise aero.fidelity.dlm.n_chord to {} or more**",
-                self.n_chord_needed
-            )
-        }
-    }
 }
 
 /// The longest box of `n` chordwise boxes of a chord `c` with this spacing.
@@ -207,7 +185,7 @@ pub fn lattice_rule(
 }
 
 #[cfg(test)]
-mod lattice_tests {
+mod tests {
     use super::*;
 
     /// The flagship: 16 boxes on the 0.5587 m root chord are 0.0349 m, within 0.08 × 172.8 /
@@ -255,9 +233,6 @@ mod lattice_tests {
         );
         assert!(!t.met());
         assert_eq!(t.n_chord_needed, 16);
-        assert!(t
-            .words(crate::study::LengthUnit::M)
-            .contains("n_chord to 16"));
         let cosine = lattice_rule(
             &spec(40, gustkit_dlm::Spacing::Cosine),
             &transport,

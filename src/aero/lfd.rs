@@ -3,7 +3,7 @@
 //! Euler flow converged on the built-in mesh about a scaled NACA 64A0xx). Every closed set of
 //! strings in a CFD spec is a serde enum, so a typo is refused with its JSON path at load.
 
-use super::registry::{
+use super::contract::{
     BuildError, Capabilities, SurfaceBinding, WingBuilder, WingContext, WingFidelity,
 };
 use crate::wing::{N_PLANFORM, PLANFORM_NAMES};

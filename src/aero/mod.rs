@@ -1,18 +1,20 @@
-//! Aerodynamics bound to the structure: the fidelity registry ([`registry`]: a study's fidelity
-//! spec → its builder → a model with its surface binding), the builders of each fidelity
+//! Aerodynamics bound to the structure: the builder contract ([`contract`]), the fidelity registry
+//! ([`registry`]: a study's fidelity spec → its builder → a model with its surface binding), the
+//! builders of each fidelity
 //! ([`dlm`], [`lfd`], [`strip`]) and the GAF driver [`AeroModel`] that couples a wing model to the
 //! plate: modes → transfer → GAFs, and the reverse sweep back to the nodal mode shapes and the
 //! planform variables. Nothing here asks which fidelity it is holding.
 
+pub mod contract;
 pub mod dlm;
 pub mod lfd;
 pub mod registry;
 pub mod strip;
 
-pub use registry::{
-    BuildError, Capabilities, FidelitySpec, SectionFidelitySpec, SurfaceBinding, WingBuilder,
-    WingContext, WingFidelity,
+pub use contract::{
+    BuildError, Capabilities, SurfaceBinding, WingBuilder, WingContext, WingFidelity,
 };
+pub use registry::{FidelitySpec, SectionFidelitySpec};
 
 use crate::structure::{Modes, PlateModel};
 use crate::transfer::{mode_shapes, ModeTransfer};

@@ -1,117 +1,12 @@
-//! The one place where a study's fidelity spec becomes a model (the MPhys lesson: a builder per
-//! fidelity). A wing study names its fidelity as `aero.fidelity: {"dlm": {...}}`; the builder
-//! turns that spec into a `Box<dyn Aerodynamics>` plus its [`SurfaceBinding`] — the plate points
-//! where the model wants structural displacements and how the planform variables move its
-//! geometry — so the transfer and the pipeline never ask which fidelity they hold. What a
-//! fidelity can do ([`Capabilities`]) is known from its spec alone, so a study that needs a
-//! reverse mode its fidelity lacks is refused when it is loaded.
+//! The one place where a study's fidelity spec becomes a builder: a wing study names its fidelity
+//! as `aero.fidelity: {"dlm": {...}}`, and [`FidelitySpec::builder`] gives the builder of that
+//! fidelity ([`super::contract::WingBuilder`]), so the transfer and the pipeline never ask which
+//! fidelity they hold. What a fidelity can do is known from its spec alone, so a study that needs
+//! a reverse mode its fidelity lacks is refused when it is loaded.
 
-use crate::wing::{Airfoil, Planform, N_PLANFORM};
-use gustkit_core::{Aerodynamics, FlightCondition};
+use super::contract::{BuildError, Capabilities, WingBuilder};
+use gustkit_core::Aerodynamics;
 use serde::{Deserialize, Serialize};
-
-/// What a fidelity can do.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Capabilities {
-    /// Reverse mode of the GAFs with respect to the mode shapes (adjoint gradients of the
-    /// thickness variables, which act only through the modes).
-    pub reverse: bool,
-    /// The reverse mode also covers the planform variables (they move the model's geometry).
-    pub reverse_planform: bool,
-}
-
-impl Capabilities {
-    /// Refuses a use that needs gradients (`what`, e.g. "optimization") of a fidelity named
-    /// `name` without a reverse mode; the reason names both.
-    pub fn require_reverse(self, name: &str, what: &str) -> Result<(), String> {
-        if self.reverse {
-            Ok(())
-        } else {
-            Err(format!(
-                "{what} needs adjoint gradients, and the {name} fidelity has no reverse mode"
-            ))
-        }
-    }
-
-    /// Refuses a use that needs the gradients of the planform variables from a fidelity whose
-    /// reverse mode covers the mode shapes only.
-    pub fn require_planform_reverse(self, name: &str, what: &str) -> Result<(), String> {
-        self.require_reverse(name, what)?;
-        if self.reverse_planform {
-            Ok(())
-        } else {
-            Err(format!(
-                "{what} needs the gradients of the planform variables (span, sweep_c4, root_chord, tip_chord), and the {name} fidelity's reverse mode covers the thickness variables only (the planform moves its mesh, whose linearization is not implemented yet); gustkit check-gradient --dv t[i] checks the thickness gradients"
-            ))
-        }
-    }
-}
-
-/// Where a wing model wants structural displacements, and how the planform moves its geometry.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct SurfaceBinding {
-    /// For each point of the model's [`Aerodynamics::surface`], in its order, the point's (ξ, η)
-    /// in the plate's parametrization: the model's points move with the planform.
-    pub points: Vec<[f64; 2]>,
-    /// ∂(geometry parameter)/∂(planform variable) for each of the model's geometry parameters
-    /// (those its reverse mode differentiates, [`Aerodynamics::geometry_names`]).
-    pub geometry_jacobian: Vec<[f64; N_PLANFORM]>,
-}
-
-/// A wing model and its binding to the plate.
-pub struct WingFidelity {
-    pub model: Box<dyn Aerodynamics>,
-    pub binding: SurfaceBinding,
-}
-
-/// A builder could not build its model: the JSON path of the field inside the fidelity's spec
-/// (empty for the spec as a whole) and the reason. The caller knows where the spec lives in its
-/// study file and names the whole path ([`BuildError::path_in`]).
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("{reason}")]
-pub struct BuildError {
-    pub path: String,
-    pub reason: String,
-}
-
-impl BuildError {
-    /// The JSON path of the field in a study whose fidelity spec sits at `spec_path`.
-    pub fn path_in(&self, spec_path: &str) -> String {
-        if self.path.is_empty() {
-            spec_path.to_string()
-        } else {
-            format!("{spec_path}.{}", self.path)
-        }
-    }
-}
-
-/// What a wing fidelity is built for: the planform (SI), the section and the flight condition
-/// (a CFD model converges its steady state there).
-#[derive(Clone, Copy, Debug)]
-pub struct WingContext<'a> {
-    pub planform: &'a Planform,
-    pub airfoil: &'a Airfoil,
-    pub flight: &'a FlightCondition,
-    /// Where the builder may keep state between runs (the run folder), if anywhere.
-    pub cache_dir: Option<&'a std::path::Path>,
-}
-
-/// A fidelity's builder for wing studies.
-pub trait WingBuilder {
-    /// The fidelity's name as the study file spells it.
-    fn name(&self) -> &'static str;
-    fn capabilities(&self) -> Capabilities;
-    /// Cheap checks of the settings for a wing (sizes, memory estimates); builds nothing
-    /// expensive.
-    fn validate(&self, wing: &WingContext) -> Result<(), BuildError>;
-    /// Cheap checks for a use with gradients (the reverse mode's memory, say); the default has
-    /// nothing more to check.
-    fn validate_gradients(&self, wing: &WingContext) -> Result<(), BuildError> {
-        self.validate(wing)
-    }
-    /// The model of the wing, with its binding.
-    fn build(&self, wing: &WingContext) -> Result<WingFidelity, BuildError>;
-}
 
 /// The aerodynamic fidelities a wing study can name.
 #[derive(Clone, Debug, Deserialize, Serialize)]

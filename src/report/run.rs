@@ -81,6 +81,28 @@ pub fn flutter_point(r: &FlutterResult, flight_speed_m_s: Option<f64>) -> String
     }
 }
 
+/// The DLM lattice rule in one sentence, lengths in the study's unit; in bold when it is not met.
+pub fn lattice_words(r: &crate::aero::dlm::LatticeRule, unit: crate::study::LengthUnit) -> String {
+    let (b, u) = unit.display(r.box_length_m, "m", 1);
+    let (l, _) = unit.display(r.limit_m, "m", 1);
+    let head = format!(
+        "DLM lattice: the longest box is {b:.4} {u} ({} chordwise), {} 0.08 V/f = {l:.4} {u} at f = {:.1} Hz ({}) and V = {:.1} m/s (MSC's rule: about 12.5 boxes a wavelength)",
+        r.n_chord,
+        if r.met() { "within" } else { "longer than" },
+        r.frequency_hz,
+        r.frequency_is,
+        r.velocity_m_s,
+    );
+    if r.met() {
+        head
+    } else {
+        format!(
+            "**{head}: the highest retained modes are not resolved; raise aero.fidelity.dlm.n_chord to {} or more**",
+            r.n_chord_needed
+        )
+    }
+}
+
 /// The markdown summary.
 pub fn summary(r: &RunResults) -> String {
     let mut md = format!(
@@ -93,7 +115,7 @@ pub fn summary(r: &RunResults) -> String {
         frequency_table(&r.modes),
     );
     if let Some(l) = &r.lattice_rule {
-        md += &format!("\n{}.\n", l.words(r.length_unit));
+        md += &format!("\n{}.\n", lattice_words(l, r.length_unit));
     }
     if let Some(g) = &r.gust {
         md += &format!(
@@ -510,4 +532,40 @@ pub fn resolution_words(c: &crate::report::results::ResolutionCheck) -> String {
         c.refined_flutter.as_deref().unwrap_or(""),
         c.time_s
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The lattice sentence: within the rule plainly, beyond it in bold with the n_chord that
+    /// would meet it, lengths in the study's unit.
+    #[test]
+    fn lattice_words_name_the_fix() {
+        let planform = crate::wing::Planform {
+            span: 15.0,
+            sweep_c4: 28f64.to_radians(),
+            root_chord: 5.0,
+            tip_chord: 1.6,
+        };
+        let spec = crate::aero::dlm::DlmSpec {
+            n_chord: 8,
+            n_span: 16,
+            chord_spacing: Default::default(),
+            span_spacing: Default::default(),
+            symmetry: gustkit_dlm::Symmetry::Symmetric,
+        };
+        let r = crate::aero::dlm::lattice_rule(&spec, &planform, 233.0, 58.0, "the mode cutoff");
+        let w = lattice_words(&r, crate::study::LengthUnit::M);
+        assert!(
+            w.starts_with("**DLM lattice: the longest box is 0.6250 m"),
+            "{w}"
+        );
+        assert!(
+            w.contains("raise aero.fidelity.dlm.n_chord to 16 or more**"),
+            "{w}"
+        );
+        let inch = lattice_words(&r, crate::study::LengthUnit::In);
+        assert!(inch.contains("24.6063 in"), "{inch}");
+    }
 }

@@ -126,7 +126,7 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
     println!("{}", frequency_table(&summary.modes));
     let lattice_rule = lattice_rule(&study, &model, &modes)?;
     if let Some(l) = &lattice_rule {
-        println!("{}", l.words(study.spec.length_unit));
+        println!("{}", report::run::lattice_words(l, study.spec.length_unit));
     }
     let (gust, gust_evaluation) = match study.spec.gust {
         Some(_) => {
