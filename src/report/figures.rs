@@ -2,7 +2,7 @@
 
 use super::results::{HistoryRow, OptimizationResults};
 pub use super::results::{ModeShapes, PsdSeries};
-use super::style::{legend_below, legend_right, series_color, tick, LegendEntry};
+use super::style::{legend_below, legend_right, series_color, series_dashed, tick, LegendEntry};
 use super::{diverging, Figure};
 use anyhow::{anyhow, Result};
 use plotters::coord::Shift;
@@ -93,7 +93,7 @@ impl Figure for VgVf<'_> {
         let entries: Vec<LegendEntry> = curves
             .iter()
             .enumerate()
-            .map(|(i, c)| LegendEntry::line(format!("mode {}", c.mode), series_color(i)))
+            .map(|(i, c)| LegendEntry::series(format!("mode {}", c.mode), i))
             .collect();
         let plot = legend_right(area, &entries, 40)?;
         let (top, bottom) = plot.split_vertically(425);
@@ -181,15 +181,20 @@ impl Figure for VgVf<'_> {
                         )
                         .map_err(err)?;
                 }
-                chart
-                    .draw_series(LineSeries::new(
-                        c.velocity_m_s
-                            .iter()
-                            .cloned()
-                            .zip(ys.iter().map(|y| clipped(*y))),
-                        color.stroke_width(2),
-                    ))
-                    .map_err(err)?;
+                let pts = c
+                    .velocity_m_s
+                    .iter()
+                    .cloned()
+                    .zip(ys.iter().map(|y| clipped(*y)));
+                if series_dashed(i) {
+                    chart
+                        .draw_series(DashedLineSeries::new(pts, 8, 5, color.stroke_width(2)))
+                        .map_err(err)?;
+                } else {
+                    chart
+                        .draw_series(LineSeries::new(pts, color.stroke_width(2)))
+                        .map_err(err)?;
+                }
             }
             if let (Some(v), Some(f)) = (
                 self.result.flutter_speed_m_s,

@@ -6,25 +6,31 @@ use anyhow::{anyhow, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-/// Series colours (Tableau 10, the light olive and cyan darkened): each has a contrast ratio of at
-/// least 3:1 against white (WCAG 2 graphics), and neighbours differ in hue.
+/// Series colours (Tableau 10 with the orange, pink, grey, olive and cyan darkened): each has a
+/// contrast ratio of at least 3:1 against white (WCAG 2 graphics), and neighbours differ in hue.
 const PALETTE: [(u8, u8, u8); 10] = [
     (31, 119, 180),
-    (255, 127, 14),
+    (220, 105, 0),
     (44, 160, 44),
     (214, 39, 40),
     (148, 103, 189),
     (140, 86, 75),
-    (227, 119, 194),
+    (200, 100, 170),
     (110, 110, 110),
     (138, 139, 20),
     (18, 140, 155),
 ];
 
-/// The colour of the i-th series (the palette repeats after ten).
+/// The colour of the i-th series (the palette repeats after ten: see [`series_dashed`]).
 pub fn series_color(i: usize) -> RGBAColor {
     let (r, g, b) = PALETTE[i % PALETTE.len()];
     RGBColor(r, g, b).to_rgba()
+}
+
+/// Whether the i-th series is drawn dashed: the second round of the palette (series 11 to 20)
+/// is, so that no two of the first twenty series look alike.
+pub fn series_dashed(i: usize) -> bool {
+    (i / PALETTE.len()) % 2 == 1
 }
 
 /// WCAG 2 contrast ratio of a colour against white.
@@ -80,6 +86,8 @@ pub struct LegendEntry {
     pub label: String,
     pub color: RGBAColor,
     pub marker: bool,
+    /// A dashed line key (a series drawn dashed).
+    pub dashed: bool,
 }
 
 impl LegendEntry {
@@ -88,13 +96,20 @@ impl LegendEntry {
             label: label.into(),
             color,
             marker: false,
+            dashed: false,
         }
     }
     pub fn marker(label: impl Into<String>, color: RGBAColor) -> Self {
         Self {
-            label: label.into(),
-            color,
             marker: true,
+            ..Self::line(label, color)
+        }
+    }
+    /// The key of the i-th series of a figure (its colour, dashed where [`series_dashed`]).
+    pub fn series(label: impl Into<String>, i: usize) -> Self {
+        Self {
+            dashed: series_dashed(i),
+            ..Self::line(label, series_color(i))
         }
     }
 }
@@ -196,6 +211,14 @@ where
         if e.marker {
             area.draw(&Circle::new((x + LEGEND_KEY / 2, y), 4, e.color.filled()))
                 .map_err(err)?;
+        } else if e.dashed {
+            for (a, b) in [(0, 8), (13, 21)] {
+                area.draw(&PathElement::new(
+                    vec![(x + a, y), (x + b, y)],
+                    e.color.stroke_width(2),
+                ))
+                .map_err(err)?;
+            }
         } else {
             area.draw(&PathElement::new(
                 vec![(x, y), (x + LEGEND_KEY, y)],
@@ -227,6 +250,19 @@ mod tests {
         }
         let yellow = Palette99::pick(2).to_rgba();
         assert!(contrast_on_white(yellow) < 1.5);
+    }
+
+    /// The first twenty series differ in colour or line: the palette's second round is dashed.
+    #[test]
+    fn twenty_series_look_different() {
+        let looks: Vec<(RGBAColor, bool)> = (0..20)
+            .map(|i| (series_color(i), series_dashed(i)))
+            .collect();
+        for i in 0..20 {
+            for j in i + 1..20 {
+                assert!(looks[i] != looks[j], "series {i} and {j}");
+            }
+        }
     }
 
     /// Tick labels: no `-0`, no `10.0`, short decimals, exponents only at the extremes.
