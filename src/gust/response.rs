@@ -315,30 +315,26 @@ impl<'a> GustProblem<'a> {
         Ok(fractions)
     }
 
-    /// Output y's effective row S_y + q Q_ws,y(ω) and offset q Q_wg,y(ω) at spline weights `w`
-    /// (S_y and zero without residual rows).
-    fn output_row(&self, w: &[f64], y: usize) -> (Vec<c64>, c64) {
-        let s = &self.outputs[y];
-        match self.residual {
-            None => (
-                s.iter().map(|v| c64::new(*v, 0.0)).collect(),
-                c64::new(0.0, 0.0),
-            ),
-            Some(r) => {
-                let mut row: Vec<c64> = s.iter().map(|v| c64::new(*v, 0.0)).collect();
-                let mut off = c64::new(0.0, 0.0);
-                for (i, wi) in w.iter().enumerate() {
-                    if *wi == 0.0 {
-                        continue;
-                    }
-                    for (rv, q) in row.iter_mut().zip(&r.q_ws[i][y]) {
-                        *rv += q * (self.q_inf * wi);
-                    }
-                    off += r.q_wg[i][y] * (self.q_inf * wi);
+    /// Output y's effective row S_y + q Q_ws,y(ω) into `row` (one entry a mode, a buffer the
+    /// caller reuses across frequencies) and its offset q Q_wg,y(ω), at spline weights `w` (S_y
+    /// and zero without residual rows).
+    fn output_row(&self, w: &[f64], y: usize, row: &mut [c64]) -> c64 {
+        for (rv, sv) in row.iter_mut().zip(&self.outputs[y]) {
+            *rv = c64::new(*sv, 0.0);
+        }
+        let mut off = c64::new(0.0, 0.0);
+        if let Some(r) = self.residual {
+            for (i, wi) in w.iter().enumerate() {
+                if *wi == 0.0 {
+                    continue;
                 }
-                (row, off)
+                for (rv, q) in row.iter_mut().zip(&r.q_ws[i][y]) {
+                    *rv += q * (self.q_inf * wi);
+                }
+                off += r.q_wg[i][y] * (self.q_inf * wi);
             }
         }
+        off
     }
 
     /// The aeroelastic matrix A(ω) (row-major) and right-hand side q Q_gs at grid point j.
@@ -395,12 +391,13 @@ pub fn solve(p: &GustProblem) -> Result<GustResponse, GustError> {
     let mut h = Vec::new();
     let mut m0s = Vec::new();
     let mut h_last = Vec::new();
+    let mut row = vec![c64::new(0.0, 0.0); nm];
     for y in 0..p.outputs.len() {
         let hy: Vec<c64> = eta
             .iter()
             .zip(&weights.weights)
             .map(|(e, w)| {
-                let (row, off) = p.output_row(w, y);
+                let off = p.output_row(w, y, &mut row);
                 (e.iter().zip(&row).map(|(a, b)| a * b).sum::<c64>() + off) / p.velocity
             })
             .collect();
@@ -464,6 +461,7 @@ pub fn rms_vjp(
     let mut residual = p
         .residual
         .map(|_| ResidualGafs::zeros(nk, p.outputs.len(), nm));
+    let mut row = vec![c64::new(0.0, 0.0); nm];
     for (j, &omega) in p.grid.omega.iter().enumerate() {
         let phi = p.turbulence.psd(omega, p.velocity);
         // η̄ = Σ_y conj(S̃_y) H̄_y / U
@@ -473,7 +471,7 @@ pub fn rms_vjp(
                 continue;
             }
             let hbar = r.h[y][j] * (rms_bar[y] * p.grid.weights[j] * phi / r.rms[y]);
-            let (row, _) = p.output_row(&weights.weights[j], y);
+            p.output_row(&weights.weights[j], y, &mut row);
             for m in 0..nm {
                 eta_bar[m] += hbar * row[m].conj() / p.velocity;
                 outputs[y][m] += (hbar.conj() * r.eta[j][m]).re / p.velocity;
@@ -532,6 +530,7 @@ pub fn rms_jvp(
     let weights = p.check()?;
     let nm = p.omega_n.len();
     let mut d_ms = vec![0.0; p.outputs.len()];
+    let mut row = vec![c64::new(0.0, 0.0); nm];
     for (j, &omega) in p.grid.omega.iter().enumerate() {
         let w = &weights.weights[j];
         let interp = |f: &dyn Fn(usize) -> c64| -> c64 {
@@ -552,7 +551,7 @@ pub fn rms_jvp(
         let deta = r.lus[j].solve(&rhs);
         let phi = p.turbulence.psd(omega, p.velocity);
         for y in 0..p.outputs.len() {
-            let (row, _) = p.output_row(w, y);
+            p.output_row(w, y, &mut row);
             let mut dh: c64 = (0..nm)
                 .map(|m| deta[m] * row[m] + eta[m] * d_outputs[y][m])
                 .sum::<c64>();

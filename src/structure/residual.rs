@@ -132,7 +132,7 @@ pub fn residual_shapes_vjp(
     let nd = fe.n_dofs();
     let mut phi_bar: Vec<Vec<f64>> = vec![vec![0.0; nd]; retained.len()];
     let mut p_bar = [0.0; N_PLANFORM];
-    // (−a, K⁻¹c) stiffness pairs and (−t_i φ_i, r) mass pairs
+    // (−a, K⁻¹c) stiffness pairs and (−Σ t_i φ_i, r) mass pairs, one an output
     let mut k_pairs: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
     let mut m_pairs: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
     for (o, wb) in outputs.iter().zip(shape_bar) {
@@ -164,14 +164,17 @@ pub fn residual_shapes_vjp(
             }
             None => {
                 let mr = fe.mass_times(&c);
-                let mut r_bar = wb.clone();
+                // v = Σ t_i φ_i carries every mode's share: r̄ −= M v, x̄ −= vᵀ(∂M/∂x) r
+                let mut v = vec![0.0; nd];
                 for (j, (_, phi, _)) in retained.iter().enumerate() {
                     let (m, t) = (dot(phi, &mr), dot(phi, &wb));
                     axpy(&mut phi_bar[j], -m, &wb);
                     axpy(&mut phi_bar[j], -t, &mr);
-                    axpy(&mut r_bar, -t, &fe.mass_times(phi));
-                    m_pairs.push((phi.iter().map(|v| -t * v).collect(), c.clone()));
+                    axpy(&mut v, t, phi);
                 }
+                let mut r_bar = wb.clone();
+                axpy(&mut r_bar, -1.0, &fe.mass_times(&v));
+                m_pairs.push((v.iter().map(|x| -x).collect(), c));
                 // r's deflection entries are η s: ∂r/∂span
                 let r_bar_nodal = nodal_shape(model, Field::Bending, r_bar.into_iter());
                 for (nd, node) in model.mesh.nodes.iter().enumerate() {
