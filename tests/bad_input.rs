@@ -116,6 +116,14 @@ fn sizes_beyond_the_machine() {
 /// angle, sweep bounds beyond the wing's own 80°; values in the file's unit (inches).
 #[test]
 fn garbage_is_refused_in_the_files_units() {
+    // the mode-acceleration switch takes a boolean
+    refused(
+        "run",
+        "gust.mode_acceleration",
+        "yes".into(),
+        "gust.mode_acceleration",
+        &["expected a boolean"],
+    );
     refused(
         "modes",
         "wing.span",
