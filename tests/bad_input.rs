@@ -195,6 +195,13 @@ fn errors_say_what_is_wrong() {
         &["at least 1"],
     );
     refused(
+        "run",
+        "optimization.resolution_corrections",
+        9.into(),
+        "optimization.resolution_corrections",
+        &["between 0 and 3", "got 9"],
+    );
+    refused(
         "modes",
         "aero.reduced_frequencies",
         serde_json::json!([0.0, 0.5, 0.2, 1.0, 2.0]),

@@ -1211,3 +1211,94 @@ fn reruns_and_thread_counts_give_identical_results() {
     assert_eq!(a, run("1", "c"), "one thread differs from two");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Resolution corrections (`optimization.resolution_corrections`): a 2-mode model on 5 × 8
+/// boxes whose refined RMS (4 modes, 10 × 16 boxes) is about 16 % above the constrained one.
+/// Without corrections the optimum fails the check and the run exits 3; with up to three, each
+/// pass constrains the study's model to limit × constrained / refined RMS of the last optimum, and
+/// the run ends on a design whose refined RMS meets the limit within the check's tolerance (2 %),
+/// heavier than the uncorrected one (a tighter limit costs mass). `--resume` of the finished run
+/// continues every pass from its checkpoint to the same design.
+#[test]
+fn resolution_corrections_meet_the_refined_limit() {
+    let dir = scratch("corrections");
+    let opt = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(opt).unwrap()).unwrap();
+    v["name"] = "opt_corr".into();
+    v["structure"]["modes"] = 2.into();
+    v["structure"]["damping_ratio"] = 0.01.into();
+    v["aero"]["fidelity"]["dlm"]["n_chord"] = 5.into();
+    v["aero"]["fidelity"]["dlm"]["n_span"] = 8.into();
+    v["gust"]["points"] = 300.into();
+    v["optimization"]
+        .as_object_mut()
+        .unwrap()
+        .remove("flutter_margin");
+    v["optimization"]["max_iterations"] = 60.into();
+    let run = |corrections: usize, extra: &[&str]| -> (Option<i32>, serde_json::Value) {
+        let mut s = v.clone();
+        s["optimization"]["resolution_corrections"] = corrections.into();
+        let file = dir.join(format!("corr{corrections}.json"));
+        std::fs::write(&file, s.to_string()).unwrap();
+        let reports = dir.join(format!("r{corrections}"));
+        let o = gustkit()
+            .args(["run", file.to_str().unwrap(), "--reports"])
+            .arg(&reports)
+            .args(extra)
+            .output()
+            .unwrap();
+        let text = std::fs::read_to_string(reports.join("opt_corr/results.json"))
+            .unwrap_or_else(|_| panic!("{}", String::from_utf8_lossy(&o.stderr)));
+        (o.status.code(), serde_json::from_str(&text).unwrap())
+    };
+    let (code, none) = run(0, &[]);
+    assert_eq!(code, Some(3));
+    assert!(none["corrections"].is_null());
+    let check = &none["resolution_check"];
+    assert!(!check["passed"].as_bool().unwrap());
+    let ratio = |c: &serde_json::Value| {
+        c["refined_rms_m"][0].as_f64().unwrap() / c["rms_m"][0].as_f64().unwrap()
+    };
+    assert!(ratio(check) > 1.05, "{}", ratio(check));
+
+    let (code, r) = run(3, &[]);
+    assert_eq!(code, Some(0));
+    let corrections = r["corrections"].as_array().unwrap();
+    assert!(!corrections.is_empty());
+    let limit = r["rms_limit"].as_f64().unwrap();
+    let mut mass = none["final"]["mass_kg"].as_f64().unwrap();
+    for c in corrections {
+        let f = |k: &str| c[k].as_f64().unwrap();
+        // the corrected limit is the study's scaled by the ratio measured at the last optimum
+        let expected = limit * f("rms_display") / f("refined_rms_display");
+        assert!((f("rms_limit_display") / expected - 1.0).abs() < 1e-12);
+        assert!(c["converged"].as_bool().unwrap());
+        assert!(f("mass_kg") > mass, "a tighter limit costs mass");
+        mass = f("mass_kg");
+    }
+    let last = &r["resolution_check"];
+    assert!(last["passed"].as_bool().unwrap());
+    let refined = last["refined_rms_m"][0].as_f64().unwrap();
+    let limit_m = last["rms_limit"][1].as_f64().unwrap();
+    assert!(refined <= limit_m * 1.02, "{refined} against {limit_m}");
+    // every pass is in the history, numbered on
+    let history = r["history"].as_array().unwrap();
+    let passes: Vec<u64> = history
+        .iter()
+        .map(|h| h["pass"].as_u64().unwrap_or(1))
+        .collect();
+    assert_eq!(*passes.last().unwrap(), 1 + corrections.len() as u64);
+    assert!(history
+        .windows(2)
+        .all(|w| w[1]["iteration"].as_u64() > w[0]["iteration"].as_u64()));
+    let summary = std::fs::read_to_string(dir.join("r3/opt_corr/summary.md")).unwrap();
+    assert!(summary.contains("Resolution corrections"), "{summary}");
+
+    let (code, again) = run(3, &["--resume"]);
+    assert_eq!(code, Some(0));
+    assert_eq!(
+        again["final"]["design_variables"],
+        r["final"]["design_variables"]
+    );
+}

@@ -15,8 +15,33 @@ const KEPT_FROM_OTHER_COMMANDS: &[&str] = &["sweep"];
 /// `steady_lfd_<hash>.bin`: the reader checks that a state fits and is converged).
 const REUSABLE_PREFIXES: &[&str] = &[crate::aero::lfd::STEADY_PREFIX];
 
-/// Files that make a staging folder worth keeping after a failure: an optimization's checkpoint.
-const CHECKPOINT_FILES: &[&str] = &["checkpoint.json", "checkpoint_study.json"];
+/// The first pass's checkpoint: a staging folder with one is a run that `--resume` continues.
+const CHECKPOINT: &str = "checkpoint.json";
+
+/// Files that make a staging folder worth keeping after a failure: an optimization's checkpoints
+/// (`checkpoint.json`, `checkpoint_pass2.json`, … of the resolution corrections) and the study
+/// they belong to (`checkpoint_study.json`).
+fn is_checkpoint(name: &str) -> bool {
+    name.starts_with("checkpoint") && name.ends_with(".json")
+}
+
+/// The checkpoint files in `dir` with their contents (the study copy left out: it does not change
+/// while a run goes on).
+fn checkpoints(dir: &Path) -> Vec<(std::ffi::OsString, Vec<u8>)> {
+    let mut found: Vec<_> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter(|e| {
+            let n = e.file_name();
+            let n = n.to_string_lossy();
+            is_checkpoint(&n) && n != "checkpoint_study.json"
+        })
+        .filter_map(|e| Some((e.file_name(), std::fs::read(e.path()).ok()?)))
+        .collect();
+    found.sort();
+    found
+}
 
 /// A run folder being written.
 pub struct RunFolder {
@@ -54,11 +79,11 @@ impl RunFolder {
                 }
             }
         }
-        if resume && !stage.join(CHECKPOINT_FILES[0]).exists() {
-            for f in CHECKPOINT_FILES {
-                let from = final_dir.join(f);
-                if from.exists() {
-                    std::fs::copy(&from, stage.join(f))
+        if resume && !stage.join(CHECKPOINT).exists() {
+            for entry in std::fs::read_dir(final_dir).into_iter().flatten().flatten() {
+                if is_checkpoint(&entry.file_name().to_string_lossy()) {
+                    let from = entry.path();
+                    std::fs::copy(&from, stage.join(entry.file_name()))
                         .with_context(|| format!("cannot copy {}", from.display()))?;
                 }
             }
@@ -122,10 +147,9 @@ impl Drop for RunFolder {
         if self.committed {
             return;
         }
-        let staged = std::fs::read(self.stage.join(CHECKPOINT_FILES[0])).ok();
-        let finished = std::fs::read(self.final_dir.join(CHECKPOINT_FILES[0])).ok();
+        let staged = checkpoints(&self.stage);
         // a checkpoint worth keeping: one this run wrote, not the finished run's copy
-        if staged.is_some() && staged != finished {
+        if !staged.is_empty() && staged != checkpoints(&self.final_dir) {
             eprintln!(
                 "the checkpoint of this run is kept in {}: `gustkit run --resume` continues it",
                 self.stage.display()

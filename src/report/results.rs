@@ -120,6 +120,37 @@ pub struct HistoryRow {
     pub violation: f64,
     pub kkt: f64,
     pub evaluations: usize,
+    /// The optimization pass this iteration belongs to: 1, then 2, … for each resolution
+    /// correction (absent for the first).
+    #[serde(default = "first_pass", skip_serializing_if = "is_first_pass")]
+    pub pass: usize,
+}
+
+fn first_pass() -> usize {
+    1
+}
+fn is_first_pass(p: &usize) -> bool {
+    *p == 1
+}
+
+/// One resolution correction: the optimization continued from the previous pass's optimum with
+/// the RMS limit scaled by the constrained / refined RMS ratio that the check measured there.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ResolutionCorrection {
+    /// 2 for the first correction.
+    pub pass: usize,
+    /// The constrained and the refined RMS of the previous pass's optimum (report unit).
+    pub rms_display: f64,
+    pub refined_rms_display: f64,
+    /// The limit this pass constrained the study's model to (report unit): the study's limit ×
+    /// rms_display / refined_rms_display.
+    pub rms_limit_display: f64,
+    pub iterations: usize,
+    pub evaluations: usize,
+    pub converged: bool,
+    pub message: String,
+    pub mass_kg: f64,
+    pub wall_time_s: f64,
 }
 
 /// The optimization: the keys the issue asks for at the top level of results.json.
@@ -170,6 +201,11 @@ pub struct OptimizationResults {
     /// `aero.compare_with` (absent without it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cross_evaluation: Option<CrossEvaluation>,
+    /// The resolution corrections after the first pass (`optimization.resolution_corrections`);
+    /// `iterations`, `evaluations`, `wall_time_s` and `history` count every pass, `timing` is the
+    /// first pass's.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub corrections: Vec<ResolutionCorrection>,
 }
 
 /// Wall times of repeated measurements, seconds: median, minimum and maximum.
@@ -381,6 +417,19 @@ pub struct ResolutionCheck {
     pub passed: bool,
     pub not_run: Option<String>,
     pub time_s: f64,
+    /// The unit the words show the RMS of the constrained (or first) output in, and the factor
+    /// from SI to it (the study's length unit for a displacement; SI before this field).
+    #[serde(default = "si_unit")]
+    pub rms_unit: String,
+    #[serde(default = "unit_factor")]
+    pub rms_unit_scale: f64,
+}
+
+fn si_unit() -> String {
+    "SI".into()
+}
+fn unit_factor() -> f64 {
+    1.0
 }
 
 /// The study's analysis at its initial design with its own fidelity and with the one of

@@ -176,6 +176,7 @@ pub fn summary(r: &RunResults) -> String {
             f.area_m2,
             100.0 * (f.area_m2 / i.area_m2 - 1.0),
         );
+        md += &corrections_text(o);
         if let Some(fc) = &o.flutter_check {
             md += &flutter_check_text(fc, o.flutter_margin);
         }
@@ -479,6 +480,33 @@ fn with_optimization(
     Ok(r)
 }
 
+/// The resolution corrections of an optimization, a table with a line of explanation (empty
+/// without any).
+fn corrections_text(o: &crate::report::results::OptimizationResults) -> String {
+    if o.corrections.is_empty() {
+        return String::new();
+    }
+    let mut md = format!(
+        "\nResolution corrections: the refined model found the optimum's RMS above the limit, so the optimization continued from it with the limit scaled by the constrained / refined RMS ratio (`optimization.resolution_corrections`):\n\n| pass | RMS before [{u}] | refined [{u}] | corrected limit [{u}] | iterations | evaluations | mass [kg] | time [s] | result |\n|---:|---:|---:|---:|---:|---:|---:|---:|---|\n",
+        u = o.unit
+    );
+    for c in &o.corrections {
+        md += &format!(
+            "| {} | {:.4} | {:.4} | {:.4} | {} | {} | {:.4} | {:.1} | {} |\n",
+            c.pass,
+            c.rms_display,
+            c.refined_rms_display,
+            c.rms_limit_display,
+            c.iterations,
+            c.evaluations,
+            c.mass_kg,
+            c.wall_time_s,
+            c.message
+        );
+    }
+    md
+}
+
 /// The resolution check in one paragraph: both models, their verdicts and RMS, and whether the
 /// refined one meets the requirement.
 pub fn resolution_words(c: &crate::report::results::ResolutionCheck) -> String {
@@ -490,17 +518,28 @@ pub fn resolution_words(c: &crate::report::results::ResolutionCheck) -> String {
             c.not_run.as_deref().unwrap_or("")
         );
     };
+    let (u, sc) = (&c.rms_unit, c.rms_unit_scale);
+    // six significant digits, no trailing zeros (the figures' tick form)
+    let sig = |v: f64| crate::report::style::tick(&v);
     let rms = match (c.rms_limit, c.rms_m.first()) {
         (Some((i, limit)), _) => match (c.rms_m.get(i), c.refined_rms_m.get(i)) {
             (Some(a), Some(b)) => format!(
-                " RMS of the constrained output {a:.6e} → {b:.6e} ({:+.2} %; limit {limit:.6e}, tolerance {:.0} %).",
+                " RMS of the constrained output {} → {} {u} ({:+.2} %; limit {} {u}, tolerance {:.0} %).",
+                sig(a * sc),
+                sig(b * sc),
                 100.0 * (b / a - 1.0),
+                sig(limit * sc),
                 100.0 * c.rms_tolerance
             ),
             _ => String::new(),
         },
         (None, Some(a)) => match c.refined_rms_m.first() {
-            Some(b) => format!(" RMS of the first output {a:.6e} → {b:.6e} ({:+.2} %).", 100.0 * (b / a - 1.0)),
+            Some(b) => format!(
+                " RMS of the first output {} → {} {u} ({:+.2} %).",
+                sig(a * sc),
+                sig(b * sc),
+                100.0 * (b / a - 1.0)
+            ),
             None => String::new(),
         },
         _ => String::new(),

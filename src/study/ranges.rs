@@ -242,6 +242,16 @@ impl Study {
             if o.max_iterations == 0 {
                 return Err(self.err("optimization.max_iterations", "must be at least 1"));
             }
+            if o.resolution_corrections > super::schema::MAX_RESOLUTION_CORRECTIONS {
+                return Err(self.err(
+                    "optimization.resolution_corrections",
+                    format!(
+                        "must be between 0 and {} (got {}): each correction is a whole optimization from the last optimum",
+                        super::schema::MAX_RESOLUTION_CORRECTIONS,
+                        o.resolution_corrections
+                    ),
+                ));
+            }
             if !(o.tolerance > 0.0 && o.tolerance < 1.0) {
                 return Err(self.err(
                     "optimization.tolerance",

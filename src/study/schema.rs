@@ -114,6 +114,14 @@ pub struct OptimizationSpec {
     pub max_iterations: usize,
     #[serde(default = "default_tolerance")]
     pub tolerance: f64,
+    /// How many times the optimization continues, from its optimum, with the RMS limit scaled by
+    /// the constrained / refined RMS ratio of the resolution check when the refined RMS exceeds
+    /// the limit beyond its tolerance (0: never; the run then exits 3 on such a design).
+    #[serde(
+        default = "default_resolution_corrections",
+        skip_serializing_if = "is_default_resolution_corrections"
+    )]
+    pub resolution_corrections: usize,
 }
 
 /// `optimization.warm_start`: where the starting design comes from.
@@ -139,6 +147,17 @@ fn default_true() -> bool {
 }
 fn default_max_iterations() -> usize {
     100
+}
+/// One correction: the refined RMS ratio moves little between neighbouring designs, so a second
+/// correction is seldom needed (the flagship's needs one).
+pub const DEFAULT_RESOLUTION_CORRECTIONS: usize = 1;
+/// The largest `resolution_corrections` accepted (each is a whole warm-started optimization).
+pub const MAX_RESOLUTION_CORRECTIONS: usize = 3;
+fn default_resolution_corrections() -> usize {
+    DEFAULT_RESOLUTION_CORRECTIONS
+}
+fn is_default_resolution_corrections(n: &usize) -> bool {
+    *n == DEFAULT_RESOLUTION_CORRECTIONS
 }
 fn default_tolerance() -> f64 {
     1e-4

@@ -2,6 +2,7 @@
 //! flutter, the gust-constrained optimization and the gradient check, each in its own module;
 //! [`run`] does every analysis a study defines and writes its report.
 
+mod correction;
 mod fidelities;
 pub mod flutter;
 pub mod gradient;
@@ -189,10 +190,21 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
         Some(_) => Some(optimize::optimize(&study, &dir, resume, false)?),
         None => None,
     };
-    let resolution_check = resolution_check(&study, optimization.as_ref())?;
-    if let Some(c) = &resolution_check {
+    let first_check = resolution_check(&study, optimization.as_ref())?;
+    if let Some(c) = &first_check {
         println!("{}", report::run::resolution_words(c));
     }
+    // an optimum whose refined RMS exceeds the limit is optimized again with the limit corrected
+    let (optimization, resolution_check) = match (optimization, first_check) {
+        (Some(o), Some(c)) => {
+            let (o, c) = correction::correct(&study, &dir, resume, o, c, |o| {
+                resolution_check(&study, Some(o))?
+                    .ok_or_else(|| anyhow::anyhow!("the resolution check of a corrected design"))
+            })?;
+            (Some(o), Some(c))
+        }
+        other => other,
+    };
     let results = RunResults {
         kind: StudyKind::Wing,
         study: study.spec.name.clone(),

@@ -139,7 +139,12 @@ fn defining_spec(study: &Study) -> Result<serde_json::Value> {
             a.remove("compare_with");
         }
         if let Some(o) = m.get_mut("optimization").and_then(|o| o.as_object_mut()) {
-            for key in ["max_iterations", "tolerance", "reference"] {
+            for key in [
+                "max_iterations",
+                "tolerance",
+                "reference",
+                "resolution_corrections",
+            ] {
                 o.remove(key);
             }
         }
@@ -284,6 +289,40 @@ pub(crate) fn design_basis(study: &Study) -> Result<(Study, Option<crate::proble
     ))
 }
 
+/// One pass of an optimization: the first solves the study's problem; each later one (a
+/// resolution correction) starts from the previous pass's optimum and BFGS matrix with the RMS
+/// limit scaled.
+#[derive(Clone, Debug)]
+pub struct Pass {
+    /// 1 for the study's own problem, then 2, 3, ….
+    pub number: usize,
+    /// The constrained limit is this factor × the study's limit.
+    pub rms_factor: f64,
+    /// Where the pass starts and its initial BFGS matrix (scaled variables), when not the
+    /// study's.
+    pub start: Option<(Vec<f64>, Option<Vec<Vec<f64>>>)>,
+}
+
+impl Pass {
+    /// The study's own problem.
+    pub fn first() -> Self {
+        Self {
+            number: 1,
+            rms_factor: 1.0,
+            start: None,
+        }
+    }
+}
+
+/// The checkpoint file of a pass in the run folder (`checkpoint.json` for the first, which warm
+/// starts of later runs read).
+pub fn checkpoint_file(dir: &Path, pass: usize) -> std::path::PathBuf {
+    match pass {
+        1 => dir.join("checkpoint.json"),
+        n => dir.join(format!("checkpoint_pass{n}.json")),
+    }
+}
+
 /// The gust-constrained mass minimization of a study (the `optimization` section).
 pub fn optimize(
     study: &Study,
@@ -291,17 +330,33 @@ pub fn optimize(
     resume: bool,
     quiet: bool,
 ) -> Result<OptimizationResults> {
+    optimize_pass(study, dir, resume, quiet, &Pass::first())
+}
+
+/// One pass of the gust-constrained mass minimization of a study.
+pub fn optimize_pass(
+    study: &Study,
+    dir: &Path,
+    resume: bool,
+    quiet: bool,
+    pass: &Pass,
+) -> Result<OptimizationResults> {
     use crate::problem::DesignProblem;
     let o = study.spec.optimization.as_ref().expect("caller checked");
     let settings = study.gust_settings()?;
     let (lower, upper) = study.design_bounds()?;
     let x0 = study.initial_design()?.to_vec();
-    // a warm start begins at another run's final design; mass and area stay relative to x0
-    let x_start = study.warm_start_design()?;
+    // a warm start begins at another run's final design (a correction pass at the previous
+    // pass's); mass and area stay relative to x0
+    let (x_start, hessian) = match &pass.start {
+        Some((x, h)) => (Some(x.clone()), h.clone()),
+        None => (study.warm_start_design()?, study.warm_start_hessian()?),
+    };
     let t_ev0 = Instant::now();
     let ev0 = crate::pipeline::evaluate(study, &settings, &x0).context("initial design")?;
     let t_ev0 = t_ev0.elapsed().as_secs_f64();
     let mut spec = design_spec(study, &settings, &ev0, lower, upper);
+    spec.rms_limit *= pass.rms_factor;
     let (fixed_basis, floor) = design_basis(study)?;
     spec.mode_floor = floor;
     if let (Some(f), false) = (floor, quiet) {
@@ -324,14 +379,20 @@ pub fn optimize(
         ..Default::default()
     };
     let defining = defining_spec(study)?;
-    let problem_id = format!(
+    let mut problem_id = format!(
         "{}:{:016x}",
         study.spec.name,
         fnv(&serde_json::to_string(&defining)?)
     );
+    if pass.number > 1 {
+        problem_id += &format!(":pass{}", pass.number);
+    }
     let study_copy = dir.join("checkpoint_study.json");
+    let checkpoint_path = checkpoint_file(dir, pass.number);
+    // a correction pass that had not begun when the run stopped begins now
+    let resume = resume && (pass.number == 1 || checkpoint_path.exists());
     let checkpoint = if resume {
-        let path = dir.join("checkpoint.json");
+        let path = checkpoint_path.clone();
         let text = std::fs::read_to_string(&path).with_context(|| {
             format!(
                 "--resume: cannot read {} (no interrupted run to continue: run without --resume)",
@@ -367,10 +428,12 @@ pub fn optimize(
         }
         Some(cp)
     } else {
-        write_atomic(
-            &study_copy,
-            serde_json::to_string_pretty(&defining)?.as_bytes(),
-        )?;
+        if pass.number == 1 {
+            write_atomic(
+                &study_copy,
+                serde_json::to_string_pretty(&defining)?.as_bytes(),
+            )?;
+        }
         None
     };
     let bar = if quiet {
@@ -397,12 +460,12 @@ pub fn optimize(
         max_iterations: o.max_iterations,
     };
     let mut store = FileCheckpoint {
-        path: dir.join("checkpoint.json"),
+        path: checkpoint_path,
     };
     let mut problem = DesignProblem::new(&fixed_basis, settings.clone(), spec.clone());
     let info = Executor::new(params, &problem_id)
         .resume(checkpoint)
-        .initial_hessian(study.warm_start_hessian()?)
+        .initial_hessian(hessian)
         .observe(&mut observer)
         .checkpoint(&mut store)
         .run(&mut problem, x_start.as_deref().unwrap_or(&x0));
@@ -455,6 +518,7 @@ pub fn optimize(
                 violation: it.violation,
                 kkt: it.kkt,
                 evaluations: it.evaluations,
+                pass: pass.number,
             })
         })
         .collect::<Result<Vec<_>>>()?;
@@ -534,6 +598,7 @@ pub fn optimize(
         warm_start: o.warm_start.as_ref().map(|w| w.from.display().to_string()),
         timing: Some(timing),
         cross_evaluation,
+        corrections: Vec::new(),
     })
 }
 

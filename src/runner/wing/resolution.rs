@@ -146,6 +146,12 @@ pub fn check(
     req: Requirement,
 ) -> Result<ResolutionCheck> {
     let t0 = Instant::now();
+    // the words show the constrained (or first) output's RMS in the study's unit
+    let shown = req.rms.map_or(0, |(i, _)| i);
+    let (unit_scale, unit) = match settings.and_then(|s| s.outputs.get(shown)) {
+        Some(o) => study.spec.length_unit.display(1.0, o.quantity.unit(), 1),
+        None => (1.0, "SI"),
+    };
     if let Some(why) = not_refinable(study) {
         // nothing to compare with: the design is not analysed again (an LFD analysis is minutes)
         return Ok(ResolutionCheck {
@@ -166,6 +172,8 @@ pub fn check(
             passed: true,
             not_run: Some(why),
             time_s: t0.elapsed().as_secs_f64(),
+            rms_unit: unit.into(),
+            rms_unit_scale: unit_scale,
         });
     }
     let base = crate::pipeline::aeroelastic(study, x).context("resolution check")?;
@@ -191,6 +199,8 @@ pub fn check(
         passed: false,
         not_run: None,
         time_s: 0.0,
+        rms_unit: unit.into(),
+        rms_unit_scale: unit_scale,
     };
     let (refined, words) = match refined_study(study, x, modes, dofs) {
         Ok(r) => r,
