@@ -151,6 +151,8 @@ mod tests {
             passed: flutter_ok && fine <= 1.0 + RMS_TOLERANCE,
             not_run: None,
             time_s: 0.0,
+            rms_unit: "m".into(),
+            rms_unit_scale: 1.0,
         }
     }
 

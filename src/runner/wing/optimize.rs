@@ -289,6 +289,9 @@ pub(crate) fn design_basis(study: &Study) -> Result<(Study, Option<crate::proble
     ))
 }
 
+/// A BFGS matrix of the scaled variables, row by row (as checkpoints keep it).
+pub type Hessian = Vec<Vec<f64>>;
+
 /// One pass of an optimization: the first solves the study's problem; each later one (a
 /// resolution correction) starts from the previous pass's optimum and BFGS matrix with the RMS
 /// limit scaled.
@@ -300,7 +303,7 @@ pub struct Pass {
     pub rms_factor: f64,
     /// Where the pass starts and its initial BFGS matrix (scaled variables), when not the
     /// study's.
-    pub start: Option<(Vec<f64>, Option<Vec<Vec<f64>>>)>,
+    pub start: Option<(Vec<f64>, Option<Hessian>)>,
 }
 
 impl Pass {
