@@ -41,7 +41,11 @@ pub(crate) fn gust_results(study: &Study) -> Result<(GustResults, crate::pipelin
         .collect();
     for o in &outputs {
         let (rms, unit) = study.spec.length_unit.display(o.rms, &o.unit, 1);
-        println!("RMS {}: {rms:.6e} {unit}", o.name);
+        println!(
+            "RMS {}: {} {unit}",
+            o.name,
+            crate::report::style::tick(&rms)
+        );
     }
     let spec = study.spec.gust.as_ref().expect("checked by gust_settings");
     let calibration = match &spec.calibration {
