@@ -140,7 +140,7 @@ fn cross_evaluation_and_compare_report() {
 }
 
 /// The reference DLM optimum, cross-evaluated with a coarse DLM lattice (4 × 6 boxes), flutters
-/// below the flight speed there (p-k at about 0.69 V): the cross-evaluation records the flutter
+/// below the flight speed there without structural damping: the cross-evaluation records the flutter
 /// point, the GAFs and the reason in place of an RMS, and the report says "unstable".
 #[test]
 fn unstable_cross_evaluation_is_recorded() {
@@ -154,6 +154,8 @@ fn unstable_cross_evaluation_is_recorded() {
         "from": root.join("reports/reference/agard445_dlm/results.json")
     });
     v["aero"]["compare_with"] = serde_json::json!({ "dlm": { "n_chord": 4, "n_span": 6 } });
+    // without the flagship's structural damping (its local modes then flutter on so few boxes)
+    v["structure"]["damping_ratio"] = 0.0.into();
     v.as_object_mut().unwrap().remove("flutter");
     let r = run(&dir, &v);
     let start = &r["cross_evaluation"]["designs"][1];

@@ -479,6 +479,7 @@ fn lfd_flutter_margin_gradient_matches_differences() {
 /// every mode and the gust at that reduced frequency (a VTK file each with the real and
 /// imaginary parts of pressure, C_p and velocity on every cell, all finite, not all zero); a
 /// value that is not one of the study's reduced frequencies is refused at load with its path.
+/// The run's resolution check analyses the design on the next LFD mesh, or says why it cannot.
 #[test]
 fn amplitude_fields_are_written() {
     let dir = std::env::temp_dir().join(format!("gustkit-lfd-fields-{}", std::process::id()));
@@ -540,6 +541,33 @@ fn amplitude_fields_are_written() {
         assert!(values.iter().all(|v| v.is_finite()), "{stem}");
         assert!(values.iter().any(|v| v.abs() > 1e-6), "{stem}: all zero");
     }
+    // the resolution check ran the LFD on the next mesh (sizes doubled in each direction: 8 ×
+    // the cells) with twice the modes, and said so
+    let results = || -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(folder.join("results.json")).unwrap())
+            .unwrap()
+    };
+    let check = &results()["resolution_check"];
+    let refined = check["refined_model"].as_str().unwrap();
+    assert!(refined.contains("4608 cells"), "{refined}");
+    assert_eq!(check["model"], "LFD given mesh (576 cells), 3 modes");
+    let rms = check["refined_rms_m"][0].as_f64().unwrap();
+    assert!(rms.is_finite() && rms > 0.0, "{check}");
+    // a next mesh above the memory limit is not run, with the reason (the estimate is linear in
+    // the cells: a limit of twice the study's own estimate refuses 8 × the cells)
+    let lfd: gustkit::aero::lfd::LfdWingSpec =
+        serde_json::from_value(v["aero"]["fidelity"]["lfd"].clone()).unwrap();
+    v["aero"]["fidelity"]["lfd"]["memory_limit_gb"] = (2.0 * lfd.memory_estimate_gb()).into();
+    std::fs::write(&file, v.to_string()).unwrap();
+    let o = run(&file);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let check = &results()["resolution_check"];
+    let why = check["not_run"].as_str().unwrap();
+    assert!(
+        why.contains("cannot run here") && why.contains("memory_limit_gb"),
+        "{why}"
+    );
+    assert!(check["refined_rms_m"].as_array().unwrap().is_empty());
     v["aero"]["fidelity"]["lfd"]["amplitude_fields_k"] = 0.5.into();
     std::fs::write(&file, v.to_string()).unwrap();
     let o = run(&file);

@@ -331,6 +331,16 @@ impl Study {
         }))
     }
 
+    /// The fidelity's own checks (sizes, memory, flight condition) without building it, for a
+    /// study edited after loading (the resolution check's refined model).
+    pub fn validate_fidelity(&self) -> Result<(), StudyError> {
+        let Some(aero) = self.spec.aero.as_ref() else {
+            return Ok(());
+        };
+        self.with_wing_context(|wing| aero.fidelity.builder().validate(wing))?
+            .map_err(|e| self.fidelity_err(&e))
+    }
+
     /// A fidelity builder's error, with the JSON path of the field in this study.
     fn fidelity_err(&self, e: &crate::aero::BuildError) -> StudyError {
         let name = self
