@@ -52,6 +52,9 @@ pub fn summary(r: &SectionResults) -> String {
             a.rms_pitch_rad / b.rms_pitch_rad
         );
     }
+    if let Some(c) = &r.resolution_check {
+        md += &format!("\n{}\n", c.words());
+    }
     md += "\n## GAFs (per unit span, divided by q∞; modes mass-normalized)\n\n| k | entry | LFD | strip theory |\n|---:|---|---|---|\n";
     if let [a, b] = &r.models[..] {
         for (i, k) in a.gafs.k.iter().enumerate() {

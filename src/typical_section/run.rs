@@ -42,7 +42,99 @@ pub struct SectionResults {
     pub mode_shapes: Vec<[f64; 2]>,
     pub cells: usize,
     pub models: Vec<ModelResults>,
+    /// The LFD on the O-mesh refined by two in each direction (absent before this field).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub resolution_check: Option<SectionResolution>,
     pub run_time_s: f64,
+}
+
+/// The typical section's resolution check: its two modes are exact, so what the model leaves out
+/// is the LFD's mesh; the section analysed again on the O-mesh with twice the cells around and
+/// across (the first spacing halved), the RMS and flutter speed at both meshes.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+pub struct SectionResolution {
+    /// The study's mesh and the refined one ("64 × 32 O-mesh, 2048 cells").
+    pub model: String,
+    pub refined_model: String,
+    /// RMS plunge (m) and pitch (rad), and the flutter speed (m/s, none in the sweep), at the
+    /// study's mesh and at the refined one.
+    pub rms_plunge_m: [f64; 2],
+    pub rms_pitch_rad: [f64; 2],
+    pub flutter_speed_m_s: [Option<f64>; 2],
+    pub time_s: f64,
+}
+
+impl SectionResolution {
+    /// The check in one paragraph, the changes in percent.
+    pub fn words(&self) -> String {
+        let change = |[a, b]: [f64; 2]| format!("{:+.2} %", 100.0 * (b / a - 1.0));
+        let flutter = match self.flutter_speed_m_s {
+            [Some(a), Some(b)] => format!("flutter {a:.2} → {b:.2} m/s ({})", change([a, b])),
+            [a, b] => format!(
+                "flutter {} → {}",
+                a.map_or("none in the sweep".into(), |v| format!("{v:.2} m/s")),
+                b.map_or("none in the sweep".into(), |v| format!("{v:.2} m/s"))
+            ),
+        };
+        format!(
+            "Resolution check: the LFD on the {} and on the {}: RMS plunge {}, RMS pitch {}, {flutter} ({:.1} s).",
+            self.model,
+            self.refined_model,
+            change(self.rms_plunge_m),
+            change(self.rms_pitch_rad),
+            self.time_s
+        )
+    }
+}
+
+/// The O-mesh's words: sizes and cells.
+fn mesh_words(m: &crate::aero::lfd::OMeshSpec) -> String {
+    format!(
+        "{} × {} O-mesh ({} cells)",
+        m.n_around,
+        m.n_radial,
+        m.n_around * m.n_radial
+    )
+}
+
+/// The resolution check of the LFD model `coarse` of the section: the same analysis on the
+/// O-mesh refined by two in each direction.
+fn resolution_check(
+    spec: &SectionSpec,
+    coarse: &ModelResults,
+    flight: &FlightCondition,
+    omega_n: &[f64],
+    shapes: &[[f64; 2]],
+) -> Result<SectionResolution> {
+    let t0 = Instant::now();
+    let mut cfd = spec.cfd.clone();
+    cfd.mesh.n_around *= 2;
+    cfd.mesh.n_radial *= 2;
+    cfd.mesh.first_spacing_chords /= 2.0;
+    let refined = SectionFidelitySpec::Lfd(cfd.clone());
+    let (aero, _) = refined
+        .build(spec.structure.chord_m, spec.flight.mach)
+        .map_err(|e| anyhow::anyhow!("resolution check: the refined O-mesh: {e}"))?;
+    let fine = analyze(
+        refined.display_name(),
+        aero.as_ref(),
+        spec,
+        flight,
+        omega_n,
+        shapes,
+    )
+    .map_err(|e| anyhow::anyhow!("resolution check: {e:#}"))?;
+    Ok(SectionResolution {
+        model: mesh_words(&spec.cfd.mesh),
+        refined_model: mesh_words(&cfd.mesh),
+        rms_plunge_m: [coarse.rms_plunge_m, fine.rms_plunge_m],
+        rms_pitch_rad: [coarse.rms_pitch_rad, fine.rms_pitch_rad],
+        flutter_speed_m_s: [
+            coarse.flutter.flutter_speed_m_s,
+            fine.flutter.flutter_speed_m_s,
+        ],
+        time_s: t0.elapsed().as_secs_f64(),
+    })
 }
 
 /// The rigid motion of each mode at an aerodynamic model's surface points (trait frame: z up),
@@ -179,6 +271,8 @@ pub fn run(s: &SectionStudyFile, reports: &Path) -> Result<()> {
                 .map_or("none in the sweep".to_string(), |v| format!("{v:.2} m/s"))
         );
     }
+    let check = resolution_check(spec, &models[0], &flight, &omega_n, &shapes)?;
+    println!("{}", check.words());
     let results = SectionResults {
         kind: StudyKind::TypicalSection,
         study: s.name.clone(),
@@ -192,6 +286,7 @@ pub fn run(s: &SectionStudyFile, reports: &Path) -> Result<()> {
         mode_shapes: shapes,
         cells,
         models,
+        resolution_check: Some(check),
         run_time_s: t0.elapsed().as_secs_f64(),
     };
     super::render(&dir, &results)?;
