@@ -80,7 +80,10 @@ fn run_writes_results_and_summary() {
     // the unit rule: results.json in SI, the summary's lengths in the study's unit (inches here)
     let rms_in = outs[0]["rms"].as_f64().unwrap() / 0.0254;
     assert!(
-        md.contains(&format!("| tip_te_w | {rms_in:.6e} | in |")),
+        md.contains(&format!(
+            "| tip_te_w | {} | in |",
+            gustkit::report::style::tick(&rms_in)
+        )),
         "{rms_in} in: {md}"
     );
     // the resolution check: twice the modes on a lattice refined by two each way; the initial

@@ -129,7 +129,12 @@ pub fn summary(r: &RunResults) -> String {
         );
         for o in &g.outputs {
             let (rms, unit) = r.length_unit.display(o.rms, &o.unit, 1);
-            md += &format!("| {} | {rms:.6e} | {unit} | {:.3} |\n", o.name, o.n0_hz);
+            md += &format!(
+                "| {} | {} | {unit} | {:.3} |\n",
+                o.name,
+                crate::report::style::tick(&rms),
+                o.n0_hz
+            );
         }
         if let Some(c) = &g.calibration {
             md += &format!(
@@ -268,8 +273,10 @@ pub fn comparison_text(
                     let (own, unit) = length_unit.display(o.rms, &o.unit, 1);
                     let (other_shown, _) = length_unit.display(*other, &o.unit, 1);
                     md += &format!(
-                        "| {} | {own:.6e} | {other_shown:.6e} | {:+.1} % | {unit} |\n",
+                        "| {} | {} | {} | {:+.1} % | {unit} |\n",
                         o.name,
+                        crate::report::style::tick(&own),
+                        crate::report::style::tick(&other_shown),
                         100.0 * (o.rms / other - 1.0),
                     );
                 }
