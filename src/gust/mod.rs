@@ -1,6 +1,7 @@
 //! Stochastic gust response: turbulence spectra, GAF interpolation in k, the modal frequency
 //! response of paper Eq. 16, PSD (Eq. 17), RMS and zero-crossing rate (Eq. 18), and their adjoint.
 
+pub mod discrete;
 pub mod interp;
 pub mod psd;
 pub mod response;
@@ -9,6 +10,7 @@ pub mod small_lu;
 
 pub use psd::Turbulence;
 pub use response::{
-    rms_vjp, solve, FrequencyGrid, GustError, GustGradient, GustProblem, GustResponse, ResidualGafs,
+    frequency_response, rms_vjp, solve, FrequencyGrid, FrequencyResponse, GustError, GustGradient,
+    GustProblem, GustResponse, ResidualGafs,
 };
 pub use settings::{GustSettings, Output, Quantity, QuantityName};

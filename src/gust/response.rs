@@ -365,8 +365,21 @@ impl<'a> GustProblem<'a> {
     }
 }
 
-/// Solves Eqs. 16–18 on the grid.
-pub fn solve(p: &GustProblem) -> Result<GustResponse, GustError> {
+/// The modal frequency response of Eq. 16 on a problem's grid: η per ω, H_y per output and ω
+/// (per unit gust velocity), and the factorizations that the reverse mode reuses.
+#[derive(Clone, Debug)]
+pub struct FrequencyResponse {
+    /// η(ω_j), one entry a mode.
+    pub eta: Vec<Vec<c64>>,
+    /// H_y(ω_j), `[output][j]`, in the output's SI unit per m/s of gust velocity.
+    pub h: Vec<Vec<c64>>,
+    lus: Vec<SmallLu>,
+}
+
+/// Solves Eq. 16 at every frequency of the problem's grid and forms the outputs' transfer
+/// functions H_y (Eq. 17 without the spectrum): the part shared by the stochastic and the
+/// discrete gust responses.
+pub fn frequency_response(p: &GustProblem) -> Result<FrequencyResponse, GustError> {
     let weights = p.check()?;
     let nm = p.omega_n.len();
     let per: Vec<(Vec<c64>, SmallLu)> = p
@@ -385,22 +398,30 @@ pub fn solve(p: &GustProblem) -> Result<GustResponse, GustError> {
         })
         .collect::<Result<_, _>>()?;
     let (eta, lus): (Vec<_>, Vec<_>) = per.into_iter().unzip();
+    let mut row = vec![c64::new(0.0, 0.0); nm];
+    let h = (0..p.outputs.len())
+        .map(|y| {
+            eta.iter()
+                .zip(&weights.weights)
+                .map(|(e, w)| {
+                    let off = p.output_row(w, y, &mut row);
+                    (e.iter().zip(&row).map(|(a, b)| a * b).sum::<c64>() + off) / p.velocity
+                })
+                .collect()
+        })
+        .collect();
+    Ok(FrequencyResponse { eta, h, lus })
+}
+
+/// Solves Eqs. 16–18 on the grid.
+pub fn solve(p: &GustProblem) -> Result<GustResponse, GustError> {
+    let FrequencyResponse { eta, h, lus } = frequency_response(p)?;
     let mut rms = Vec::new();
     let mut n0 = Vec::new();
     let mut psd = Vec::new();
-    let mut h = Vec::new();
     let mut m0s = Vec::new();
     let mut h_last = Vec::new();
-    let mut row = vec![c64::new(0.0, 0.0); nm];
-    for y in 0..p.outputs.len() {
-        let hy: Vec<c64> = eta
-            .iter()
-            .zip(&weights.weights)
-            .map(|(e, w)| {
-                let off = p.output_row(w, y, &mut row);
-                (e.iter().zip(&row).map(|(a, b)| a * b).sum::<c64>() + off) / p.velocity
-            })
-            .collect();
+    for hy in &h {
         let py: Vec<f64> = hy
             .iter()
             .zip(&p.grid.omega)
@@ -418,7 +439,6 @@ pub fn solve(p: &GustProblem) -> Result<GustResponse, GustError> {
         m0s.push(m0);
         h_last.push(hy.last().map_or(0.0, |v| v.norm()));
         psd.push(py);
-        h.push(hy);
     }
     let tail = p.tail_check(&m0s, &h_last)?;
     Ok(GustResponse {
