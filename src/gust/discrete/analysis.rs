@@ -73,58 +73,73 @@ pub fn initial_span(profiles: &[GustProfile], omega_n: &[f64]) -> f64 {
     (4.0 * t_end).max(periods)
 }
 
-fn on_grid(
-    p: &GustProblem,
-    profiles: &[GustProfile],
-    s: &TransientSettings,
-    grid: &TimeGrid,
-) -> Result<Vec<ProfileResponse>, GustError> {
-    let mut q = p.clone();
-    q.grid = FrequencyGrid {
-        omega: grid.omega.clone(),
-        weights: vec![0.0; grid.omega.len()],
-    };
-    let fr = frequency_response(&q)?;
-    // (iω)^d H_y(ω), shared by every profile
-    let transfer: Vec<Vec<c64>> =
-        fr.h.iter()
-            .zip(&s.derivative)
-            .map(|(hy, &d)| {
-                hy.iter()
-                    .zip(&grid.omega)
-                    .map(|(h, &w)| h * c64::new(0.0, w).powu(d))
-                    .collect()
-            })
-            .collect();
-    let mut syn = Synthesizer::new(grid);
-    let mut y = vec![0.0; grid.time.len()];
-    let mut spectrum = vec![c64::new(0.0, 0.0); grid.omega.len()];
-    let mut product = spectrum.clone();
-    let mut out = Vec::with_capacity(profiles.len());
-    for g in profiles {
-        for (w, o) in spectrum.iter_mut().zip(&grid.omega) {
+/// A problem's transfer functions on one time grid, ready for any profile: Eq. 16 is solved
+/// once, each profile then costs its spectrum and one inverse FFT an output.
+pub struct TransientModel {
+    pub grid: TimeGrid,
+    /// (iω)^d H_y(ω) per output and grid frequency.
+    transfer: Vec<Vec<c64>>,
+    syn: Synthesizer,
+    spectrum: Vec<c64>,
+    product: Vec<c64>,
+    y: Vec<f64>,
+}
+
+impl TransientModel {
+    /// Solves the problem's frequency response on `grid`, the outputs differentiated
+    /// `derivative[y]` times in time.
+    pub fn new(p: &GustProblem, derivative: &[u32], grid: TimeGrid) -> Result<Self, GustError> {
+        let mut q = p.clone();
+        q.grid = FrequencyGrid {
+            omega: grid.omega.clone(),
+            weights: vec![0.0; grid.omega.len()],
+        };
+        let fr = frequency_response(&q)?;
+        let transfer =
+            fr.h.iter()
+                .zip(derivative)
+                .map(|(hy, &d)| {
+                    hy.iter()
+                        .zip(&grid.omega)
+                        .map(|(h, &w)| h * c64::new(0.0, w).powu(d))
+                        .collect()
+                })
+                .collect();
+        Ok(Self {
+            syn: Synthesizer::new(&grid),
+            spectrum: vec![c64::new(0.0, 0.0); grid.omega.len()],
+            product: vec![c64::new(0.0, 0.0); grid.omega.len()],
+            y: vec![0.0; grid.time.len()],
+            transfer,
+            grid,
+        })
+    }
+
+    /// The outputs' response to profile `g`: peaks, wrap fractions, the truncated energy, and
+    /// the histories if `keep`.
+    pub fn respond(&mut self, g: &GustProfile, keep: bool) -> ProfileResponse {
+        for (w, o) in self.spectrum.iter_mut().zip(&self.grid.omega) {
             *w = g.spectrum(*o);
         }
         let mut r = ProfileResponse {
             peaks: Vec::new(),
             histories: Vec::new(),
             wrap: Vec::new(),
-            truncated: truncated_energy(g, grid),
+            truncated: truncated_energy(g, &self.grid),
         };
-        for t in &transfer {
-            for ((pr, h), w) in product.iter_mut().zip(t).zip(&spectrum) {
+        for t in &self.transfer {
+            for ((pr, h), w) in self.product.iter_mut().zip(t).zip(&self.spectrum) {
                 *pr = h * w;
             }
-            syn.history(&product, &mut y);
-            r.peaks.push(extremes(&grid.time, &y));
-            r.wrap.push(wrap_fraction(&y));
-            if s.keep_histories {
-                r.histories.push(y.clone());
+            self.syn.history(&self.product, &mut self.y);
+            r.peaks.push(extremes(&self.grid.time, &self.y));
+            r.wrap.push(wrap_fraction(&self.y));
+            if keep {
+                r.histories.push(self.y.clone());
             }
         }
-        out.push(r);
+        r
     }
-    Ok(out)
 }
 
 /// The responses of the problem's outputs to each profile. With no span given, the span starts
@@ -136,7 +151,7 @@ pub fn transient(
     p: &GustProblem,
     profiles: &[GustProfile],
     s: &TransientSettings,
-) -> Result<TransientResponse, GustError> {
+) -> Result<(TransientResponse, TransientModel), GustError> {
     if s.derivative.len() != p.outputs.len() {
         return Err(GustError::Input(format!(
             "one derivative order an output: {} for {} outputs",
@@ -165,7 +180,11 @@ pub fn transient(
             )));
         }
         let grid = TimeGrid::new(span, s.omega_max).map_err(GustError::Input)?;
-        let responses = on_grid(p, profiles, s, &grid)?;
+        let mut model = TransientModel::new(p, &s.derivative, grid)?;
+        let responses: Vec<ProfileResponse> = profiles
+            .iter()
+            .map(|g| model.respond(g, s.keep_histories))
+            .collect();
         if let Some((i, r)) = responses
             .iter()
             .enumerate()
@@ -184,11 +203,12 @@ pub fn transient(
             .flat_map(|(i, r)| r.wrap.iter().enumerate().map(move |(y, w)| (i, y, *w)))
             .fold((0, 0, 0.0f64), |a, b| if b.2 > a.2 { b } else { a });
         if worst.2 <= WRAP_TOLERANCE {
-            return Ok(TransientResponse {
-                grid,
+            let response = TransientResponse {
+                grid: model.grid.clone(),
                 span_chosen: s.span.is_none(),
                 profiles: responses,
-            });
+            };
+            return Ok((response, model));
         }
         if s.span.is_some() || doublings == MAX_DOUBLINGS {
             return Err(GustError::Input(format!(

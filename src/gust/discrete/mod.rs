@@ -4,7 +4,11 @@
 pub mod analysis;
 pub mod profile;
 pub mod transient;
+pub mod tuned;
 
-pub use analysis::{transient, ProfileResponse, TransientResponse, TransientSettings};
+pub use analysis::{
+    transient, ProfileResponse, TransientModel, TransientResponse, TransientSettings,
+};
 pub use profile::{cs25_amplitude, reference_gust_velocity, GustProfile};
 pub use transient::{extremes, truncated_energy, wrap_fraction, Peak, Synthesizer, TimeGrid};
+pub use tuned::{tuned_search, CriticalGust, EnvelopePoint, TunedResult};

@@ -121,7 +121,7 @@ fn plunge_history_matches_state_space_time_marching() {
         amplitude: 1.0,
         velocity: sec.velocity,
     };
-    let r = transient(&sec.problem(), std::slice::from_ref(&gust), &sec.settings()).unwrap();
+    let (r, _) = transient(&sec.problem(), std::slice::from_ref(&gust), &sec.settings()).unwrap();
     let acc = &r.profiles[0].histories[0];
     let time = &r.grid.time;
     let (b, u, rho) = (sec.b, sec.velocity, sec.density);
@@ -195,7 +195,8 @@ fn rigid_plunge_reproduces_pratt_gust_factor() {
             amplitude: 1.0,
             velocity: sec.velocity,
         };
-        let r = transient(&sec.problem(), std::slice::from_ref(&gust), &sec.settings()).unwrap();
+        let (r, _) =
+            transient(&sec.problem(), std::slice::from_ref(&gust), &sec.settings()).unwrap();
         let peak = r.profiles[0].peaks[0].0.value;
         let (rho, v, c) = (sec.density, sec.velocity, 2.0 * sec.b);
         let quasi_static = rho * 1.0 * v * 2.0 * PI / (2.0 * sec.mass / c);
