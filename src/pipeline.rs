@@ -127,7 +127,8 @@ impl Evaluation {
         &self.settings
     }
 
-    fn problem(&self) -> GustProblem<'_> {
+    /// The stochastic gust problem of this evaluation (Eqs. 16–18 on its grid).
+    pub(crate) fn problem(&self) -> GustProblem<'_> {
         GustProblem {
             omega_n: self.modes.omega(),
             damping_ratio: self.modes.damping_ratio,

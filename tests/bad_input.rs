@@ -231,6 +231,42 @@ fn errors_say_what_is_wrong() {
     );
 }
 
+/// The discrete gust section (issue 30): a gradient outside CS-25's 30–350 ft without the option
+/// that allows it, a tabulated profile whose times do not increase, a 1-cos gust without its
+/// amplitude, an alleviation factor above 1: each refused at load naming the field and the fix.
+#[test]
+fn discrete_gust_errors_name_the_field() {
+    let cs25 = serde_json::json!({"cs25": {"altitude_m": 0.0, "f_g": 1.0}});
+    refused(
+        "modes",
+        "discrete_gust",
+        serde_json::json!({"gradient_ft": [20.0, 350.0], "amplitude": cs25}),
+        "discrete_gust.gradient_ft",
+        &["outside CS-25's 30–350 ft", "allow_any_gradient"],
+    );
+    refused(
+        "modes",
+        "discrete_gust",
+        serde_json::json!({"profile": "tabulated", "table": {"time_s": [0.0, 0.2, 0.1], "velocity_m_s": [0.0, 5.0, 0.0]}}),
+        "discrete_gust.table.time_s[2]",
+        &["increase strictly", "0.1 s after 0.2 s"],
+    );
+    refused(
+        "modes",
+        "discrete_gust",
+        serde_json::json!({"gradient_ft": [30.0, 350.0]}),
+        "discrete_gust.amplitude",
+        &["u_ds_m_s", "cs25"],
+    );
+    refused(
+        "modes",
+        "discrete_gust",
+        serde_json::json!({"amplitude": {"cs25": {"altitude_m": 0.0, "f_g": 1.5}}}),
+        "discrete_gust.amplitude.cs25.f_g",
+        &["(0, 1]", "got 1.5"],
+    );
+}
+
 /// A prefix is never repeated: the JSON path names the field once.
 #[test]
 fn no_repeated_prefixes() {

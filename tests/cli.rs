@@ -1329,3 +1329,90 @@ fn resolution_corrections_meet_the_refined_limit() {
         r["final"]["design_variables"]
     );
 }
+
+/// The minimal wing study with a `discrete_gust` section, as a user edits it in.
+fn minimal_with_discrete(dir: &Path, name: &str, section: serde_json::Value) -> PathBuf {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/minimal_wing.json");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    v["name"] = name.into();
+    v["discrete_gust"] = section;
+    let file = dir.join(format!("{name}.json"));
+    std::fs::write(&file, v.to_string()).unwrap();
+    file
+}
+
+/// `gustkit run` with a tuned 1-cos search (issue 30): results.json holds the envelope (the 20
+/// grid gradients and the refinement's, in increasing H), a critical row per output and its
+/// acceleration, with each critical peak at least as large as every envelope point's, and
+/// passes both checks; the CSV files and figures are written. A time span too short for the
+/// response to decay is refused with the field and the fix, exit 1, and no run folder.
+#[test]
+fn discrete_gust_tuned_search_is_reported() {
+    let dir = common::scratch("cli", "discrete");
+    let file = minimal_with_discrete(
+        &dir,
+        "discrete",
+        serde_json::json!({"amplitude": {"cs25": {"altitude_m": 3000.0, "f_g": 0.9}}, "accelerations": true}),
+    );
+    let reports = dir.join("reports");
+    let o = gustkit()
+        .args(["run", file.to_str().unwrap(), "--reports"])
+        .arg(&reports)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let run = reports.join("discrete");
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("results.json")).unwrap()).unwrap();
+    let d = &r["discrete_gust"];
+    let env = d["envelope"].as_array().unwrap();
+    assert_eq!(env.iter().filter(|e| e["refined"] == false).count(), 20);
+    let h: Vec<f64> = env
+        .iter()
+        .map(|e| e["gradient_ft"].as_f64().unwrap())
+        .collect();
+    assert!(
+        h.windows(2).all(|w| w[0] <= w[1]) && h[0] >= 30.0 - 1e-9 && h[h.len() - 1] <= 350.0 + 1e-9
+    );
+    let n_gust_outputs = r["gust"]["outputs"].as_array().unwrap().len();
+    let critical = d["critical"].as_array().unwrap();
+    assert!(critical.len() > n_gust_outputs, "accelerations added");
+    for (y, c) in critical.iter().enumerate() {
+        let (mx, mn) = (c["max"].as_f64().unwrap(), c["min"].as_f64().unwrap());
+        for e in env {
+            assert!(e["max"][y].as_f64().unwrap() <= mx && e["min"][y].as_f64().unwrap() >= mn);
+        }
+    }
+    assert!(
+        d["wrap_max"].as_f64().unwrap() <= 1e-3 && d["truncated_max"].as_f64().unwrap() <= 1e-4
+    );
+    for f in [
+        "discrete_gust_envelope.csv",
+        "discrete_gust_envelope.png",
+        "discrete_gust_histories.png",
+    ] {
+        assert!(run.join(f).exists(), "{f}");
+    }
+    let summary = std::fs::read_to_string(run.join("summary.md")).unwrap();
+    assert!(summary.contains("## Discrete gust"));
+
+    let short = minimal_with_discrete(
+        &dir,
+        "discrete_short",
+        serde_json::json!({"amplitude": {"u_ds_m_s": 10.0}, "time_span_s": 0.3}),
+    );
+    let o = gustkit()
+        .args(["run", short.to_str().unwrap(), "--reports"])
+        .arg(&reports)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("discrete_gust.time_span_s") && err.contains("wrap around"),
+        "{err}"
+    );
+    assert!(!reports.join("discrete_short").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,6 +1,8 @@
 //! Reports: figures (plotters, PNG and SVG), VTK files and markdown, always written atomically.
 
 pub mod compare;
+pub mod discrete;
+pub mod discrete_plots;
 pub mod figures;
 pub mod folder;
 pub mod results;

@@ -372,6 +372,9 @@ pub struct RunResults {
     pub fidelity: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gust: Option<GustResults>,
+    /// The discrete gust analysis at the study's design (absent without the section).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub discrete_gust: Option<crate::report::discrete::DiscreteGustResults>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub flutter: Option<FlutterSummary>,
     #[serde(default, skip_serializing_if = "Option::is_none", flatten)]

@@ -145,6 +145,9 @@ pub fn summary(r: &RunResults) -> String {
         }
         md += "\n![PSD](psd.png)\n";
     }
+    if let Some(d) = &r.discrete_gust {
+        md += &crate::report::discrete::summary_text(d, r.length_unit);
+    }
     if let Some(f) = &r.flutter {
         md += &format!(
             "\n## Flutter (p-k)\n\nM = {}, ρ = {} kg/m³: {}.\n\n![V-g, V-f](flutter_vg.png)\n",
@@ -339,6 +342,9 @@ pub fn figures(r: &RunResults, sink: &mut impl FigureSink) -> Result<()> {
                 panels,
             },
         )?;
+    }
+    if let Some(d) = &r.discrete_gust {
+        crate::report::discrete_plots::figures(d, &r.study, r.length_unit, sink)?;
     }
     if let Some(f) = &r.flutter {
         sink.figure(

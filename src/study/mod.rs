@@ -5,6 +5,7 @@
 //! Lengths are given in `length_unit` (m, in or ft) and converted to SI here; angles in degrees;
 //! material constants in SI with the unit in the field name.
 
+pub mod discrete;
 pub mod limits;
 pub mod ranges;
 pub(crate) mod schema;
@@ -174,6 +175,7 @@ impl Study {
         let s = &self.spec;
         check_header(&self.file, s.schema_version, &s.name)?;
         self.check_ranges()?;
+        self.discrete_gust_settings()?;
         self.planform()?;
         self.airfoil()?;
         self.material()?;

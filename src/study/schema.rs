@@ -27,6 +27,9 @@ pub struct StudyFile {
     /// Continuous-turbulence response settings.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gust: Option<GustSpec>,
+    /// Discrete gust response (tuned 1-cos gusts or a tabulated profile) of the gust outputs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub discrete_gust: Option<DiscreteGustSpec>,
     /// p-k flutter sweep at the flight Mach number and density.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub flutter: Option<FlutterSpec>,
@@ -238,6 +241,98 @@ pub struct GustSpec {
     /// target and the σ_w that would meet the target exactly (the RMS is linear in σ_w).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub calibration: Option<CalibrationSpec>,
+}
+
+/// Discrete gust analysis: the response of the gust section's outputs to vertical gusts that
+/// convect over the wing at the flight speed, by the frequency response and an inverse FFT.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct DiscreteGustSpec {
+    /// `"one_minus_cosine"` (the default: the tuned gust search of CS-25.341(a)) or
+    /// `"tabulated"` (the profile of `table`).
+    #[serde(default)]
+    pub profile: DiscreteProfileName,
+    /// [H_min, H_max] of the tuned search, ft (CS-25: 30 to 350 ft).
+    #[serde(default = "default_gradient_ft")]
+    pub gradient_ft: [f64; 2],
+    /// Points of the search grid in H (equally spaced; the critical H of each output is then
+    /// refined).
+    #[serde(default = "default_gradient_points")]
+    pub gradient_points: usize,
+    /// Admits gradients outside CS-25's 30–350 ft.
+    #[serde(default)]
+    pub allow_any_gradient: bool,
+    /// The gust amplitude U_ds of the 1-cos: `{"u_ds_m_s": U}` (true airspeed, the same at every
+    /// H) or `{"cs25": {"altitude_m", "f_g", "speed": "vc" | "vd"}}` (U_ref F_g (H/350 ft)^{1/6},
+    /// EAS converted to TAS at the flight density).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub amplitude: Option<AmplitudeSpec>,
+    /// The tabulated profile: `{"time_s": [...], "velocity_m_s": [...]}` (the gust velocity at
+    /// `aero.gust_x_ref`, linear between points, zero outside).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub table: Option<GustTableSpec>,
+    /// The time span of the response, s; default chosen so that every response decays in it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_span_s: Option<f64>,
+    /// Adds the vertical acceleration of every displacement output (m/s²).
+    #[serde(default)]
+    pub accelerations: bool,
+}
+
+/// The shape of a discrete gust.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum DiscreteProfileName {
+    #[default]
+    OneMinusCosine,
+    Tabulated,
+}
+
+/// The amplitude of the 1-cos gust.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum AmplitudeSpec {
+    /// U_ds, m/s true airspeed, the same at every gradient.
+    UDsMS(f64),
+    /// CS-25.341(a)(4)–(6).
+    Cs25(Cs25Spec),
+}
+
+/// The CS-25 design gust velocity's inputs.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Cs25Spec {
+    /// Altitude of the flight condition, m (U_ref by altitude).
+    pub altitude_m: f64,
+    /// The flight profile alleviation factor F_g (0, 1].
+    pub f_g: f64,
+    /// `"vc"` (design cruising speed, the default) or `"vd"` (design dive speed: half U_ref).
+    #[serde(default)]
+    pub speed: DesignSpeed,
+}
+
+/// The design speed of a CS-25 gust.
+#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum DesignSpeed {
+    #[default]
+    Vc,
+    Vd,
+}
+
+/// A tabulated gust profile.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct GustTableSpec {
+    pub time_s: Vec<f64>,
+    pub velocity_m_s: Vec<f64>,
+}
+
+fn default_gradient_ft() -> [f64; 2] {
+    [30.0, 350.0]
+}
+fn default_gradient_points() -> usize {
+    20
 }
 
 /// σ_w calibrated so that the initial RMS of `output` equals `target_rms` (length unit for

@@ -3,6 +3,7 @@
 //! [`run`] does every analysis a study defines and writes its report.
 
 mod correction;
+mod discrete;
 mod fidelities;
 pub mod flutter;
 pub mod gradient;
@@ -136,6 +137,10 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
         }
         None => (None, None),
     };
+    let discrete_gust = match &gust_evaluation {
+        Some(ev) => discrete::discrete_results(&study, ev, &dir)?,
+        None => None,
+    };
     let flutter = match study.spec.flutter {
         Some(_) => {
             let (doc, r, velocities) = flutter::flutter_analysis(&study, &dir, false)?;
@@ -222,6 +227,7 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
             .as_ref()
             .map(|a| a.fidelity.builder().name().to_string()),
         gust,
+        discrete_gust,
         flutter,
         optimization,
         comparison,
