@@ -458,12 +458,57 @@ pub fn rms_vjp(
     r: &GustResponse,
     rms_bar: &[f64],
 ) -> Result<GustGradient, GustError> {
-    let weights = p.check()?;
     if rms_bar.len() != p.outputs.len() {
         return Err(GustError::Input(format!(
             "seeds: {} RMS seeds for {} outputs",
             rms_bar.len(),
             p.outputs.len()
+        )));
+    }
+    // H̄_y(ω_j) = RMS̄_y w_j Φ_j H_y(ω_j) / RMS_y
+    let hbar: Vec<Vec<c64>> = (0..p.outputs.len())
+        .map(|y| {
+            p.grid
+                .omega
+                .iter()
+                .enumerate()
+                .map(|(j, &omega)| {
+                    if rms_bar[y] == 0.0 || r.rms[y] == 0.0 {
+                        return c64::new(0.0, 0.0);
+                    }
+                    let phi = p.turbulence.psd(omega, p.velocity);
+                    r.h[y][j] * (rms_bar[y] * p.grid.weights[j] * phi / r.rms[y])
+                })
+                .collect()
+        })
+        .collect();
+    transfer_vjp(p, &r.eta, &r.lus, &hbar)
+}
+
+impl FrequencyResponse {
+    /// Reverse mode of the transfer functions: seeds `hbar[y][j]` on H_y(ω_j) (conjugate
+    /// convention, δJ = Re Σ conj(H̄) δH) to seeds on the GAF table, ω_n², S and the residual rows.
+    pub fn vjp(&self, p: &GustProblem, hbar: &[Vec<c64>]) -> Result<GustGradient, GustError> {
+        transfer_vjp(p, &self.eta, &self.lus, hbar)
+    }
+}
+
+/// The reverse sweep shared by every functional of the transfer functions (module docs): per ω,
+///   η̄ = Σ_y conj(S̃_y) H̄_y / U,  Aᴴ λ = η̄,  Q̄_gs = q λ,  Q̄_ss = q λ ηᴴ,
+///   ω̄²_n,m = Re(−conj(λ_m) η_m (1 + iω ζ/ω_n,m)),  S̄ = Re(conj(H̄) η) / U,
+/// and the residual rows' seeds, all mapped to the table's k by the transposed spline weights.
+fn transfer_vjp(
+    p: &GustProblem,
+    eta_all: &[Vec<c64>],
+    lus: &[SmallLu],
+    hbar: &[Vec<c64>],
+) -> Result<GustGradient, GustError> {
+    let weights = p.check()?;
+    if hbar.len() != p.outputs.len() || hbar.iter().any(|h| h.len() != p.grid.omega.len()) {
+        return Err(GustError::Input(format!(
+            "seeds: one transfer-function seed an output and grid frequency ({} outputs, {} frequencies)",
+            p.outputs.len(),
+            p.grid.omega.len()
         )));
     }
     let nm = p.omega_n.len();
@@ -483,34 +528,38 @@ pub fn rms_vjp(
         .map(|_| ResidualGafs::zeros(nk, p.outputs.len(), nm));
     let mut row = vec![c64::new(0.0, 0.0); nm];
     for (j, &omega) in p.grid.omega.iter().enumerate() {
-        let phi = p.turbulence.psd(omega, p.velocity);
+        let eta = &eta_all[j];
         // η̄ = Σ_y conj(S̃_y) H̄_y / U
         let mut eta_bar = vec![c64::new(0.0, 0.0); nm];
+        let mut any = false;
         for y in 0..p.outputs.len() {
-            if rms_bar[y] == 0.0 || r.rms[y] == 0.0 {
+            let hb = hbar[y][j];
+            if hb == c64::new(0.0, 0.0) {
                 continue;
             }
-            let hbar = r.h[y][j] * (rms_bar[y] * p.grid.weights[j] * phi / r.rms[y]);
+            any = true;
             p.output_row(&weights.weights[j], y, &mut row);
             for m in 0..nm {
-                eta_bar[m] += hbar * row[m].conj() / p.velocity;
-                outputs[y][m] += (hbar.conj() * r.eta[j][m]).re / p.velocity;
+                eta_bar[m] += hb * row[m].conj() / p.velocity;
+                outputs[y][m] += (hb.conj() * eta[m]).re / p.velocity;
             }
             if let Some(res) = residual.as_mut() {
-                let s = hbar * (p.q_inf / p.velocity);
+                let s = hb * (p.q_inf / p.velocity);
                 for (i, wi) in weights.weights[j].iter().enumerate() {
                     if *wi == 0.0 {
                         continue;
                     }
                     for m in 0..nm {
-                        res.q_ws[i][y][m] += s * r.eta[j][m].conj() * *wi;
+                        res.q_ws[i][y][m] += s * eta[m].conj() * *wi;
                     }
                     res.q_wg[i][y] += s * *wi;
                 }
             }
         }
-        let lam = r.lus[j].solve_adjoint(&eta_bar);
-        let eta = &r.eta[j];
+        if !any {
+            continue;
+        }
+        let lam = lus[j].solve_adjoint(&eta_bar);
         for m in 0..nm {
             let l = lam[m];
             // Ā_mn = −λ_m conj(η_n); Q̄_ss = −q Ā = q λ_m conj(η_n); Q̄_gs = q λ

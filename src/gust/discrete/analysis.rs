@@ -8,7 +8,9 @@ use super::transient::{
     extremes, truncated_energy, wrap_fraction, Peak, Synthesizer, TimeGrid, TRUNCATION_TOLERANCE,
     WRAP_TOLERANCE,
 };
-use crate::gust::response::{frequency_response, FrequencyGrid, GustError, GustProblem};
+use crate::gust::response::{
+    frequency_response, FrequencyGrid, FrequencyResponse, GustError, GustProblem,
+};
 use faer::c64;
 
 /// Times the span may be doubled when the response has not decayed within it.
@@ -77,6 +79,10 @@ pub fn initial_span(profiles: &[GustProfile], omega_n: &[f64]) -> f64 {
 /// once, each profile then costs its spectrum and one inverse FFT an output.
 pub struct TransientModel {
     pub grid: TimeGrid,
+    /// The time-derivative order of each output.
+    pub derivative: Vec<u32>,
+    /// Eq. 16 on the grid: η, H_y and the factorizations the reverse mode reuses.
+    pub response: FrequencyResponse,
     /// (iω)^d H_y(ω) per output and grid frequency.
     transfer: Vec<Vec<c64>>,
     syn: Synthesizer,
@@ -106,6 +112,8 @@ impl TransientModel {
                 })
                 .collect();
         Ok(Self {
+            derivative: derivative.to_vec(),
+            response: fr,
             syn: Synthesizer::new(&grid),
             spectrum: vec![c64::new(0.0, 0.0); grid.omega.len()],
             product: vec![c64::new(0.0, 0.0); grid.omega.len()],
@@ -113,6 +121,37 @@ impl TransientModel {
             transfer,
             grid,
         })
+    }
+
+    /// The inverse transform of the grid (the reverse mode runs its adjoint).
+    pub fn synthesizer(&mut self) -> &mut Synthesizer {
+        &mut self.syn
+    }
+
+    /// The problem `p` on this model's frequency grid (for the reverse mode).
+    pub fn on_grid<'a>(&self, p: &GustProblem<'a>) -> GustProblem<'a> {
+        let mut q = p.clone();
+        q.grid = FrequencyGrid {
+            omega: self.grid.omega.clone(),
+            weights: vec![0.0; self.grid.omega.len()],
+        };
+        q
+    }
+
+    /// The history of output `y` for profile `g` into `out` (one value per time sample).
+    pub fn history(&mut self, g: &GustProfile, y: usize, out: &mut [f64]) {
+        for (w, o) in self.spectrum.iter_mut().zip(&self.grid.omega) {
+            *w = g.spectrum(*o);
+        }
+        for ((pr, h), w) in self
+            .product
+            .iter_mut()
+            .zip(&self.transfer[y])
+            .zip(&self.spectrum)
+        {
+            *pr = h * w;
+        }
+        self.syn.history(&self.product, out);
     }
 
     /// The outputs' response to profile `g`: peaks, wrap fractions, the truncated energy, and

@@ -129,6 +129,24 @@ impl Synthesizer {
     }
 }
 
+impl Synthesizer {
+    /// The adjoint of [`Synthesizer::history`]: for seeds ȳ_n on the samples, the seeds on the
+    /// spectrum in the conjugate convention (δJ = Re Σ conj(Ȳ_j) δY_j, J = Σ ȳ_n y_n):
+    /// Ȳ_j = conj[(Δω/π) c_j e^{iω_j t_0} Σ_n ȳ_n e^{2πi jn/N}], one forward-direction FFT.
+    pub fn history_adjoint(&mut self, y_bar: &[f64], out: &mut [c64]) {
+        let n = self.buffer.len();
+        for (b, y) in self.buffer.iter_mut().zip(y_bar) {
+            *b = c64::new(*y, 0.0);
+        }
+        self.fft
+            .process_with_scratch(&mut self.buffer, &mut self.scratch);
+        for (j, (o, s)) in out.iter_mut().zip(&self.shift).enumerate() {
+            let c = if j == 0 { 0.5 } else { 1.0 };
+            *o = (self.buffer[j % n] * s * (c * self.scale)).conj();
+        }
+    }
+}
+
 /// The fraction of the gust's energy that the grid up to its last frequency misses:
 /// 1 − (1/π) ∫₀^{ω_M} |W|² dω / ∫ w² dt, the integral by the trapezoidal rule on the grid
 /// (negative values, the rule's own error, reported as zero).
