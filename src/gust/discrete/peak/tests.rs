@@ -135,7 +135,7 @@ fn peak_ks_reverse_mode_matches_central_differences() {
         let dl: Vec<f64> = (0..2).map(|m| it.next().unwrap() * wn[m] * wn[m]).collect();
         pred += g.lambda.iter().zip(&dl).map(|(a, b)| a * b).sum::<f64>();
         let ds: Vec<Vec<f64>> = (0..2)
-            .map(|a| (0..2).map(|_| *it.next().unwrap()).collect())
+            .map(|_| (0..2).map(|_| *it.next().unwrap()).collect())
             .collect();
         pred += (0..2)
             .flat_map(|a| (0..2).map(move |b| (a, b)))
