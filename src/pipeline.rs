@@ -128,7 +128,7 @@ impl Evaluation {
     }
 
     /// The stochastic gust problem of this evaluation (Eqs. 16–18 on its grid).
-    pub(crate) fn problem(&self) -> GustProblem<'_> {
+    pub fn problem(&self) -> GustProblem<'_> {
         GustProblem {
             omega_n: self.modes.omega(),
             damping_ratio: self.modes.damping_ratio,
@@ -153,6 +153,10 @@ pub struct OutputSeeds {
     pub rms: Vec<f64>,
     /// Seeds on the damping of p-k roots at one speed.
     pub damping: Option<DampingSeed>,
+    /// Seeds already carried back to the modal gust problem (GAF table, ω_n², output vectors,
+    /// residual rows) by a functional of the transfer functions of its own (a discrete gust
+    /// peak, [`crate::gust::discrete::PeakKs::vjp`]).
+    pub gust: Option<crate::gust::GustGradient>,
 }
 
 /// Seeds `g_bar` on the damping of p-k `roots` (from [`Evaluation::flutter_damping`]).
@@ -329,7 +333,7 @@ pub fn gradients(ev: &Evaluation, all: &[OutputSeeds]) -> Result<Vec<Vec<f64>>> 
         let mut p_bar = [0.0; N_PLANFORM];
         let mut rows_bar = None;
         let rms_seeded = seeds.rms.iter().any(|s| *s != 0.0);
-        let table_bar = if rms_seeded || seeds.damping.is_some() {
+        let table_bar = if rms_seeded || seeds.damping.is_some() || seeds.gust.is_some() {
             let mut table_bar = zeros_like(&ev.table);
             // p-k dampings → GAF table, ω_n²
             if let Some(d) = &seeds.damping {
@@ -347,15 +351,22 @@ pub fn gradients(ev: &Evaluation, all: &[OutputSeeds]) -> Result<Vec<Vec<f64>>> 
                     add_table(&mut table_bar, &t_bar);
                 }
             }
+            let mut modal_parts = Vec::new();
             if rms_seeded {
-                rows_bar = rms_seeds(
-                    ev,
-                    seeds,
-                    &mut table_bar,
-                    &mut modal_seed,
-                    &mut p_bar,
-                    &mut g,
-                )?;
+                modal_parts.push(gust::rms_vjp(&ev.problem(), &ev.response, &seeds.rms)?);
+            }
+            if let Some(gg) = &seeds.gust {
+                modal_parts.push(gg.clone());
+            }
+            for gg in modal_parts {
+                let rows = gust_seeds(ev, gg, &mut table_bar, &mut modal_seed, &mut p_bar, &mut g);
+                rows_bar = match (rows_bar, rows) {
+                    (Some(mut a), Some(b)) => {
+                        add_rows(&mut a, &b);
+                        Some(a)
+                    }
+                    (a, b) => a.or(b),
+                };
             }
             Some(table_bar)
         } else {
@@ -437,18 +448,28 @@ pub fn gradients(ev: &Evaluation, all: &[OutputSeeds]) -> Result<Vec<Vec<f64>>> 
     Ok(out)
 }
 
-/// The gust-response part of the reverse sweep: RMS seeds → seeds on the GAF table, on ω_n², on
-/// the output mode samples (mode shapes, planform) and direct design terms; returns the seeds on
-/// the residual rows (mode acceleration).
-fn rms_seeds(
+/// acc += r over the residual rows.
+fn add_rows(acc: &mut ResidualGafs, r: &ResidualGafs) {
+    for (a, b) in acc.q_ws.iter_mut().flatten().flatten().zip(r.q_ws.iter().flatten().flatten()) {
+        *a += b;
+    }
+    for (a, b) in acc.q_wg.iter_mut().flatten().zip(r.q_wg.iter().flatten()) {
+        *a += b;
+    }
+}
+
+/// The gust-response part of the reverse sweep: seeds on the modal gust problem (from the RMS or
+/// a discrete gust peak) → seeds on the GAF table, on ω_n², on the output mode samples (mode
+/// shapes, planform) and direct design terms; returns the seeds on the residual rows (mode
+/// acceleration).
+fn gust_seeds(
     ev: &Evaluation,
-    seeds: &OutputSeeds,
+    gg: crate::gust::GustGradient,
     table_bar: &mut GafTable,
     modal_seed: &mut ModalSeed,
     p_bar: &mut [f64; N_PLANFORM],
     g: &mut [f64],
-) -> Result<Option<ResidualGafs>> {
-    let gg = gust::rms_vjp(&ev.problem(), &ev.response, &seeds.rms)?;
+) -> Option<ResidualGafs> {
     add_table(table_bar, &gg.table);
     for (l, v) in modal_seed.lambda.iter_mut().zip(&gg.lambda) {
         *l += v;
@@ -482,7 +503,7 @@ fn rms_seeds(
             }
         }
     }
-    Ok(gg.residual)
+    gg.residual
 }
 
 /// acc += t over both parts of a GAF table.

@@ -24,9 +24,43 @@ pub struct DesignSpec {
     pub fix_area: bool,
     /// The flutter-margin constraint, if any (the second inequality).
     pub flutter: Option<FlutterMargin>,
-    /// The modal basis kept whole (the last inequality), when the study chooses its modes by the
-    /// cutoff rule: see [`ModeFloor`].
+    /// The modal basis kept whole (the inequality after the flutter margin), when the study
+    /// chooses its modes by the cutoff rule: see [`ModeFloor`].
     pub mode_floor: Option<ModeFloor>,
+    /// The discrete gust peak limit (the last inequality), if any: see [`PeakLimit`].
+    pub peak: Option<PeakLimit>,
+}
+
+/// A discrete gust peak limit in the optimization: KS(±y/limit over every time sample and gust)
+/// − 1 ≤ 0 ([`crate::gust::discrete::PeakKs`]), on a time grid fixed for the whole run (chosen at
+/// the initial design with twice the span the decay rule needs, so that a design change that
+/// slows the decay does not wrap around; a change of grid between iterations would make the
+/// constraint jump).
+#[derive(Clone, Debug)]
+pub struct PeakLimit {
+    pub constraint: crate::study::discrete::PeakConstraint,
+    pub grid: crate::gust::discrete::TimeGrid,
+}
+
+impl PeakLimit {
+    /// The transient model of evaluation `ev` on the fixed grid and the aggregate.
+    pub fn evaluate(
+        &self,
+        ev: &Evaluation,
+    ) -> Result<(crate::gust::discrete::TransientModel, crate::gust::discrete::PeakKs), String> {
+        let p = ev.problem();
+        let mut derivative = vec![0; p.outputs.len()];
+        derivative[self.constraint.output] = self.constraint.derivative;
+        let mut model = crate::gust::discrete::TransientModel::new(&p, &derivative, self.grid.clone())
+            .map_err(|e| format!("discrete gust peak: {e}"))?;
+        let ks = crate::gust::discrete::PeakKs::evaluate(
+            &mut model,
+            &self.constraint.gusts,
+            self.constraint.output,
+            self.constraint.limit,
+        );
+        Ok((model, ks))
+    }
 }
 
 /// A modal basis chosen by a frequency cutoff, kept so through an optimization: the constraints
@@ -76,19 +110,29 @@ impl ModeFloor {
 /// KS weights and the p-k roots of the last flutter-margin evaluation.
 type FlutterState = (Vec<f64>, DampingSeed);
 
+/// The transient model and KS aggregate of the last peak-limit evaluation.
+type PeakState = (crate::gust::discrete::TransientModel, crate::gust::discrete::PeakKs);
+
+/// The last point evaluated with what its gradient needs.
+type LastEvaluation = (
+    Evaluation,
+    Option<FlutterState>,
+    Option<crate::structure::Modes>,
+    Option<PeakState>,
+);
+
 /// The study's design problem; caches the last evaluation for its gradient.
 pub struct DesignProblem<'a> {
     pub study: &'a Study,
     pub settings: GustSettings,
     pub spec: DesignSpec,
-    last: Option<(
-        Evaluation,
-        Option<FlutterState>,
-        Option<crate::structure::Modes>,
-    )>,
+    last: Option<LastEvaluation>,
     /// The largest p-k damping up to the margin speed at every point evaluated (with a flutter
     /// margin): the quantity the KS constraint bounds, for the report.
     pub damping_peaks: Vec<(Vec<f64>, f64)>,
+    /// The peak KS aggregate and the largest sampled |y| over the limit at every point evaluated
+    /// (with a peak limit), for the report.
+    pub peak_values: Vec<(Vec<f64>, f64, f64)>,
     /// Wall time of every function (values) and gradient evaluated, s.
     pub function_times: Vec<f64>,
     pub gradient_times: Vec<f64>,
@@ -102,6 +146,7 @@ impl<'a> DesignProblem<'a> {
             spec,
             last: None,
             damping_peaks: Vec::new(),
+            peak_values: Vec::new(),
             function_times: Vec::new(),
             gradient_times: Vec::new(),
         }
@@ -166,6 +211,13 @@ impl Problem for DesignProblem<'_> {
             ineq.push(c);
             floor_modes = Some(modes);
         }
+        let mut peak = None;
+        if let Some(pl) = &self.spec.peak {
+            let (model, ks) = pl.evaluate(&ev)?;
+            ineq.push(ks.ks - 1.0);
+            self.peak_values.push((x.to_vec(), ks.ks, ks.peak));
+            peak = Some((model, ks));
+        }
         let v = Values {
             f: ev.mass_kg / self.spec.mass0,
             eq: if self.spec.fix_area {
@@ -175,7 +227,7 @@ impl Problem for DesignProblem<'_> {
             },
             ineq,
         };
-        self.last = Some((ev, flutter, floor_modes));
+        self.last = Some((ev, flutter, floor_modes, peak));
         self.function_times.push(t0.elapsed().as_secs_f64());
         Ok(v)
     }
@@ -183,7 +235,23 @@ impl Problem for DesignProblem<'_> {
         if self.last.as_ref().is_none_or(|e| e.0.x != x) {
             self.values(x)?;
         }
-        let (ev, flutter, floor_modes) = self.last.as_ref().expect("evaluated");
+        // the peak's reverse mode through its transient model (taken out for the mutable FFT
+        // plan, put back after)
+        let mut peak_state = self.last.as_mut().and_then(|l| l.3.take());
+        let peak_gradient = match (&self.spec.peak, peak_state.as_mut()) {
+            (Some(pl), Some((model, ks))) => {
+                let ev = &self.last.as_ref().expect("evaluated").0;
+                Some(
+                    ks.vjp(model, &ev.problem(), &pl.constraint.gusts, 1.0)
+                        .map_err(|e| format!("discrete gust peak reverse mode: {e}"))?,
+                )
+            }
+            _ => None,
+        };
+        if let Some(l) = self.last.as_mut() {
+            l.3 = peak_state;
+        }
+        let (ev, flutter, floor_modes, _) = self.last.as_ref().expect("evaluated");
         let n_out = ev.rms_m.len();
         let seeds = |mass: f64, area: f64, rms: f64| OutputSeeds {
             mass,
@@ -192,6 +260,7 @@ impl Problem for DesignProblem<'_> {
                 .map(|i| if i == self.spec.output { rms } else { 0.0 })
                 .collect(),
             damping: None,
+            gust: None,
         };
         let mut all = vec![
             seeds(1.0 / self.spec.mass0, 0.0, 0.0),
@@ -205,6 +274,12 @@ impl Problem for DesignProblem<'_> {
             s.damping = Some(d);
             all.push(s);
         }
+        let has_peak = peak_gradient.is_some();
+        if let Some(gg) = peak_gradient {
+            let mut s = seeds(0.0, 0.0, 0.0);
+            s.gust = Some(gg);
+            all.push(s);
+        }
         let t0 = std::time::Instant::now();
         let mut g = gradients(ev, &all)
             .map_err(|e| format!("{e:#}"))?
@@ -212,9 +287,12 @@ impl Problem for DesignProblem<'_> {
         self.gradient_times.push(t0.elapsed().as_secs_f64());
         let (f, h) = (g.next().expect("mass"), g.next().expect("area"));
         let mut ineq: Vec<Vec<f64>> = g.collect();
+        // the order of the values: RMS, flutter margin, mode floor, peak
+        let peak = if has_peak { ineq.pop() } else { None };
         if let (Some(floor), Some(modes)) = (&self.spec.mode_floor, floor_modes) {
             ineq.push(floor.gradient(&ev.plate, modes));
         }
+        ineq.extend(peak);
         Ok(Gradients {
             f,
             eq: if self.spec.fix_area {

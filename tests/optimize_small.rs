@@ -49,6 +49,7 @@ fn small_mass_minimization() {
         fix_area: true,
         flutter: None,
         mode_floor: None,
+        peak: None,
     };
     let mut problem = DesignProblem::new(&study, settings, spec.clone());
     let params = SqpParams {

@@ -446,6 +446,7 @@ pub fn bench_pipeline(study: &Study, repeat: usize) -> Result<PipelineTimings> {
         area: 1.0,
         rms: vec![1.0; ev.rms_m.len()],
         damping: None,
+        gust: None,
     };
     let gradient = measure(repeat, || {
         timed(&mut || {

@@ -235,3 +235,82 @@ impl Study {
         }))
     }
 }
+
+/// The peak constraint of an optimization, resolved: the gust output it bounds, the order of
+/// the time derivative (2 for `<name>_acceleration`), its limit in SI and the gusts it spans
+/// (the tuned search's grid of gradients, or the table).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PeakConstraint {
+    pub name: String,
+    pub output: usize,
+    pub derivative: u32,
+    pub limit: f64,
+    pub unit: String,
+    pub gusts: Vec<GustProfile>,
+}
+
+impl Study {
+    /// The optimization's peak constraint (none without one); errors name the field.
+    pub fn peak_constraint(&self) -> Result<Option<PeakConstraint>, StudyError> {
+        let Some(pc) = self.spec.optimization.as_ref().and_then(|o| o.peak_constraint.as_ref()) else {
+            return Ok(None);
+        };
+        let Some(settings) = self.discrete_gust_settings()? else {
+            return Err(self.err(
+                "optimization.peak_constraint",
+                "needs a discrete_gust section: its gusts are the ones the peak is taken over",
+            ));
+        };
+        let gust = self.gust_settings()?;
+        let (base, derivative) = match pc.output.strip_suffix("_acceleration") {
+            Some(b) if !gust.outputs.iter().any(|o| o.name == pc.output) => (b, 2),
+            _ => (pc.output.as_str(), 0),
+        };
+        let Some(output) = gust.outputs.iter().position(|o| o.name == base) else {
+            return Err(self.err(
+                "optimization.peak_constraint.output",
+                format!(
+                    "no gust output named '{base}' (the outputs: {}; an acceleration is '<name>_acceleration')",
+                    gust.outputs.iter().map(|o| o.name.as_str()).collect::<Vec<_>>().join(", ")
+                ),
+            ));
+        };
+        let quantity = &gust.outputs[output].quantity;
+        if derivative == 2 && !matches!(quantity, crate::gust::Quantity::Displacement { .. }) {
+            return Err(self.err(
+                "optimization.peak_constraint.output",
+                format!("'{}': only displacement outputs have an acceleration", pc.output),
+            ));
+        }
+        let si_unit = if derivative == 2 { "m/s²" } else { quantity.unit() };
+        let to_si = if si_unit == "m" { self.spec.length_unit.to_m() } else { 1.0 };
+        if !(pc.max > 0.0 && pc.max.is_finite()) {
+            return Err(self.err(
+                "optimization.peak_constraint.max",
+                format!("must be positive (got {})", pc.max),
+            ));
+        }
+        let velocity = self.spec.flight.as_ref().map_or(0.0, |f| f.velocity_m_s);
+        let gusts = match &settings.case {
+            DiscreteCase::Tuned { range_m, points, amplitude } => (0..*points)
+                .map(|i| {
+                    let h = if *points == 1 {
+                        range_m[0]
+                    } else {
+                        range_m[0] + (range_m[1] - range_m[0]) * i as f64 / (*points - 1) as f64
+                    };
+                    GustProfile::OneMinusCosine { gradient: h, amplitude: amplitude.at(h), velocity }
+                })
+                .collect(),
+            DiscreteCase::Tabulated(p) => vec![p.clone()],
+        };
+        Ok(Some(PeakConstraint {
+            name: pc.output.clone(),
+            output,
+            derivative,
+            limit: pc.max * to_si,
+            unit: si_unit.to_string(),
+            gusts,
+        }))
+    }
+}

@@ -176,6 +176,7 @@ impl Study {
         check_header(&self.file, s.schema_version, &s.name)?;
         self.check_ranges()?;
         self.discrete_gust_settings()?;
+        self.peak_constraint()?;
         self.planform()?;
         self.airfoil()?;
         self.material()?;

@@ -125,6 +125,19 @@ pub struct OptimizationSpec {
         skip_serializing_if = "is_default_resolution_corrections"
     )]
     pub resolution_corrections: usize,
+    /// A discrete gust peak limit: `{"output", "max"}` — the largest |value| of a `gust` output
+    /// (or its acceleration, `<name>_acceleration`) over the `discrete_gust` section's gusts stays
+    /// within `max` (length unit for displacements, N m, m/s²).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub peak_constraint: Option<PeakConstraintSpec>,
+}
+
+/// `optimization.peak_constraint`.
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PeakConstraintSpec {
+    pub output: String,
+    pub max: f64,
 }
 
 /// `optimization.warm_start`: where the starting design comes from.

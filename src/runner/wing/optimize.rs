@@ -22,6 +22,8 @@ struct RunObserver {
     rms_limit: f64,
     /// Damping limit of the flutter-margin constraint, when there is one.
     damping_max: Option<f64>,
+    /// Whether the last inequality is a discrete gust peak limit.
+    peak: bool,
     quiet: bool,
     bar: indicatif::ProgressBar,
     /// When the previous iteration ended (the run's start before the first).
@@ -66,6 +68,10 @@ impl crate::optim::Observer for RunObserver {
         let flutter = match (it.values.ineq.get(1), self.damping_max) {
             (Some(c), Some(g_max)) => format!(", g_KS {:+.4}", g_max + c * DAMPING_SCALE),
             _ => String::new(),
+        };
+        let flutter = match (self.peak, it.values.ineq.last()) {
+            (true, Some(c)) => format!("{flutter}, peak KS {:.4} × limit", c + 1.0),
+            _ => flutter,
         };
         let line = format!(
             "iteration {:>3}: mass {:.5} kg ({:+.2} %), RMS {:.4} {} (limit {:.4}){flutter}, violation {:.2e}, KKT {:.2e}, step {:.3}{}",
@@ -241,7 +247,36 @@ pub(crate) fn design_spec(
                 damping_max: m.damping_max,
             }),
         mode_floor: None,
+        peak: None,
     }
+}
+
+/// The discrete gust peak limit of the study's optimization (none without one): its grid is the
+/// one the decay rule chooses at the initial design, with twice the span (or the study's span).
+fn peak_limit(
+    study: &Study,
+    ev0: &crate::pipeline::Evaluation,
+) -> Result<Option<crate::problem::PeakLimit>> {
+    let Some(constraint) = study.peak_constraint()? else {
+        return Ok(None);
+    };
+    let settings = study.discrete_gust_settings()?.expect("checked with the constraint");
+    let p = ev0.problem();
+    let mut derivative = vec![0; p.outputs.len()];
+    derivative[constraint.output] = constraint.derivative;
+    let omega_max = p.table.k.last().copied().unwrap_or(0.0) * p.velocity / p.table.b_ref;
+    let ts = crate::gust::discrete::TransientSettings {
+        span: settings.span,
+        omega_max,
+        derivative,
+        keep_histories: false,
+        max_bytes: 2e9,
+    };
+    let (r, _) = crate::gust::discrete::transient(&p, &constraint.gusts, &ts)
+        .with_context(|| format!("{}: discrete gust peak limit at the initial design", study.file.display()))?;
+    let span = if settings.span.is_some() { r.grid.span } else { 2.0 * r.grid.span };
+    let grid = crate::gust::discrete::TimeGrid::new(span, omega_max).map_err(anyhow::Error::msg)?;
+    Ok(Some(crate::problem::PeakLimit { constraint, grid }))
 }
 
 /// The constrained gust output of the study's `optimization` section: its index among the
@@ -362,6 +397,19 @@ pub fn optimize_pass(
     spec.rms_limit *= pass.rms_factor;
     let (fixed_basis, floor) = design_basis(study)?;
     spec.mode_floor = floor;
+    spec.peak = peak_limit(study, &ev0)?;
+    if let (Some(pl), false) = (&spec.peak, quiet) {
+        println!(
+            "discrete gust peak limit: |{}| ≤ {} {} over {} gusts (KS, ρ = ln(n)/{}), on a fixed grid of {:.3} s, {} samples",
+            pl.constraint.name,
+            pl.constraint.limit,
+            pl.constraint.unit,
+            pl.constraint.gusts.len(),
+            crate::gust::discrete::PEAK_KS_GAP,
+            pl.grid.span,
+            pl.grid.time.len()
+        );
+    }
     if let (Some(f), false) = (floor, quiet) {
         println!(
             "modal basis: the {} modes below {:.1} Hz at the initial design; the first mode left out must stay above it",
@@ -457,6 +505,7 @@ pub fn optimize_pass(
         rms_unit: unit,
         rms_limit,
         damping_max: spec.flutter.map(|m| m.damping_max),
+        peak: spec.peak.is_some(),
         quiet,
         bar,
         last: Instant::now(),
