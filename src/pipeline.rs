@@ -450,7 +450,13 @@ pub fn gradients(ev: &Evaluation, all: &[OutputSeeds]) -> Result<Vec<Vec<f64>>> 
 
 /// acc += r over the residual rows.
 fn add_rows(acc: &mut ResidualGafs, r: &ResidualGafs) {
-    for (a, b) in acc.q_ws.iter_mut().flatten().flatten().zip(r.q_ws.iter().flatten().flatten()) {
+    for (a, b) in acc
+        .q_ws
+        .iter_mut()
+        .flatten()
+        .flatten()
+        .zip(r.q_ws.iter().flatten().flatten())
+    {
         *a += b;
     }
     for (a, b) in acc.q_wg.iter_mut().flatten().zip(r.q_wg.iter().flatten()) {

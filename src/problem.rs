@@ -47,12 +47,19 @@ impl PeakLimit {
     pub fn evaluate(
         &self,
         ev: &Evaluation,
-    ) -> Result<(crate::gust::discrete::TransientModel, crate::gust::discrete::PeakKs), String> {
+    ) -> Result<
+        (
+            crate::gust::discrete::TransientModel,
+            crate::gust::discrete::PeakKs,
+        ),
+        String,
+    > {
         let p = ev.problem();
         let mut derivative = vec![0; p.outputs.len()];
         derivative[self.constraint.output] = self.constraint.derivative;
-        let mut model = crate::gust::discrete::TransientModel::new(&p, &derivative, self.grid.clone())
-            .map_err(|e| format!("discrete gust peak: {e}"))?;
+        let mut model =
+            crate::gust::discrete::TransientModel::new(&p, &derivative, self.grid.clone())
+                .map_err(|e| format!("discrete gust peak: {e}"))?;
         let ks = crate::gust::discrete::PeakKs::evaluate(
             &mut model,
             &self.constraint.gusts,
@@ -111,7 +118,10 @@ impl ModeFloor {
 type FlutterState = (Vec<f64>, DampingSeed);
 
 /// The transient model and KS aggregate of the last peak-limit evaluation.
-type PeakState = (crate::gust::discrete::TransientModel, crate::gust::discrete::PeakKs);
+type PeakState = (
+    crate::gust::discrete::TransientModel,
+    crate::gust::discrete::PeakKs,
+);
 
 /// The last point evaluated with what its gradient needs.
 type LastEvaluation = (

@@ -265,6 +265,13 @@ fn discrete_gust_errors_name_the_field() {
         "discrete_gust.amplitude.cs25.f_g",
         &["(0, 1]", "got 1.5"],
     );
+    refused(
+        "run",
+        "optimization.peak_constraint",
+        serde_json::json!({"output": "tip_te_w", "max": 1.0}),
+        "optimization.peak_constraint",
+        &["needs a discrete_gust section"],
+    );
 }
 
 /// A prefix is never repeated: the JSON path names the field once.

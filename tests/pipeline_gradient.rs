@@ -307,7 +307,13 @@ fn discrete_gust_peak_gradient_matches_finite_differences() {
         let limit = r
             .profiles
             .iter()
-            .map(|pr| pr.peaks[output].0.value.abs().max(pr.peaks[output].1.value.abs()))
+            .map(|pr| {
+                pr.peaks[output]
+                    .0
+                    .value
+                    .abs()
+                    .max(pr.peaks[output].1.value.abs())
+            })
             .fold(0.0, f64::max);
         let pl = gustkit::problem::PeakLimit {
             constraint: gustkit::study::discrete::PeakConstraint {
@@ -337,7 +343,10 @@ fn discrete_gust_peak_gradient_matches_finite_differences() {
             },
         )
         .unwrap();
-        println!("output {output}, d = {derivative}: KS {:.6}, peak {:.6}", ks.ks, ks.peak);
+        println!(
+            "output {output}, d = {derivative}: KS {:.6}, peak {:.6}",
+            ks.ks, ks.peak
+        );
         six_digits_on_every_class(&f, &x0, &g);
     }
 }

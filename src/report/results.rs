@@ -206,6 +206,25 @@ pub struct OptimizationResults {
     /// first pass's.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub corrections: Vec<ResolutionCorrection>,
+    /// The discrete gust peak limit, when the optimization has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub peak_limit: Option<PeakLimitResult>,
+}
+
+/// A discrete gust peak limit at the initial and final designs: the KS aggregate (the
+/// constrained value, ≤ 1 when met) and the largest sampled |y| over the limit, and the limit in
+/// the report's unit.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct PeakLimitResult {
+    pub output: String,
+    pub limit: f64,
+    pub unit: String,
+    pub gusts: usize,
+    pub ks_rho: f64,
+    pub initial_ks: f64,
+    pub initial_peak: f64,
+    pub final_ks: f64,
+    pub final_peak: f64,
 }
 
 /// Wall times of repeated measurements, seconds: median, minimum and maximum.

@@ -185,6 +185,20 @@ pub fn summary(r: &RunResults) -> String {
             100.0 * (f.area_m2 / i.area_m2 - 1.0),
         );
         md += &corrections_text(o);
+        if let Some(pl) = &o.peak_limit {
+            md += &format!(
+                "\nDiscrete gust peak limit |{}| ≤ {} {} over {} gusts, as the KS aggregate over every time sample and gust (ρ = {:.0}, at most 0.005 above the largest sampled value): initial {:.4}, final {:.4} × the limit (KS {:.4} → {:.4}).\n",
+                pl.output,
+                crate::report::style::tick(&pl.limit),
+                pl.unit,
+                pl.gusts,
+                pl.ks_rho,
+                pl.initial_peak,
+                pl.final_peak,
+                pl.initial_ks,
+                pl.final_ks
+            );
+        }
         if let Some(fc) = &o.flutter_check {
             md += &flutter_check_text(fc, o.flutter_margin);
         }

@@ -252,7 +252,12 @@ pub struct PeakConstraint {
 impl Study {
     /// The optimization's peak constraint (none without one); errors name the field.
     pub fn peak_constraint(&self) -> Result<Option<PeakConstraint>, StudyError> {
-        let Some(pc) = self.spec.optimization.as_ref().and_then(|o| o.peak_constraint.as_ref()) else {
+        let Some(pc) = self
+            .spec
+            .optimization
+            .as_ref()
+            .and_then(|o| o.peak_constraint.as_ref())
+        else {
             return Ok(None);
         };
         let Some(settings) = self.discrete_gust_settings()? else {
@@ -279,11 +284,22 @@ impl Study {
         if derivative == 2 && !matches!(quantity, crate::gust::Quantity::Displacement { .. }) {
             return Err(self.err(
                 "optimization.peak_constraint.output",
-                format!("'{}': only displacement outputs have an acceleration", pc.output),
+                format!(
+                    "'{}': only displacement outputs have an acceleration",
+                    pc.output
+                ),
             ));
         }
-        let si_unit = if derivative == 2 { "m/s²" } else { quantity.unit() };
-        let to_si = if si_unit == "m" { self.spec.length_unit.to_m() } else { 1.0 };
+        let si_unit = if derivative == 2 {
+            "m/s²"
+        } else {
+            quantity.unit()
+        };
+        let to_si = if si_unit == "m" {
+            self.spec.length_unit.to_m()
+        } else {
+            1.0
+        };
         if !(pc.max > 0.0 && pc.max.is_finite()) {
             return Err(self.err(
                 "optimization.peak_constraint.max",
@@ -292,14 +308,22 @@ impl Study {
         }
         let velocity = self.spec.flight.as_ref().map_or(0.0, |f| f.velocity_m_s);
         let gusts = match &settings.case {
-            DiscreteCase::Tuned { range_m, points, amplitude } => (0..*points)
+            DiscreteCase::Tuned {
+                range_m,
+                points,
+                amplitude,
+            } => (0..*points)
                 .map(|i| {
                     let h = if *points == 1 {
                         range_m[0]
                     } else {
                         range_m[0] + (range_m[1] - range_m[0]) * i as f64 / (*points - 1) as f64
                     };
-                    GustProfile::OneMinusCosine { gradient: h, amplitude: amplitude.at(h), velocity }
+                    GustProfile::OneMinusCosine {
+                        gradient: h,
+                        amplitude: amplitude.at(h),
+                        velocity,
+                    }
                 })
                 .collect(),
             DiscreteCase::Tabulated(p) => vec![p.clone()],

@@ -260,7 +260,9 @@ fn peak_limit(
     let Some(constraint) = study.peak_constraint()? else {
         return Ok(None);
     };
-    let settings = study.discrete_gust_settings()?.expect("checked with the constraint");
+    let settings = study
+        .discrete_gust_settings()?
+        .expect("checked with the constraint");
     let p = ev0.problem();
     let mut derivative = vec![0; p.outputs.len()];
     derivative[constraint.output] = constraint.derivative;
@@ -272,9 +274,18 @@ fn peak_limit(
         keep_histories: false,
         max_bytes: 2e9,
     };
-    let (r, _) = crate::gust::discrete::transient(&p, &constraint.gusts, &ts)
-        .with_context(|| format!("{}: discrete gust peak limit at the initial design", study.file.display()))?;
-    let span = if settings.span.is_some() { r.grid.span } else { 2.0 * r.grid.span };
+    let (r, _) =
+        crate::gust::discrete::transient(&p, &constraint.gusts, &ts).with_context(|| {
+            format!(
+                "{}: discrete gust peak limit at the initial design",
+                study.file.display()
+            )
+        })?;
+    let span = if settings.span.is_some() {
+        r.grid.span
+    } else {
+        2.0 * r.grid.span
+    };
     let grid = crate::gust::discrete::TimeGrid::new(span, omega_max).map_err(anyhow::Error::msg)?;
     Ok(Some(crate::problem::PeakLimit { constraint, grid }))
 }
@@ -625,6 +636,40 @@ pub fn optimize_pass(
         }
         None => None,
     };
+    let peak_limit = match &spec.peak {
+        Some(pl) => {
+            let (_, k0) = pl.evaluate(&ev0).map_err(anyhow::Error::msg)?;
+            let (_, k1) = pl.evaluate(&ev).map_err(anyhow::Error::msg)?;
+            let (limit, unit) =
+                study
+                    .spec
+                    .length_unit
+                    .display(pl.constraint.limit, &pl.constraint.unit, 1);
+            if !quiet {
+                println!(
+                    "discrete gust peak |{}|: {:.4} → {:.4} × the limit {} {unit} (KS {:.4} → {:.4})",
+                    pl.constraint.name,
+                    k0.peak,
+                    k1.peak,
+                    crate::report::style::tick(&limit),
+                    k0.ks,
+                    k1.ks
+                );
+            }
+            Some(crate::report::results::PeakLimitResult {
+                output: pl.constraint.name.clone(),
+                limit,
+                unit: unit.to_string(),
+                gusts: pl.constraint.gusts.len(),
+                ks_rho: k1.rho,
+                initial_ks: k0.ks,
+                initial_peak: k0.peak,
+                final_ks: k1.ks,
+                final_peak: k1.peak,
+            })
+        }
+        None => None,
+    };
     let design = study.initial_design()?;
     Ok(OptimizationResults {
         converged: info.converged,
@@ -651,6 +696,7 @@ pub fn optimize_pass(
         timing: Some(timing),
         cross_evaluation,
         corrections: Vec::new(),
+        peak_limit,
     })
 }
 
