@@ -1249,15 +1249,7 @@ fn reruns_and_thread_counts_give_identical_results() {
 #[test]
 fn resolution_corrections_meet_the_refined_limit() {
     let dir = scratch("corrections");
-    let opt = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json");
-    let mut v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(opt).unwrap()).unwrap();
-    v["name"] = "opt_corr".into();
-    v["structure"]["modes"] = 2.into();
-    v["structure"]["damping_ratio"] = 0.01.into();
-    v["aero"]["fidelity"]["dlm"]["n_chord"] = 5.into();
-    v["aero"]["fidelity"]["dlm"]["n_span"] = 8.into();
-    v["gust"]["points"] = 300.into();
+    let mut v = small_flagship("opt_corr");
     v["optimization"]
         .as_object_mut()
         .unwrap()
@@ -1425,15 +1417,7 @@ fn discrete_gust_tuned_search_is_reported() {
 #[test]
 fn peak_limit_constrains_the_optimum() {
     let dir = common::scratch("cli", "peak_limit");
-    let opt = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json");
-    let mut v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(opt).unwrap()).unwrap();
-    v["name"] = "peak_limit".into();
-    v["structure"]["modes"] = 2.into();
-    v["structure"]["damping_ratio"] = 0.01.into();
-    v["aero"]["fidelity"]["dlm"]["n_chord"] = 5.into();
-    v["aero"]["fidelity"]["dlm"]["n_span"] = 8.into();
-    v["gust"]["points"] = 300.into();
+    let mut v = small_flagship("peak_limit");
     v["optimization"]["max_iterations"] = 100.into();
     v["optimization"]["resolution_corrections"] = 0.into();
     v["discrete_gust"] = serde_json::json!({"amplitude": {"u_ds_m_s": 10.0}, "gradient_points": 5});
@@ -1470,4 +1454,19 @@ fn peak_limit_constrains_the_optimum() {
     let rms = r["final"]["rms_display"].as_f64().unwrap();
     assert!(rms < 1.5 * 0.999, "the RMS limit is not what binds: {rms}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The flagship problem made small for end-to-end optimization tests: 2 modes (damping ratio
+/// 0.01), 5 × 8 boxes, 300 gust frequencies.
+fn small_flagship(name: &str) -> serde_json::Value {
+    let opt = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(opt).unwrap()).unwrap();
+    v["name"] = name.into();
+    v["structure"]["modes"] = 2.into();
+    v["structure"]["damping_ratio"] = 0.01.into();
+    v["aero"]["fidelity"]["dlm"]["n_chord"] = 5.into();
+    v["aero"]["fidelity"]["dlm"]["n_span"] = 8.into();
+    v["gust"]["points"] = 300.into();
+    v
 }

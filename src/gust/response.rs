@@ -205,6 +205,36 @@ pub struct GustGradient {
 }
 
 impl<'a> GustProblem<'a> {
+    /// A problem for the discrete gust (transient) path only: its turbulence, frequency grid and
+    /// tail limit are placeholders, which that path replaces (the grid) or never reads.
+    pub fn for_transient(
+        omega_n: Vec<f64>,
+        damping_ratio: f64,
+        table: &'a GafTable,
+        q_inf: f64,
+        velocity: f64,
+        outputs: Vec<Vec<f64>>,
+    ) -> Self {
+        Self {
+            omega_n,
+            damping_ratio,
+            table,
+            q_inf,
+            velocity,
+            turbulence: Turbulence::Dryden {
+                sigma_w_m_s: 1.0,
+                scale_length_m: 100.0,
+            },
+            grid: FrequencyGrid {
+                omega: vec![0.0],
+                weights: vec![0.0],
+            },
+            outputs,
+            residual: None,
+            max_tail: 1.0,
+        }
+    }
+
     fn check(&self) -> Result<SplineWeights, GustError> {
         let nm = self.omega_n.len();
         if self.table.n_modes() != nm {

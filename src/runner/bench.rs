@@ -181,6 +181,20 @@ pub fn bench(study: &Study, repeat: Option<usize>, optimization: bool) -> Result
             println!("{}", m.line("flutter margin (p-k roots up to the margin)"));
         }
         println!("{}", p.gradient.line("gradient (one reverse sweep)"));
+        if let (Some(f), Some(g)) = (&p.discrete_function, &p.discrete_gradient) {
+            println!(
+                "discrete gusts (the discrete_gust section's {} gusts, every output, on the grid its decay rule picks):",
+                p.discrete_gusts
+            );
+            println!(
+                "{}",
+                f.line("function (Eq. 16 on the grid, FFTs, KS of one output)")
+            );
+            println!(
+                "{}",
+                g.line("gradient of the KS (adjoint FFTs, reverse sweep)")
+            );
+        }
         if let (Some(f), Some(g)) = (&p.design_function, &p.design_gradient) {
             println!("design problem (what the SQP asks for at each point):");
             println!("{}", f.line("function (the above and the flutter margin)"));
@@ -384,6 +398,14 @@ pub struct PipelineTimings {
     /// and the flutter margin) and one gradient of the objective and every constraint.
     pub design_function: Option<Stats>,
     pub design_gradient: Option<Stats>,
+    /// With a `discrete_gust` section: the transient model on its grid with the histories of
+    /// every output for every gust of the section (the tuned grid without refinement) and the
+    /// KS peak of the first output (the constraint's output, with a peak limit) …
+    pub discrete_function: Option<Stats>,
+    /// … and the gradient of that KS in every design variable (the adjoint FFTs, the reverse
+    /// sweep of Eq. 16 on the grid, the GAF reverse mode, modes, planform).
+    pub discrete_gradient: Option<Stats>,
+    pub discrete_gusts: usize,
 }
 
 /// Times one function evaluation, its parts, the flutter margin and one gradient of the gust
@@ -473,6 +495,90 @@ pub fn bench_pipeline(study: &Study, repeat: usize) -> Result<PipelineTimings> {
             })
         })?);
     }
+    let (mut discrete_function, mut discrete_gradient, mut discrete_gusts) = (None, None, 0);
+    if let Some(d) = study.discrete_gust_settings()? {
+        // the constraint's gusts and output where there is a peak limit, else the tuned grid's
+        // gusts (or the table) and the first output
+        let (gusts, output, derivative) = match study.peak_constraint()? {
+            Some(c) => (c.gusts, c.output, c.derivative),
+            None => {
+                let velocity = ev.aero.flight.velocity;
+                let gusts = match &d.case {
+                    crate::study::discrete::DiscreteCase::Tuned {
+                        range_m,
+                        points,
+                        amplitude,
+                    } => (0..*points)
+                        .map(|i| {
+                            let h = range_m[0]
+                                + (range_m[1] - range_m[0]) * i as f64
+                                    / (*points - 1).max(1) as f64;
+                            crate::gust::discrete::GustProfile::OneMinusCosine {
+                                gradient: h,
+                                amplitude: amplitude.at(h),
+                                velocity,
+                            }
+                        })
+                        .collect(),
+                    crate::study::discrete::DiscreteCase::Tabulated(p) => vec![p.clone()],
+                };
+                (gusts, 0, 0)
+            }
+        };
+        let p = ev.problem();
+        let mut der = vec![0; p.outputs.len()];
+        der[output] = derivative;
+        let omega_max = p.table.k.last().copied().unwrap_or(0.0) * p.velocity / p.table.b_ref;
+        let ts = crate::gust::discrete::TransientSettings {
+            span: d.span,
+            omega_max,
+            derivative: der.clone(),
+            keep_histories: false,
+            max_bytes: 2e9,
+        };
+        let (r, _) = crate::gust::discrete::transient(&p, &gusts, &ts)?;
+        let grid = r.grid;
+        let scale = r
+            .profiles
+            .iter()
+            .map(|pr| {
+                pr.peaks[output]
+                    .0
+                    .value
+                    .abs()
+                    .max(pr.peaks[output].1.value.abs())
+            })
+            .fold(f64::MIN_POSITIVE, f64::max);
+        discrete_function = Some(measure(repeat, || {
+            timed(&mut || {
+                let mut model = crate::gust::discrete::TransientModel::new(&p, &der, grid.clone())?;
+                for g in &gusts {
+                    std::hint::black_box(model.respond(g, false));
+                }
+                std::hint::black_box(crate::gust::discrete::PeakKs::evaluate(
+                    &mut model, &gusts, output, scale,
+                ));
+                Ok(())
+            })
+        })?);
+        let mut model = crate::gust::discrete::TransientModel::new(&p, &der, grid.clone())?;
+        let ks = crate::gust::discrete::PeakKs::evaluate(&mut model, &gusts, output, scale);
+        discrete_gradient = Some(measure(repeat, || {
+            timed(&mut || {
+                let gg = ks.vjp(&mut model, &p, &gusts, 1.0)?;
+                let seeds = crate::pipeline::OutputSeeds {
+                    mass: 0.0,
+                    area: 0.0,
+                    rms: vec![0.0; ev.rms_m.len()],
+                    damping: None,
+                    gust: Some(gg),
+                };
+                std::hint::black_box(crate::pipeline::gradient(&ev, &seeds)?);
+                Ok(())
+            })
+        })?);
+        discrete_gusts = gusts.len();
+    }
     Ok(PipelineTimings {
         function,
         aeroelastic,
@@ -482,5 +588,8 @@ pub fn bench_pipeline(study: &Study, repeat: usize) -> Result<PipelineTimings> {
         gradient,
         design_function,
         design_gradient,
+        discrete_function,
+        discrete_gradient,
+        discrete_gusts,
     })
 }

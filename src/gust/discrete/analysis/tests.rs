@@ -1,5 +1,4 @@
 use super::*;
-use crate::gust::Turbulence;
 use gustkit_core::theory::strip_gafs;
 use gustkit_core::GafTable;
 use std::f64::consts::PI;
@@ -49,24 +48,14 @@ impl Plunge {
     /// keeps A(0) regular (it changes the acceleration by (1e-3/ω)², below 1e-6 where the gust
     /// has its energy).
     fn problem(&self) -> GustProblem<'_> {
-        GustProblem {
-            omega_n: vec![1e-3],
-            damping_ratio: 0.0,
-            table: &self.table,
-            q_inf: 0.5 * self.density * self.velocity * self.velocity,
-            velocity: self.velocity,
-            turbulence: Turbulence::Dryden {
-                sigma_w_m_s: 1.0,
-                scale_length_m: 100.0,
-            },
-            grid: FrequencyGrid {
-                omega: vec![0.0],
-                weights: vec![0.0],
-            },
-            outputs: vec![vec![1.0 / self.mass.sqrt()]],
-            residual: None,
-            max_tail: 1.0,
-        }
+        GustProblem::for_transient(
+            vec![1e-3],
+            0.0,
+            &self.table,
+            0.5 * self.density * self.velocity * self.velocity,
+            self.velocity,
+            vec![vec![1.0 / self.mass.sqrt()]],
+        )
     }
 
     /// The span: the plunge's aerodynamic damping lets its velocity decay with the time constant

@@ -1,7 +1,5 @@
 use super::*;
 use crate::gust::discrete::analysis::{transient, TransientSettings};
-use crate::gust::response::FrequencyGrid;
-use crate::gust::Turbulence;
 use gustkit_core::theory::strip_gafs;
 use gustkit_core::GafTable;
 
@@ -38,24 +36,14 @@ fn section() -> (GafTable, Vec<f64>) {
 }
 
 fn problem<'a>(table: &'a GafTable, omega_n: &[f64], outputs: Vec<Vec<f64>>) -> GustProblem<'a> {
-    GustProblem {
-        omega_n: omega_n.to_vec(),
-        damping_ratio: 0.02,
+    GustProblem::for_transient(
+        omega_n.to_vec(),
+        0.02,
         table,
-        q_inf: 0.5 * 1.225 * 100.0 * 100.0,
-        velocity: 100.0,
-        turbulence: Turbulence::Dryden {
-            sigma_w_m_s: 1.0,
-            scale_length_m: 100.0,
-        },
-        grid: FrequencyGrid {
-            omega: vec![0.0],
-            weights: vec![0.0],
-        },
+        0.5 * 1.225 * 100.0 * 100.0,
+        100.0,
         outputs,
-        residual: None,
-        max_tail: 1.0,
-    }
+    )
 }
 
 /// Pseudo-random numbers in [−1, 1] (a fixed LCG: the test is reproducible).

@@ -1,6 +1,4 @@
 use super::*;
-use crate::gust::response::FrequencyGrid;
-use crate::gust::Turbulence;
 use faer::c64;
 use gustkit_core::GafTable;
 
@@ -27,24 +25,14 @@ fn oscillator_table() -> GafTable {
 fn refinement_finds_the_scan_maximum() {
     let table = oscillator_table();
     let velocity = 150.0;
-    let p = GustProblem {
-        omega_n: vec![2.0 * std::f64::consts::PI * 2.0],
-        damping_ratio: 0.02,
-        table: &table,
-        q_inf: 1000.0,
+    let p = GustProblem::for_transient(
+        vec![2.0 * std::f64::consts::PI * 2.0],
+        0.02,
+        &table,
+        1000.0,
         velocity,
-        turbulence: Turbulence::Dryden {
-            sigma_w_m_s: 1.0,
-            scale_length_m: 100.0,
-        },
-        grid: FrequencyGrid {
-            omega: vec![0.0],
-            weights: vec![0.0],
-        },
-        outputs: vec![vec![1.0]],
-        residual: None,
-        max_tail: 1.0,
-    };
+        vec![vec![1.0]],
+    );
     let s = TransientSettings {
         span: None,
         omega_max: 4.0 * velocity,
