@@ -197,7 +197,10 @@ pub fn bench(study: &Study, repeat: Option<usize>, optimization: bool) -> Result
         }
         if let (Some(f), Some(g)) = (&p.design_function, &p.design_gradient) {
             println!("design problem (what the SQP asks for at each point):");
-            println!("{}", f.line("function (the above and the flutter margin)"));
+            println!(
+                "{}",
+                f.line("function (the above, the flutter margin, a peak limit)")
+            );
             println!("{}", g.line("gradient (objective and every constraint)"));
         }
     }
@@ -479,7 +482,9 @@ pub fn bench_pipeline(study: &Study, repeat: usize) -> Result<PipelineTimings> {
     let (mut design_function, mut design_gradient) = (None, None);
     if study.spec.optimization.is_some() {
         let (lower, upper) = study.design_bounds()?;
-        let spec = crate::runner::wing::optimize::design_spec(study, &settings, &ev, lower, upper);
+        let mut spec =
+            crate::runner::wing::optimize::design_spec(study, &settings, &ev, lower, upper);
+        spec.peak = crate::runner::wing::optimize::peak_limit(study, &ev)?;
         let mut problem = crate::problem::DesignProblem::new(study, settings.clone(), spec);
         design_function = Some(measure(repeat, || {
             timed(&mut || {

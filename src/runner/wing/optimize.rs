@@ -253,7 +253,7 @@ pub(crate) fn design_spec(
 
 /// The discrete gust peak limit of the study's optimization (none without one): its grid is the
 /// one the decay rule chooses at the initial design, with twice the span (or the study's span).
-fn peak_limit(
+pub(crate) fn peak_limit(
     study: &Study,
     ev0: &crate::pipeline::Evaluation,
 ) -> Result<Option<crate::problem::PeakLimit>> {
