@@ -410,11 +410,16 @@ pub fn optimize_pass(
     spec.mode_floor = floor;
     spec.peak = peak_limit(study, &ev0)?;
     if let (Some(pl), false) = (&spec.peak, quiet) {
+        let (limit, limit_unit) =
+            study
+                .spec
+                .length_unit
+                .display(pl.constraint.limit, &pl.constraint.unit, 1);
         println!(
             "discrete gust peak limit: |{}| ≤ {} {} over {} gusts (KS, ρ = ln(n)/{}), on a fixed grid of {:.3} s, {} samples",
             pl.constraint.name,
-            pl.constraint.limit,
-            pl.constraint.unit,
+            crate::report::style::tick(&limit),
+            limit_unit,
             pl.constraint.gusts.len(),
             crate::gust::discrete::PEAK_KS_GAP,
             pl.grid.span,
