@@ -145,6 +145,10 @@ pub struct ResolutionCorrection {
     /// The limit this pass constrained the study's model to (report unit): the study's limit ×
     /// rms_display / refined_rms_display.
     pub rms_limit_display: f64,
+    /// With a discrete gust peak limit corrected too: the factor on it (constrained / refined
+    /// peak of the previous optimum).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub peak_factor: Option<f64>,
     pub iterations: usize,
     pub evaluations: usize,
     pub converged: bool,
@@ -445,6 +449,12 @@ pub struct ResolutionCheck {
     pub rms_unit: String,
     #[serde(default = "unit_factor")]
     pub rms_unit_scale: f64,
+    /// With a discrete gust peak limit: the largest sampled |y| over the limit at both
+    /// resolutions (held to the limit within the RMS tolerance at the refined one).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub peak: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refined_peak: Option<f64>,
 }
 
 fn si_unit() -> String {

@@ -571,6 +571,15 @@ pub fn resolution_words(c: &crate::report::results::ResolutionCheck) -> String {
         },
         _ => String::new(),
     };
+    let rms = match (c.peak, c.refined_peak) {
+        (Some(a), Some(b)) => format!(
+            "{rms} Discrete gust peak {} → {} × its limit (tolerance {:.0} %).",
+            sig(a),
+            sig(b),
+            100.0 * c.rms_tolerance
+        ),
+        _ => rms,
+    };
     let unstable = c
         .refined_unstable
         .as_deref()

@@ -29,6 +29,21 @@ pub fn rms_factor(c: &ResolutionCheck) -> Option<f64> {
     (flutter_ok && rms_failed && coarse > 0.0 && fine.is_finite()).then(|| coarse / fine)
 }
 
+/// The peak-limit factor of the next pass (constrained / refined peak of the checked design),
+/// when the refined peak exceeds its limit beyond the tolerance and the design holds its flutter
+/// margin; None otherwise.
+pub fn peak_factor(c: &ResolutionCheck) -> Option<f64> {
+    if c.passed || c.refined_unstable.is_some() || c.not_run.is_some() {
+        return None;
+    }
+    let flutter_ok = c
+        .refined_flutter_speed_m_s
+        .is_none_or(|v| v >= c.stable_to_m_s * (1.0 - FLUTTER_TOLERANCE));
+    let (coarse, fine) = (c.peak?, c.refined_peak?);
+    (flutter_ok && fine > 1.0 + RMS_TOLERANCE && coarse > 0.0 && fine.is_finite())
+        .then(|| coarse / fine)
+}
+
 /// The corrections of a finished first pass `first` whose check is `check`: up to the study's
 /// `resolution_corrections` passes, each from the last optimum, re-checked by `recheck`. Returns
 /// the optimization with every pass in it and the last check.
@@ -50,19 +65,29 @@ pub fn correct(
         if !all.converged {
             break;
         }
-        let Some(factor) = rms_factor(&check) else {
+        let (rf, pf) = (rms_factor(&check), peak_factor(&check));
+        if rf.is_none() && pf.is_none() {
             break;
-        };
-        let (i, _) = check.rms_limit.expect("rms_factor needs a limit");
+        }
+        let factor = rf.unwrap_or(1.0);
+        let (i, _) = check.rms_limit.expect("a correction needs the RMS limit");
         let scale = all.final_.rms_display / all.final_.rms;
         let (coarse, fine) = (check.rms_m[i] * scale, check.refined_rms_m[i] * scale);
         let limit = all.rms_limit * factor;
-        println!(
-            "resolution correction {}: the refined RMS {fine:.4} {u} is {:+.2} % of the constrained {coarse:.4} {u}; the optimization continues from its optimum with the limit {limit:.4} {u}",
-            number - 1,
-            100.0 * (fine / coarse - 1.0),
-            u = all.unit,
-        );
+        if rf.is_some() {
+            println!(
+                "resolution correction {}: the refined RMS {fine:.4} {u} is {:+.2} % of the constrained {coarse:.4} {u}; the optimization continues from its optimum with the limit {limit:.4} {u}",
+                number - 1,
+                100.0 * (fine / coarse - 1.0),
+                u = all.unit,
+            );
+        }
+        if let (Some(f), Some(p), Some(q)) = (pf, check.peak, check.refined_peak) {
+            println!(
+                "resolution correction {}: the refined discrete gust peak is {q:.4} × its limit (constrained: {p:.4}); the optimization continues from its optimum with the peak limit × {f:.4}",
+                number - 1,
+            );
+        }
         // the previous pass's BFGS matrix (same bounds, same scaling) starts this one
         let previous = checkpoint_file(dir, number - 1);
         let hessian = std::fs::read_to_string(&previous)
@@ -72,6 +97,7 @@ pub fn correct(
         let pass = Pass {
             number,
             rms_factor: factor,
+            peak_factor: pf.unwrap_or(1.0),
             start: Some((all.final_.design_variables.clone(), hessian)),
         };
         let next = optimize_pass(study, dir, resume, false, &pass)
@@ -81,6 +107,7 @@ pub fn correct(
             rms_display: coarse,
             refined_rms_display: fine,
             rms_limit_display: limit,
+            peak_factor: pf,
             iterations: next.iterations,
             evaluations: next.evaluations,
             converged: next.converged,
@@ -153,6 +180,8 @@ mod tests {
             time_s: 0.0,
             rms_unit: "m".into(),
             rms_unit_scale: 1.0,
+            peak: None,
+            refined_peak: None,
         }
     }
 
@@ -175,5 +204,24 @@ mod tests {
         let mut c = check(1.04, None);
         c.not_run = Some("LFD".into());
         assert_eq!(rms_factor(&c), None);
+    }
+
+    /// The peak limit's correction: the ratio of the constrained to the refined peak when the
+    /// refined peak exceeds its limit beyond the tolerance, none within it or with flutter.
+    #[test]
+    fn a_peak_failure_is_corrected_by_the_ratio() {
+        let with_peak = |peak: f64, fine: f64, flutter: Option<f64>| {
+            let mut c = check(0.9, flutter);
+            c.peak = Some(peak);
+            c.refined_peak = Some(fine);
+            c.passed = false;
+            c
+        };
+        let f = peak_factor(&with_peak(1.0, 1.03, None)).unwrap();
+        assert!((f - 1.0 / 1.03).abs() < 1e-15, "{f}");
+        assert_eq!(peak_factor(&with_peak(1.0, 1.015, None)), None);
+        assert_eq!(peak_factor(&with_peak(1.0, 1.03, Some(90.0))), None);
+        // no peak limit: nothing to correct
+        assert_eq!(peak_factor(&check(1.04, None)), None);
     }
 }

@@ -251,9 +251,15 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
             o.message, o.iterations
         )),
         (_, Some(c)) if !c.passed => crate::runner::Outcome::GoalNotReached(format!(
-            "the design fails the resolution check: with {} it {}",
+            "the design fails the resolution check: with {} it {}{}",
             c.refined_model.as_deref().unwrap_or(""),
-            c.refined_flutter.as_deref().unwrap_or("")
+            c.refined_flutter.as_deref().unwrap_or(""),
+            match c.refined_peak {
+                Some(p) if p > 1.0 + c.rms_tolerance => {
+                    format!("; its discrete gust peak is {p:.4} × its limit")
+                }
+                _ => String::new(),
+            }
         )),
         _ => crate::runner::Outcome::Done,
     })

@@ -347,6 +347,8 @@ pub struct Pass {
     pub number: usize,
     /// The constrained limit is this factor × the study's limit.
     pub rms_factor: f64,
+    /// The discrete gust peak limit likewise (1 without one).
+    pub peak_factor: f64,
     /// Where the pass starts and its initial BFGS matrix (scaled variables), when not the
     /// study's.
     pub start: Option<(Vec<f64>, Option<Hessian>)>,
@@ -358,6 +360,7 @@ impl Pass {
         Self {
             number: 1,
             rms_factor: 1.0,
+            peak_factor: 1.0,
             start: None,
         }
     }
@@ -409,6 +412,9 @@ pub fn optimize_pass(
     let (fixed_basis, floor) = design_basis(study)?;
     spec.mode_floor = floor;
     spec.peak = peak_limit(study, &ev0)?;
+    if let Some(pl) = spec.peak.as_mut() {
+        pl.constraint.limit *= pass.peak_factor;
+    }
     if let (Some(pl), false) = (&spec.peak, quiet) {
         let (limit, limit_unit) =
             study

@@ -172,18 +172,57 @@ fn flutter_of(a: &crate::pipeline::Aeroelastic) -> Result<(Verdict, f64)> {
     Ok((Verdict::of(&r), f.velocity))
 }
 
-/// The RMS of every output, or why there is none (the model is unstable at the flight speed).
+/// The RMS of every output and the discrete gust peak over its limit (with a peak limit), or why
+/// there are none (the model is unstable at the flight speed).
+type Responses = std::result::Result<(Vec<f64>, Option<f64>), String>;
+
 fn rms_of(
     a: crate::pipeline::Aeroelastic,
     settings: Option<&GustSettings>,
-) -> Result<std::result::Result<Vec<f64>, String>> {
+    peak: Option<&crate::study::discrete::PeakConstraint>,
+) -> Result<Responses> {
     let Some(settings) = settings else {
-        return Ok(Ok(Vec::new()));
+        return Ok(Ok((Vec::new(), None)));
     };
     if let Err(e) = crate::flutter::check_stability(&a.modes, &a.table, &a.aero.flight) {
         return Ok(Err(format!("{e:#}")));
     }
-    Ok(Ok(crate::pipeline::respond(a, settings)?.rms_m))
+    let ev = crate::pipeline::respond(a, settings)?;
+    let peak = match peak {
+        Some(pc) => Some(peak_of(&ev, pc)?),
+        None => None,
+    };
+    Ok(Ok((ev.rms_m, peak)))
+}
+
+/// The largest sampled |y| of a peak limit's output over its gusts, over the limit, on the grid
+/// the decay rule picks for this model (its own modes and GAF table).
+fn peak_of(
+    ev: &crate::pipeline::Evaluation,
+    pc: &crate::study::discrete::PeakConstraint,
+) -> Result<f64> {
+    let p = ev.problem();
+    let mut derivative = vec![0; p.outputs.len()];
+    derivative[pc.output] = pc.derivative;
+    let ts = crate::gust::discrete::TransientSettings {
+        span: None,
+        omega_max: p.table.k.last().copied().unwrap_or(0.0) * p.velocity / p.table.b_ref,
+        derivative,
+        keep_histories: false,
+        max_bytes: 2e9,
+    };
+    let (r, _) = crate::gust::discrete::transient(&p, &pc.gusts, &ts)?;
+    Ok(r.profiles
+        .iter()
+        .map(|pr| {
+            pr.peaks[pc.output]
+                .0
+                .value
+                .abs()
+                .max(pr.peaks[pc.output].1.value.abs())
+        })
+        .fold(0.0, f64::max)
+        / pc.limit)
 }
 
 /// The resolution check of design `x`: its flutter point and RMS at the study's resolution and at
@@ -223,13 +262,20 @@ pub fn check(
             time_s: t0.elapsed().as_secs_f64(),
             rms_unit: unit.into(),
             rms_unit_scale: unit_scale,
+            peak: None,
+            refined_peak: None,
         });
     }
     let base = crate::pipeline::aeroelastic(study, x).context("resolution check")?;
     let modes = base.modes.len();
     let dofs = study.retained_dofs(&base.plate);
     let (verdict, flight_speed) = flutter_of(&base)?;
-    let rms = rms_of(base, settings)?;
+    // an optimization's peak limit is checked beside its RMS limit
+    let peak = match req.rms {
+        Some(_) => study.peak_constraint()?,
+        None => None,
+    };
+    let rms = rms_of(base, settings, peak.as_ref())?;
     let mut out = ResolutionCheck {
         model: model_words(study, modes),
         refined_model: None,
@@ -239,7 +285,7 @@ pub fn check(
         flutter_speed_m_s: verdict.unstable_from(),
         refined_flutter: None,
         refined_flutter_speed_m_s: None,
-        rms_m: rms.as_ref().ok().cloned().unwrap_or_default(),
+        rms_m: rms.as_ref().ok().map(|r| r.0.clone()).unwrap_or_default(),
         refined_rms_m: Vec::new(),
         refined_unstable: None,
         rms_limit: req.rms,
@@ -250,6 +296,8 @@ pub fn check(
         time_s: 0.0,
         rms_unit: unit.into(),
         rms_unit_scale: unit_scale,
+        peak: rms.as_ref().ok().and_then(|r| r.1),
+        refined_peak: None,
     };
     let (refined, words) = match refined_study(study, x, modes, dofs) {
         Ok(r) => r,
@@ -262,12 +310,15 @@ pub fn check(
     };
     let fine = crate::pipeline::aeroelastic(&refined, x).context("resolution check, refined")?;
     let (fine_verdict, _) = flutter_of(&fine)?;
-    let fine_rms = rms_of(fine, settings)?;
+    let fine_rms = rms_of(fine, settings, peak.as_ref())?;
     out.refined_model = Some(words);
     out.refined_flutter = Some(fine_verdict.words(flight_speed));
     out.refined_flutter_speed_m_s = fine_verdict.unstable_from();
     match fine_rms {
-        Ok(r) => out.refined_rms_m = r,
+        Ok((r, p)) => {
+            out.refined_rms_m = r;
+            out.refined_peak = p;
+        }
         Err(why) => out.refined_unstable = Some(why),
     }
     let flutter_ok = fine_verdict.stable_up_to(req.stable_to_m_s * (1.0 - FLUTTER_TOLERANCE));
@@ -278,7 +329,9 @@ pub fn check(
             .is_some_and(|r| *r <= limit * (1.0 + RMS_TOLERANCE)),
         None => true,
     };
-    out.passed = flutter_ok && rms_ok && out.refined_unstable.is_none();
+    // the peak limit with the RMS limit's tolerance
+    let peak_ok = out.refined_peak.is_none_or(|p| p <= 1.0 + RMS_TOLERANCE);
+    out.passed = flutter_ok && rms_ok && peak_ok && out.refined_unstable.is_none();
     out.time_s = t0.elapsed().as_secs_f64();
     Ok(out)
 }
