@@ -81,11 +81,20 @@ pub struct DiscreteGustResults {
     pub time_s: f64,
 }
 
-/// Every n-th sample and the last, at most [`HISTORY_SAMPLES`].
+/// The part of a history a reader looks at, decimated: from the start up to 20 % past the last
+/// sample above 1e-3 of the peak |y| (the rest is the decayed tail the window needs against
+/// wrap-around), every n-th sample and the last of that part, at most [`HISTORY_SAMPLES`]. The
+/// CSV files keep every sample of the window.
 pub fn decimate(time: &[f64], value: &[f64]) -> (Vec<f64>, Vec<f64>) {
-    let stride = time.len().div_ceil(HISTORY_SAMPLES).max(1);
-    let keep: Vec<usize> = (0..time.len())
-        .filter(|i| i % stride == 0 || *i == time.len() - 1)
+    let peak = value.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let last = value
+        .iter()
+        .rposition(|v| v.abs() > 1e-3 * peak)
+        .unwrap_or(time.len() - 1);
+    let end = (last + last / 5 + 1).min(time.len());
+    let stride = end.div_ceil(HISTORY_SAMPLES).max(1);
+    let keep: Vec<usize> = (0..end)
+        .filter(|i| i % stride == 0 || *i == end - 1)
         .collect();
     (
         keep.iter().map(|&i| time[i]).collect(),

@@ -593,10 +593,11 @@ pub fn resolution_words(c: &crate::report::results::ResolutionCheck) -> String {
         )
     } else {
         format!(
-            "**The design fails at the refined resolution** (it must not flutter below {:.1} m/s, {:.2} × the flight speed, within {:.0} %, and meet its RMS limit within {:.0} %).",
+            "**The design fails at the refined resolution** (it must not flutter below {:.1} m/s, {:.2} × the flight speed, within {:.0} %, and meet its RMS limit{} within {:.0} %).",
             c.stable_to_m_s,
             c.stable_to_m_s / c.flight_speed_m_s,
             100.0 * c.flutter_tolerance,
+            if c.refined_peak.is_some() { " and its discrete gust peak limit" } else { "" },
             100.0 * c.rms_tolerance
         )
     };
