@@ -42,6 +42,25 @@ pub struct PeakLimit {
     pub grid: crate::gust::discrete::TimeGrid,
 }
 
+/// The transient analysis of a peak constraint's output over its gusts at evaluation `ev`, on
+/// the grid of span `span` (s) or, with none, the one the decay rule picks for this model; the
+/// memory of the grid limited to 2 GB.
+pub fn peak_response(
+    ev: &Evaluation,
+    pc: &crate::study::discrete::PeakConstraint,
+    span: Option<f64>,
+) -> Result<crate::gust::discrete::TransientResponse, crate::gust::GustError> {
+    let p = ev.problem();
+    let ts = crate::gust::discrete::TransientSettings {
+        span,
+        omega_max: p.table_omega_max(),
+        derivative: pc.derivatives(p.outputs.len()),
+        keep_histories: false,
+        max_bytes: 2e9,
+    };
+    Ok(crate::gust::discrete::transient(&p, &pc.gusts, &ts)?.0)
+}
+
 impl PeakLimit {
     /// The transient model of evaluation `ev` on the fixed grid and the aggregate.
     pub fn evaluate(
@@ -55,8 +74,7 @@ impl PeakLimit {
         String,
     > {
         let p = ev.problem();
-        let mut derivative = vec![0; p.outputs.len()];
-        derivative[self.constraint.output] = self.constraint.derivative;
+        let derivative = self.constraint.derivatives(p.outputs.len());
         let mut model =
             crate::gust::discrete::TransientModel::new(&p, &derivative, self.grid.clone())
                 .map_err(|e| format!("discrete gust peak: {e}"))?;

@@ -292,7 +292,7 @@ fn discrete_gust_peak_gradient_matches_finite_differences() {
         })
         .collect();
     let p0 = ev0.problem();
-    let omega_max = p0.table.k.last().unwrap() * velocity / p0.table.b_ref;
+    let omega_max = p0.table_omega_max();
     for (output, derivative) in [(1usize, 0u32), (0, 2)] {
         let mut der = vec![0; p0.outputs.len()];
         der[output] = derivative;
@@ -304,17 +304,7 @@ fn discrete_gust_peak_gradient_matches_finite_differences() {
             max_bytes: 1e9,
         };
         let (r, _) = transient(&p0, &gusts, &ts).unwrap();
-        let limit = r
-            .profiles
-            .iter()
-            .map(|pr| {
-                pr.peaks[output]
-                    .0
-                    .value
-                    .abs()
-                    .max(pr.peaks[output].1.value.abs())
-            })
-            .fold(0.0, f64::max);
+        let limit = r.largest_abs(output);
         let pl = gustkit::problem::PeakLimit {
             constraint: gustkit::study::discrete::PeakConstraint {
                 name: "test".into(),

@@ -235,6 +235,12 @@ impl<'a> GustProblem<'a> {
         }
     }
 
+    /// The circular frequency of the GAF table's highest reduced frequency, k_max U / b (rad/s):
+    /// how far a frequency grid of this problem can reach.
+    pub fn table_omega_max(&self) -> f64 {
+        self.table.k.last().copied().unwrap_or(0.0) * self.velocity / self.table.b_ref
+    }
+
     fn check(&self) -> Result<SplineWeights, GustError> {
         let nm = self.omega_n.len();
         if self.table.n_modes() != nm {

@@ -502,75 +502,42 @@ pub fn bench_pipeline(study: &Study, repeat: usize) -> Result<PipelineTimings> {
     }
     let (mut discrete_function, mut discrete_gradient, mut discrete_gusts) = (None, None, 0);
     if let Some(d) = study.discrete_gust_settings()? {
-        // the constraint's gusts and output where there is a peak limit, else the tuned grid's
-        // gusts (or the table) and the first output
-        let (gusts, output, derivative) = match study.peak_constraint()? {
-            Some(c) => (c.gusts, c.output, c.derivative),
-            None => {
-                let velocity = ev.aero.flight.velocity;
-                let gusts = match &d.case {
-                    crate::study::discrete::DiscreteCase::Tuned {
-                        range_m,
-                        points,
-                        amplitude,
-                    } => (0..*points)
-                        .map(|i| {
-                            let h = range_m[0]
-                                + (range_m[1] - range_m[0]) * i as f64
-                                    / (*points - 1).max(1) as f64;
-                            crate::gust::discrete::GustProfile::OneMinusCosine {
-                                gradient: h,
-                                amplitude: amplitude.at(h),
-                                velocity,
-                            }
-                        })
-                        .collect(),
-                    crate::study::discrete::DiscreteCase::Tabulated(p) => vec![p.clone()],
-                };
-                (gusts, 0, 0)
-            }
+        // the peak limit where the optimization has one, else the same over the section's
+        // gusts on the first output
+        let pc = match study.peak_constraint()? {
+            Some(c) => c,
+            None => crate::study::discrete::PeakConstraint {
+                name: String::new(),
+                output: 0,
+                derivative: 0,
+                limit: 1.0,
+                unit: String::new(),
+                gusts: d.case.gusts(ev.aero.flight.velocity),
+            },
         };
+        let (gusts, output) = (&pc.gusts, pc.output);
         let p = ev.problem();
-        let mut der = vec![0; p.outputs.len()];
-        der[output] = derivative;
-        let omega_max = p.table.k.last().copied().unwrap_or(0.0) * p.velocity / p.table.b_ref;
-        let ts = crate::gust::discrete::TransientSettings {
-            span: d.span,
-            omega_max,
-            derivative: der.clone(),
-            keep_histories: false,
-            max_bytes: 2e9,
-        };
-        let (r, _) = crate::gust::discrete::transient(&p, &gusts, &ts)?;
-        let grid = r.grid;
-        let scale = r
-            .profiles
-            .iter()
-            .map(|pr| {
-                pr.peaks[output]
-                    .0
-                    .value
-                    .abs()
-                    .max(pr.peaks[output].1.value.abs())
-            })
-            .fold(f64::MIN_POSITIVE, f64::max);
+        let der = pc.derivatives(p.outputs.len());
+        let r = crate::problem::peak_response(&ev, &pc, d.span)?;
+        let grid = r.grid.clone();
+        let scale = r.largest_abs(output).max(f64::MIN_POSITIVE);
         discrete_function = Some(measure(repeat, || {
             timed(&mut || {
                 let mut model = crate::gust::discrete::TransientModel::new(&p, &der, grid.clone())?;
-                for g in &gusts {
+                for g in gusts {
                     std::hint::black_box(model.respond(g, false));
                 }
                 std::hint::black_box(crate::gust::discrete::PeakKs::evaluate(
-                    &mut model, &gusts, output, scale,
+                    &mut model, gusts, output, scale,
                 ));
                 Ok(())
             })
         })?);
         let mut model = crate::gust::discrete::TransientModel::new(&p, &der, grid.clone())?;
-        let ks = crate::gust::discrete::PeakKs::evaluate(&mut model, &gusts, output, scale);
+        let ks = crate::gust::discrete::PeakKs::evaluate(&mut model, gusts, output, scale);
         discrete_gradient = Some(measure(repeat, || {
             timed(&mut || {
-                let gg = ks.vjp(&mut model, &p, &gusts, 1.0)?;
+                let gg = ks.vjp(&mut model, &p, gusts, 1.0)?;
                 let seeds = crate::pipeline::OutputSeeds {
                     mass: 0.0,
                     area: 0.0,

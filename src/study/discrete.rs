@@ -70,6 +70,28 @@ pub enum DiscreteCase {
     Tabulated(GustProfile),
 }
 
+impl DiscreteCase {
+    /// The gusts of the case at flight speed `velocity`: the tuned search's grid of gradients
+    /// (without its refinement), or the table.
+    pub fn gusts(&self, velocity: f64) -> Vec<GustProfile> {
+        match self {
+            DiscreteCase::Tuned {
+                range_m,
+                points,
+                amplitude,
+            } => crate::gust::discrete::gradient_grid(*range_m, *points)
+                .into_iter()
+                .map(|h| GustProfile::OneMinusCosine {
+                    gradient: h,
+                    amplitude: amplitude.at(h),
+                    velocity,
+                })
+                .collect(),
+            DiscreteCase::Tabulated(p) => vec![p.clone()],
+        }
+    }
+}
+
 /// The discrete gust settings of a study (SI).
 #[derive(Clone, Debug, PartialEq)]
 pub struct DiscreteGustSettings {
@@ -249,6 +271,16 @@ pub struct PeakConstraint {
     pub gusts: Vec<GustProfile>,
 }
 
+impl PeakConstraint {
+    /// The time-derivative order of each of `n_outputs` outputs: this constraint's on its
+    /// output, 0 on the others.
+    pub fn derivatives(&self, n_outputs: usize) -> Vec<u32> {
+        let mut d = vec![0; n_outputs];
+        d[self.output] = self.derivative;
+        d
+    }
+}
+
 impl Study {
     /// The optimization's peak constraint (none without one); errors name the field.
     pub fn peak_constraint(&self) -> Result<Option<PeakConstraint>, StudyError> {
@@ -307,27 +339,7 @@ impl Study {
             ));
         }
         let velocity = self.spec.flight.as_ref().map_or(0.0, |f| f.velocity_m_s);
-        let gusts = match &settings.case {
-            DiscreteCase::Tuned {
-                range_m,
-                points,
-                amplitude,
-            } => (0..*points)
-                .map(|i| {
-                    let h = if *points == 1 {
-                        range_m[0]
-                    } else {
-                        range_m[0] + (range_m[1] - range_m[0]) * i as f64 / (*points - 1) as f64
-                    };
-                    GustProfile::OneMinusCosine {
-                        gradient: h,
-                        amplitude: amplitude.at(h),
-                        velocity,
-                    }
-                })
-                .collect(),
-            DiscreteCase::Tabulated(p) => vec![p.clone()],
-        };
+        let gusts = settings.case.gusts(velocity);
         Ok(Some(PeakConstraint {
             name: pc.output.clone(),
             output,

@@ -54,6 +54,16 @@ pub struct TransientResponse {
     pub profiles: Vec<ProfileResponse>,
 }
 
+impl TransientResponse {
+    /// The largest |y| of output `y` over every profile (the sampled peaks, refined).
+    pub fn largest_abs(&self, y: usize) -> f64 {
+        self.profiles
+            .iter()
+            .map(|pr| pr.peaks[y].0.value.abs().max(pr.peaks[y].1.value.abs()))
+            .fold(0.0, f64::max)
+    }
+}
+
 /// The first span tried: four times the longest profile's end, and at least 30 periods of the
 /// lowest natural frequency (an aeroelastic mode of damping ratio ζ keeps e^{−2π·30ζ} of its
 /// amplitude after them: 1.5e-4 at ζ = 0.05; lighter damping is caught by the wrap check).
@@ -73,6 +83,16 @@ pub fn initial_span(profiles: &[GustProfile], omega_n: &[f64]) -> f64 {
         0.0
     };
     (4.0 * t_end).max(periods)
+}
+
+/// Problem `p` with the uniform frequency grid of `grid` (its weights unused).
+fn with_grid<'a>(p: &GustProblem<'a>, grid: &TimeGrid) -> GustProblem<'a> {
+    let mut q = p.clone();
+    q.grid = FrequencyGrid {
+        omega: grid.omega.clone(),
+        weights: vec![0.0; grid.omega.len()],
+    };
+    q
 }
 
 /// A problem's transfer functions on one time grid, ready for any profile: Eq. 16 is solved
@@ -95,11 +115,7 @@ impl TransientModel {
     /// Solves the problem's frequency response on `grid`, the outputs differentiated
     /// `derivative[y]` times in time.
     pub fn new(p: &GustProblem, derivative: &[u32], grid: TimeGrid) -> Result<Self, GustError> {
-        let mut q = p.clone();
-        q.grid = FrequencyGrid {
-            omega: grid.omega.clone(),
-            weights: vec![0.0; grid.omega.len()],
-        };
+        let q = with_grid(p, &grid);
         let fr = frequency_response(&q)?;
         let transfer =
             fr.h.iter()
@@ -130,12 +146,7 @@ impl TransientModel {
 
     /// The problem `p` on this model's frequency grid (for the reverse mode).
     pub fn on_grid<'a>(&self, p: &GustProblem<'a>) -> GustProblem<'a> {
-        let mut q = p.clone();
-        q.grid = FrequencyGrid {
-            omega: self.grid.omega.clone(),
-            weights: vec![0.0; self.grid.omega.len()],
-        };
-        q
+        with_grid(p, &self.grid)
     }
 
     /// The history of output `y` for profile `g` into `out` (one value per time sample).

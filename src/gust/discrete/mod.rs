@@ -13,4 +13,4 @@ pub use analysis::{
 pub use peak::{PeakKs, PEAK_KS_GAP};
 pub use profile::{cs25_amplitude, reference_gust_velocity, GustProfile};
 pub use transient::{extremes, truncated_energy, wrap_fraction, Peak, Synthesizer, TimeGrid};
-pub use tuned::{tuned_search, CriticalGust, EnvelopePoint, TunedResult};
+pub use tuned::{gradient_grid, tuned_search, CriticalGust, EnvelopePoint, TunedResult};

@@ -50,6 +50,16 @@ pub struct TunedResult {
     pub truncated_max: f64,
 }
 
+/// `points` equally spaced gust gradients over `range` (m); one point: the range's start.
+pub fn gradient_grid(range: [f64; 2], points: usize) -> Vec<f64> {
+    if points == 1 {
+        return vec![range[0]];
+    }
+    (0..points)
+        .map(|i| range[0] + (range[1] - range[0]) * i as f64 / (points - 1) as f64)
+        .collect()
+}
+
 fn one_minus_cosine(h: f64, amplitude: &dyn Fn(f64) -> f64, velocity: f64) -> GustProfile {
     GustProfile::OneMinusCosine {
         gradient: h,
@@ -80,13 +90,7 @@ pub fn tuned_search(
             range
         )));
     }
-    let grid_h: Vec<f64> = if points == 1 {
-        vec![range[0]]
-    } else {
-        (0..points)
-            .map(|i| range[0] + (range[1] - range[0]) * i as f64 / (points - 1) as f64)
-            .collect()
-    };
+    let grid_h = gradient_grid(range, points);
     let profiles: Vec<GustProfile> = grid_h
         .iter()
         .map(|&h| one_minus_cosine(h, amplitude, velocity))

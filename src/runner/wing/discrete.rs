@@ -82,7 +82,7 @@ pub(crate) fn discrete_results(
     let rows = p.residual.map(|r| with_rows(r, &extra));
     p.residual = rows.as_ref();
     let velocity = p.velocity;
-    let omega_max = p.table.k.last().copied().unwrap_or(0.0) * velocity / p.table.b_ref;
+    let omega_max = p.table_omega_max();
     let s = TransientSettings {
         span: settings.span,
         omega_max,

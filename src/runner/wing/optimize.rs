@@ -263,30 +263,19 @@ pub(crate) fn peak_limit(
     let settings = study
         .discrete_gust_settings()?
         .expect("checked with the constraint");
-    let p = ev0.problem();
-    let mut derivative = vec![0; p.outputs.len()];
-    derivative[constraint.output] = constraint.derivative;
-    let omega_max = p.table.k.last().copied().unwrap_or(0.0) * p.velocity / p.table.b_ref;
-    let ts = crate::gust::discrete::TransientSettings {
-        span: settings.span,
-        omega_max,
-        derivative,
-        keep_histories: false,
-        max_bytes: 2e9,
-    };
-    let (r, _) =
-        crate::gust::discrete::transient(&p, &constraint.gusts, &ts).with_context(|| {
-            format!(
-                "{}: discrete gust peak limit at the initial design",
-                study.file.display()
-            )
-        })?;
+    let r = crate::problem::peak_response(ev0, &constraint, settings.span).with_context(|| {
+        format!(
+            "{}: discrete gust peak limit at the initial design",
+            study.file.display()
+        )
+    })?;
     let span = if settings.span.is_some() {
         r.grid.span
     } else {
         2.0 * r.grid.span
     };
-    let grid = crate::gust::discrete::TimeGrid::new(span, omega_max).map_err(anyhow::Error::msg)?;
+    let grid = crate::gust::discrete::TimeGrid::new(span, ev0.problem().table_omega_max())
+        .map_err(anyhow::Error::msg)?;
     Ok(Some(crate::problem::PeakLimit { constraint, grid }))
 }
 

@@ -201,28 +201,8 @@ fn peak_of(
     ev: &crate::pipeline::Evaluation,
     pc: &crate::study::discrete::PeakConstraint,
 ) -> Result<f64> {
-    let p = ev.problem();
-    let mut derivative = vec![0; p.outputs.len()];
-    derivative[pc.output] = pc.derivative;
-    let ts = crate::gust::discrete::TransientSettings {
-        span: None,
-        omega_max: p.table.k.last().copied().unwrap_or(0.0) * p.velocity / p.table.b_ref,
-        derivative,
-        keep_histories: false,
-        max_bytes: 2e9,
-    };
-    let (r, _) = crate::gust::discrete::transient(&p, &pc.gusts, &ts)?;
-    Ok(r.profiles
-        .iter()
-        .map(|pr| {
-            pr.peaks[pc.output]
-                .0
-                .value
-                .abs()
-                .max(pr.peaks[pc.output].1.value.abs())
-        })
-        .fold(0.0, f64::max)
-        / pc.limit)
+    let r = crate::problem::peak_response(ev, pc, None)?;
+    Ok(r.largest_abs(pc.output) / pc.limit)
 }
 
 /// The resolution check of design `x`: its flutter point and RMS at the study's resolution and at

@@ -2,6 +2,7 @@ use super::*;
 use crate::gust::discrete::analysis::{transient, TransientSettings};
 use gustkit_core::theory::strip_gafs;
 use gustkit_core::GafTable;
+use gustkit_testkit::rand_vec;
 
 /// A typical section (b = 1 m, μ = 20, r_α² = 0.25, elastic axis and centre of mass at
 /// mid-chord) with plunge at 2 Hz and pitch at 5 Hz as two mass-normalized modes, Theodorsen and
@@ -46,19 +47,6 @@ fn problem<'a>(table: &'a GafTable, omega_n: &[f64], outputs: Vec<Vec<f64>>) -> 
     )
 }
 
-/// Pseudo-random numbers in [−1, 1] (a fixed LCG: the test is reproducible).
-fn rand(n: usize, seed: u64) -> Vec<f64> {
-    let mut s = seed;
-    (0..n)
-        .map(|_| {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        })
-        .collect()
-}
-
 /// The KS peak of the plunge displacement and of the pitch acceleration over three 1-cos gusts:
 /// its reverse mode against central differences of the forward evaluation along random
 /// perturbations of the whole GAF table, of ω_n² and of the output vectors, on the grid fixed
@@ -85,13 +73,9 @@ fn peak_ks_reverse_mode_matches_central_differences() {
         max_bytes: 1e9,
     };
     let (r, mut model) = transient(&p, &gusts, &settings).unwrap();
-    let grid = r.grid;
+    let grid = r.grid.clone();
     for y in 0..2 {
-        let scale = r
-            .profiles
-            .iter()
-            .map(|pr| pr.peaks[y].0.value.abs().max(pr.peaks[y].1.value.abs()))
-            .fold(0.0, f64::max);
+        let scale = r.largest_abs(y);
         let ks = PeakKs::evaluate(&mut model, &gusts, y, scale);
         assert!(
             ks.ks >= ks.peak && ks.ks - ks.peak <= PEAK_KS_GAP * 1.0001,
@@ -102,7 +86,7 @@ fn peak_ks_reverse_mode_matches_central_differences() {
         let g = ks.vjp(&mut model, &p, &gusts, 1.0).unwrap();
         // random directions: table (complex), ω_n², S
         let nk = table.k.len();
-        let rv = rand(nk * 12 + 2 + 4, 7 + y as u64);
+        let rv = rand_vec(nk * 12 + 2 + 4, 7 + y as u64);
         let mut dt = table.clone();
         let mut pred = 0.0;
         let mut it = rv.iter();

@@ -157,20 +157,14 @@ fn history_adjoint_passes_the_dot_product_test() {
         let grid = TimeGrid::new(span, omega_max).unwrap();
         let mut syn = Synthesizer::new(&grid);
         let (m, n) = (grid.omega.len(), grid.time.len());
-        let mut s = 12345u64;
-        let mut next = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        };
-        let y_omega: Vec<c64> = (0..m).map(|_| c64::new(next(), next())).collect();
-        let y_bar: Vec<f64> = (0..n).map(|_| next()).collect();
+        let r = gustkit_testkit::rand_vec(2 * m + n, 12345);
+        let y_omega: Vec<c64> = r[..2 * m].chunks(2).map(|c| c64::new(c[0], c[1])).collect();
+        let y_bar = &r[2 * m..];
         let mut y = vec![0.0; n];
         syn.history(&y_omega, &mut y);
         let mut spectrum_bar = vec![c64::new(0.0, 0.0); m];
-        syn.history_adjoint(&y_bar, &mut spectrum_bar);
-        let lhs: f64 = y.iter().zip(&y_bar).map(|(a, b)| a * b).sum();
+        syn.history_adjoint(y_bar, &mut spectrum_bar);
+        let lhs: f64 = y.iter().zip(y_bar).map(|(a, b)| a * b).sum();
         let rhs: f64 = spectrum_bar
             .iter()
             .zip(&y_omega)
