@@ -197,3 +197,56 @@ fn rigid_plunge_reproduces_pratt_gust_factor() {
         );
     }
 }
+
+/// The FFT response converges in the frequency spacing (the span T = 2π/Δω) and in the
+/// frequency cut ω_M (the time step): the acceleration peak of the plunging section (exact
+/// Theodorsen/Sears, μ_g = 20, 1-cos of 25 chords) with T = 10τ + 2 s, twice and four times
+/// that, then with the cut at k = 1, 2 and 4. Tolerances from the error models: a span leaves
+/// a wrap-around of about e^{−T/τ} of the peak (4.5e-5 at 10τ); with the wrap gone (2T, 4T)
+/// what remains is the parabolic refinement of the peak between samples that fall elsewhere on
+/// each grid, of order (ω_g Δt)⁴ = 2e-6 (ω_g = πU/H, Δt = 3 ms); the cut leaves the 1-cos spectrum beyond ω_M, whose amplitude falls as
+/// ω⁻³ (gust corners) so the change from k = 2 to k = 4 must be below that from k = 1 to 2
+/// and below 1e-2 of the peak.
+#[test]
+fn fft_response_converges_in_spacing_and_cut() {
+    let sec = Plunge::new(20.0, |k| {
+        let (ss, gs) = strip_gafs(k, 1.0, 0.0);
+        (ss[0][0], gs[0])
+    });
+    let gust = GustProfile::OneMinusCosine {
+        gradient: 12.5 * 2.0 * sec.b,
+        amplitude: 1.0,
+        velocity: sec.velocity,
+    };
+    let base = sec.settings();
+    let b = sec.b;
+    let tau = (sec.mass + PI * sec.density * b * b) / (2.0 * PI * sec.density * sec.velocity * b);
+    let peak = |span: f64, k_max: f64| {
+        let s = TransientSettings {
+            span: Some(span),
+            omega_max: k_max * sec.velocity / b,
+            keep_histories: false,
+            ..base.clone()
+        };
+        let (r, _) = transient(&sec.problem(), std::slice::from_ref(&gust), &s).unwrap();
+        r.profiles[0].peaks[0].0.value
+    };
+    let t0 = 10.0 * tau + 2.0;
+    let spans: Vec<f64> = [1.0, 2.0, 4.0].iter().map(|f| peak(f * t0, 4.0)).collect();
+    let reference = spans[2];
+    eprintln!(
+        "span {t0:.3} s ×1, ×2, ×4: {:?}, relative to ×4: {:.2e}, {:.2e}",
+        spans,
+        (spans[0] - reference).abs() / reference,
+        (spans[1] - reference).abs() / reference
+    );
+    assert!((spans[0] - reference).abs() < 2.0 * (-10.0f64).exp() * reference);
+    assert!((spans[1] - reference).abs() < 2e-6 * reference);
+    let cuts: Vec<f64> = [1.0, 2.0, 4.0].iter().map(|&k| peak(t0, k)).collect();
+    let (d1, d2) = (
+        (cuts[1] - cuts[0]).abs() / reference,
+        (cuts[2] - cuts[1]).abs() / reference,
+    );
+    eprintln!("cut at k = 1, 2, 4: {cuts:?}, changes {d1:.2e}, {d2:.2e}");
+    assert!(d2 < d1 && d2 < 1e-2, "changes {d1:.2e} then {d2:.2e}");
+}
