@@ -10,6 +10,7 @@ pub mod cli;
 pub mod flutter;
 pub mod gust;
 pub mod kind;
+pub mod nastran;
 pub mod optim;
 pub mod pipeline;
 pub mod problem;
