@@ -59,7 +59,6 @@ pub fn parse_real(s: &str) -> Option<f64> {
     {
         return None;
     }
-    let m: f64 = mantissa.parse().ok()?;
     let e: i32 = match exponent {
         None => 0,
         Some(x) => {
@@ -67,7 +66,8 @@ pub fn parse_real(s: &str) -> Option<f64> {
             parse_int(x)?.try_into().ok()?
         }
     };
-    let v = m * 10f64.powi(e);
+    // through the standard parser, correctly rounded (9.83-6 is the double nearest 9.83e-6)
+    let v: f64 = format!("{mantissa}e{e}").parse().ok()?;
     v.is_finite().then_some(v)
 }
 
