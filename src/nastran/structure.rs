@@ -1227,7 +1227,7 @@ mod tests {
                 };
                 let torsion = (g * j / (rho * (i1 + i2))).sqrt() / (4.0 * l);
                 let axial = (e / rho).sqrt() / (4.0 * l);
-                let mut expected = vec![
+                let mut expected = [
                     bending(i1, 0),
                     bending(i1, 1),
                     bending(i1, 2),
