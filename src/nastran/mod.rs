@@ -10,6 +10,7 @@ pub mod bulk;
 pub mod case_control;
 pub mod deck;
 pub mod field;
+pub mod spline;
 pub mod structure;
 
 pub use case_control::{CaseControl, Executive, Subcase};
