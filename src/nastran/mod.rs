@@ -6,6 +6,7 @@
 //! (`nastran` 0.0.1) is an experimental GPL crate on nom 3 without the aeroelastic cards.
 //! Values keep the model's own units: nothing is converted on reading.
 
+pub mod aero;
 pub mod bulk;
 pub mod case_control;
 pub mod deck;
