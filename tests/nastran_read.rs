@@ -163,6 +163,15 @@ fn jet_transport_random_gust_deck() {
     assert!((b.freq[&40][39] - 9.75).abs() < 1e-12);
     assert_eq!(b.params["WTMASS"], ".0025907");
     assert!(b.warnings.is_empty(), "{:?}", b.warnings);
+    // the three panels by their AEFACT divisions (7 × 3, 3 × 6 with the aileron, 1 × 3 boxes)
+    // and every box moved by exactly one spline (the SPLINE2 rectangles 1022–1037 and
+    // 1040–1042, SPLINE1's aileron rectangle 1026–1039)
+    let s = gustkit::nastran::structure::Structure::assemble(&b, Some(1)).unwrap();
+    let surf = gustkit::nastran::aero::lifting_surfaces(&b, &s).unwrap();
+    assert_eq!(surf.box_ids.len(), 21 + 18 + 3);
+    let (rows, unmoved) = gustkit::nastran::aero::spline_rows(&b, &s, &surf).unwrap();
+    assert!(unmoved.is_empty(), "{unmoved:?}");
+    assert_eq!(rows.value.nrows(), 2 * 42);
 }
 
 /// D11-03-2A: the same wing in a transient gust: TLOAD1 on TABLED1, TSTEP.

@@ -60,8 +60,8 @@ pub fn dlm_surface(planform: &Planform, spec: &DlmSpec) -> (SurfaceSpec, Vec<[f6
         c4: planform.tip_chord,
         n_chord: spec.n_chord,
         n_span: spec.n_span,
-        chord_spacing: spec.chord_spacing,
-        span_spacing: spec.span_spacing,
+        chord_spacing: spec.chord_spacing.clone(),
+        span_spacing: spec.span_spacing.clone(),
     };
     (surface, jac)
 }
@@ -151,7 +151,7 @@ impl LatticeRule {
 }
 
 /// The longest box of `n` chordwise boxes of a chord `c` with this spacing.
-fn longest_box(spacing: gustkit_dlm::Spacing, n: usize, c: f64) -> f64 {
+fn longest_box(spacing: &gustkit_dlm::Spacing, n: usize, c: f64) -> f64 {
     spacing
         .edges(n)
         .windows(2)
@@ -171,10 +171,10 @@ pub fn lattice_rule(
     let c = planform.root_chord.max(planform.tip_chord);
     let limit = BOX_PER_WAVELENGTH * velocity / f_hz;
     let needed = (1..=100_000)
-        .find(|&n| longest_box(spec.chord_spacing, n, c) <= limit)
+        .find(|&n| longest_box(&spec.chord_spacing, n, c) <= limit)
         .unwrap_or(100_000);
     LatticeRule {
-        box_length_m: longest_box(spec.chord_spacing, spec.n_chord, c),
+        box_length_m: longest_box(&spec.chord_spacing, spec.n_chord, c),
         limit_m: limit,
         frequency_hz: f_hz,
         frequency_is: f_is.to_string(),

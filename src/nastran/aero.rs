@@ -29,6 +29,8 @@ pub struct LiftingSurfaces {
     pub box_ids: Vec<u32>,
     /// The CAERO1 of every box.
     pub box_caero: Vec<u32>,
+    /// Chordwise boxes of every CAERO1 (by its id).
+    pub n_chord: BTreeMap<u32, u32>,
     /// The aerodynamic frame (ACSID): the DLM's coordinates are in it.
     pub frame: Frame,
     /// Reference semichord REFC/2 and density RHOREF (the model's units).
@@ -36,7 +38,7 @@ pub struct LiftingSurfaces {
     pub rho_ref: f64,
 }
 
-/// The DLM of the CAERO1 panels (uniform divisions), with AERO's symmetry.
+/// The DLM of the CAERO1 panels (uniform divisions or AEFACT fractions), with AERO's symmetry.
 pub fn lifting_surfaces(b: &BulkData, s: &Structure) -> R<LiftingSurfaces> {
     let aero = b.aero.as_ref().ok_or_else(|| {
         model_error("bulk data", "has no AERO card: a dynamic aeroelastic analysis needs its reference chord, density and coordinate system".into())
@@ -79,6 +81,7 @@ pub fn lifting_surfaces(b: &BulkData, s: &Structure) -> R<LiftingSurfaces> {
     let mut surfaces = Vec::new();
     let mut box_ids = Vec::new();
     let mut box_caero = Vec::new();
+    let mut n_chord = BTreeMap::new();
     for c in b.caero1.values() {
         let what = format!("CAERO1 {}", c.id);
         if !b.paero1.contains_key(&c.pid) {
@@ -96,13 +99,29 @@ pub fn lifting_surfaces(b: &BulkData, s: &Structure) -> R<LiftingSurfaces> {
                 format!("IGID must be positive (got {})", c.igid),
             ));
         }
-        let (Some(ns), Some(nc)) = (c.nspan, c.nchord) else {
-            return Err(model_error(
-                &what,
-                "divisions by AEFACT lists (LSPAN, LCHORD) are not read yet: give NSPAN and NCHORD"
-                    .into(),
-            ));
+        // divisions: a count (uniform) or an AEFACT of edge fractions (LSPAN, LCHORD win)
+        let division = |count: Option<u32>, list: Option<u32>, field: &str| -> R<(u32, Spacing)> {
+            match list {
+                Some(id) => {
+                    let f = b.aefact.get(&id).ok_or_else(|| {
+                        model_error(
+                            &what,
+                            format!("{field} names AEFACT {id}, which the model does not define"),
+                        )
+                    })?;
+                    if f.len() < 2 {
+                        return Err(model_error(
+                            &what,
+                            format!("AEFACT {id} ({field}) needs at least two fractions"),
+                        ));
+                    }
+                    Ok((f.len() as u32 - 1, Spacing::Fractions(f.clone())))
+                }
+                None => Ok((count.unwrap_or(1), Spacing::Uniform)),
+            }
         };
+        let (ns, span_spacing) = division(c.nspan, c.lspan, "LSPAN")?;
+        let (nc, chord_spacing) = division(c.nchord, c.lchord, "LCHORD")?;
         let cp = *s.frames.get(&c.cp).ok_or_else(|| {
             model_error(
                 &what,
@@ -117,9 +136,10 @@ pub fn lifting_surfaces(b: &BulkData, s: &Structure) -> R<LiftingSurfaces> {
             c4: c.x43,
             n_chord: nc as usize,
             n_span: ns as usize,
-            chord_spacing: Spacing::Uniform,
-            span_spacing: Spacing::Uniform,
+            chord_spacing,
+            span_spacing,
         };
+        n_chord.insert(c.id, nc);
         for k in 0..(ns * nc) {
             box_ids.push(c.id + k);
             box_caero.push(c.id);
@@ -139,6 +159,7 @@ pub fn lifting_surfaces(b: &BulkData, s: &Structure) -> R<LiftingSurfaces> {
         dlm,
         box_ids,
         box_caero,
+        n_chord,
         frame,
         b_ref: 0.5 * aero.refc,
         rho_ref: aero.rhoref,
@@ -189,7 +210,31 @@ pub fn spline_rows(
             )
         })?;
         let boxes: Vec<u32> = match (sp.boxes, sp.aelist) {
-            (Some((b1, b2)), _) => (b1..=b2).collect(),
+            // BOX1 and BOX2 are opposite corners of a rectangle of boxes of the panel
+            (Some((b1, b2)), _) => {
+                let nc = surf.n_chord[&caero.id];
+                let at = |id: u32| -> R<(u32, u32)> {
+                    let k = id
+                        .checked_sub(caero.id)
+                        .filter(|_| {
+                            index.contains_key(&id) && surf.box_caero[index[&id]] == caero.id
+                        })
+                        .ok_or_else(|| {
+                            model_error(
+                                &what,
+                                format!("names box {id}, which CAERO1 {} does not have", caero.id),
+                            )
+                        })?;
+                    Ok((k % nc, k / nc))
+                };
+                let ((i1, j1), (i2, j2)) = (at(b1)?, at(b2)?);
+                if i2 < i1 || j2 < j1 {
+                    return Err(model_error(&what, format!("BOX1 {b1} and BOX2 {b2} are not the first and last corners of a rectangle of boxes")));
+                }
+                (j1..=j2)
+                    .flat_map(|j| (i1..=i2).map(move |i| caero.id + i + nc * j))
+                    .collect()
+            }
             (None, Some(list)) => b.aelist.get(&list).cloned().ok_or_else(|| {
                 model_error(
                     &what,

@@ -324,13 +324,16 @@ pub fn beam(
     what: &str,
 ) -> R<SplineRows> {
     let [fx, fy, fz] = frame.axes;
-    if dot(fz, normal) < 0.999 {
+    // the spline's w is along its frame's z; the surface's normal is that or its opposite
+    let orientation = dot(fz, normal);
+    if orientation.abs() < 0.999 {
         return Err(NastranError {
             place: "model".into(),
             what: what.into(),
-            reason: "its coordinate system (CID) must have its x–y plane in the plane of the lifting surface, z along the surface's normal".into(),
+            reason: "its coordinate system (CID) must have its x–y plane in the plane of the lifting surface (z along the surface's normal or against it)".into(),
         });
     }
+    let sign = orientation.signum();
     let local = |p: [f64; 3]| {
         let d = [
             p[0] - frame.origin[0],
@@ -345,7 +348,7 @@ pub fn beam(
         let (xi, eta) = local(s.position[g]);
         measures.push((
             Measure::W { xi, eta },
-            translation_along(s, g, normal).to_vec(),
+            translation_along(s, g, fz).to_vec(),
             att.dz,
         ));
         if let Some(f) = att.dthx {
@@ -411,8 +414,8 @@ pub fn beam(
                 vx += row_x[i] * inv[(i, j)];
             }
             for &(dof, f) in &measures[j].1 {
-                value[(p, dof)] += v * f;
-                slope[(p, dof)] += vx * f;
+                value[(p, dof)] += sign * v * f;
+                slope[(p, dof)] += sign * vx * f;
             }
         }
     }

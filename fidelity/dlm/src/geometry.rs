@@ -6,27 +6,53 @@ use gustkit_core::AeroError;
 use serde::{Deserialize, Serialize};
 
 /// Distribution of box edges along a direction.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Spacing {
     #[default]
     Uniform,
     /// Cosine spacing, clustered at both ends.
     Cosine,
+    /// Given edge fractions in [0, 1], increasing (Nastran's AEFACT divisions of a CAERO1: the
+    /// boxes may cover part of the panel, as when several CAERO1 share one planform).
+    Fractions(Vec<f64>),
 }
 
 impl Spacing {
     /// The n + 1 edge fractions in [0, 1].
-    pub fn edges(self, n: usize) -> Vec<f64> {
+    pub fn edges(&self, n: usize) -> Vec<f64> {
+        if let Spacing::Fractions(f) = self {
+            return f.clone();
+        }
         (0..=n)
             .map(|i| {
                 let t = i as f64 / n as f64;
                 match self {
-                    Spacing::Uniform => t,
                     Spacing::Cosine => 0.5 * (1.0 - (std::f64::consts::PI * t).cos()),
+                    _ => t,
                 }
             })
             .collect()
+    }
+
+    /// Checks given fractions against the box count `n`: n + 1 increasing values in [0, 1].
+    pub fn validate(&self, n: usize) -> Result<(), String> {
+        let Spacing::Fractions(f) = self else {
+            return Ok(());
+        };
+        if f.len() != n + 1 {
+            return Err(format!(
+                "{} edge fractions for {n} boxes (need {})",
+                f.len(),
+                n + 1
+            ));
+        }
+        if !(f[0] >= 0.0 && f[n] <= 1.0) || f.windows(2).any(|w| !(w[1] > w[0])) {
+            return Err(format!(
+                "edge fractions must increase within [0, 1] (got {f:?})"
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -75,6 +101,14 @@ impl SurfaceSpec {
                 "chords must be positive (c1 = {}, c4 = {}): a box of zero area",
                 self.c1, self.c4
             ))));
+        }
+        for (what, spacing, n) in [
+            ("chord_spacing", &self.chord_spacing, self.n_chord),
+            ("span_spacing", &self.span_spacing, self.n_span),
+        ] {
+            spacing
+                .validate(n)
+                .map_err(|e| AeroError::Input(name(&format!("{what}: {e}"))))?;
         }
         if self.params().iter().any(|v| !v.is_finite()) {
             return Err(AeroError::Input(name("coordinates must be finite")));
