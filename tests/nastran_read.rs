@@ -424,3 +424,77 @@ fn swept_wing_flutter_matches_nastran95() {
         }
     }
 }
+
+/// D11-03-1A's random gust response against NASTRAN-95's published RMS and zero-crossing rates
+/// (demoout/d11031a.out): fuselage plunge 11T3, wing tip 9T3 and the wing-root bending moment
+/// SPCF 11R3 (the constraint force of the GENEL wing's root component). With the DLM on 31
+/// reduced frequencies (0–0.6, spline-interpolated: gustkit's way) the RMS values agree to
+/// −0.05 %, −0.05 % and −0.34 % and the bending moment's N0 to −0.32 %; the displacements' N0
+/// come out 6.2 % and 5.6 % low, a discrepancy not explained yet (their variance is the free
+/// plunge's below 1 Hz, their N0 the tail above it; the GAFs of NASTRAN-95 at MKAERO1's three
+/// k, linear in k and held constant beyond, give RMS values 29 % low, so NASTRAN-95 did not
+/// interpolate that way). Tolerances: RMS 0.5 %, the moment's N0 0.5 %, the displacements' N0
+/// 7 % (the open discrepancy, stated).
+#[test]
+fn jet_transport_random_gust_matches_nastran95() {
+    use gustkit::nastran::random::{random_response, KInterpolation, Quantity};
+    let (input, b) = read("d11031a.inp");
+    let sub = input.case_control.subcase(1).unwrap();
+    let requests = [
+        (11, 3, Quantity::Displacement),
+        (9, 3, Quantity::Displacement),
+        (11, 6, Quantity::SpcForce),
+    ];
+    let published = [
+        (0.3099176, 0.2961935),
+        (0.2961114, 0.3120188),
+        (1.665699e4, 1.692268),
+    ];
+    let k: Vec<f64> = (0..=30).map(|i| 0.6 * i as f64 / 30.0).collect();
+    let fine: Vec<f64> = (0..=120).map(|i| 0.6 * i as f64 / 120.0).collect();
+    for how in [
+        KInterpolation::Dense(k.clone()),
+        KInterpolation::LinearOnMkaero(fine),
+    ] {
+        let rows = random_response(&b, &sub, &requests, &how).unwrap();
+        eprintln!(
+            "{}",
+            if matches!(how, KInterpolation::Dense(_)) {
+                "dense k"
+            } else {
+                "MKAERO1 k, linear"
+            }
+        );
+        for (r, (rms, n0)) in rows.iter().zip(published) {
+            eprintln!(
+                "  {}: RMS {:.6e} vs {rms:.6e} ({:+.2} %), N0 {:.4} vs {n0:.4} ({:+.2} %)",
+                r.label,
+                r.rms,
+                100.0 * (r.rms / rms - 1.0),
+                r.n0_hz,
+                100.0 * (r.n0_hz / n0 - 1.0)
+            );
+        }
+        if matches!(how, KInterpolation::Dense(_)) {
+            for (i, (r, (rms, n0))) in rows.iter().zip(published).enumerate() {
+                assert!(
+                    (r.rms / rms - 1.0).abs() < 5e-3,
+                    "{}: RMS {} vs {rms}",
+                    r.label,
+                    r.rms
+                );
+                let tol = if i == 2 { 5e-3 } else { 0.07 };
+                assert!(
+                    (r.n0_hz / n0 - 1.0).abs() < tol,
+                    "{}: N0 {} vs {n0}",
+                    r.label,
+                    r.n0_hz
+                );
+            }
+            assert_eq!(
+                rows.iter().map(|r| r.label.as_str()).collect::<Vec<_>>(),
+                ["11T3", "9T3", "SPCF 11R3"]
+            );
+        }
+    }
+}

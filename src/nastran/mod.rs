@@ -11,6 +11,7 @@ pub mod bulk;
 pub mod case_control;
 pub mod deck;
 pub mod field;
+pub mod random;
 pub mod spline;
 pub mod structure;
 
