@@ -498,3 +498,76 @@ fn jet_transport_random_gust_matches_nastran95() {
         }
     }
 }
+
+mod common;
+
+/// `gustkit run DECK`: the PK flutter deck runs to its run folder (results.json with the
+/// flutter point, summary.md; the flutter speed as the library computes it), the random gust deck
+/// writes `random_response` rows labelled as Nastran prints them; a KE-method deck, a transient
+/// deck and an unsupported card stop with exit 1, a message naming the cause, and no folder.
+#[test]
+fn gustkit_runs_nastran_decks() {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/nastran");
+    let dir = common::scratch("nastran", "run");
+    let run = |deck: &Path| {
+        common::gustkit()
+            .arg("run")
+            .arg(deck)
+            .arg("--reports")
+            .arg(&dir)
+            .output()
+            .unwrap()
+    };
+    let out = run(&data.join("d10023a.inp"));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("d10023a/results.json")).unwrap())
+            .unwrap();
+    let p = &r["subcases"][0]["flutter"][0];
+    let v = p["flutter_speed"].as_f64().unwrap();
+    assert!((v / 6021.8 - 1.0).abs() < 0.02, "{v}");
+    assert_eq!(p["flutter_mode"], 2);
+    assert!(dir.join("d10023a/summary.md").is_file());
+    let out = run(&data.join("d11031a.inp"));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("d11031a/results.json")).unwrap())
+            .unwrap();
+    let rows = r["subcases"][0]["random_response"].as_array().unwrap();
+    let row = |label: &str| {
+        rows.iter()
+            .find(|x| x["label"] == label)
+            .unwrap_or_else(|| panic!("{label}: {rows:?}"))
+    };
+    assert!((row("9T3")["rms"].as_f64().unwrap() / 0.2961114 - 1.0).abs() < 5e-3);
+    assert!((row("SPCF 11R3")["rms"].as_f64().unwrap() / 1.665699e4 - 1.0).abs() < 5e-3);
+    for (deck, needle) in [("d10021a.inp", "KE method"), ("d11032a.inp", "transient")] {
+        let out = run(&data.join(deck));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{err}");
+        assert!(err.contains(needle), "{err}");
+        assert!(!dir.join(deck.trim_end_matches(".inp")).exists());
+    }
+    let bad = dir.join("bad.bdf");
+    std::fs::write(
+        &bad,
+        "SOL 103\nCEND\nBEGIN BULK\nGRID,1,,0.,0.,0.\nCHEXA,5,1,1,2,3,4,5,6\nENDDATA\n",
+    )
+    .unwrap();
+    let out = run(&bad);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("bad.bdf line 5") && err.contains("CHEXA 5"),
+        "{err}"
+    );
+    assert!(!dir.join("bad").exists());
+}

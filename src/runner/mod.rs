@@ -6,6 +6,7 @@
 pub mod bench;
 pub mod export;
 pub mod load;
+pub mod nastran;
 pub mod sweep;
 pub mod wing;
 
@@ -29,6 +30,14 @@ pub const EXIT_GOAL_NOT_REACHED: u8 = 3;
 
 /// `gustkit run`: every analysis the study defines, with its report, whatever its kind.
 pub fn run(file: &Path, reports: &Path, resume: bool) -> Result<Outcome> {
+    if nastran::is_nastran(file) {
+        if resume {
+            anyhow::bail!(
+                "--resume applies to optimization studies; a Nastran input runs from the start"
+            );
+        }
+        return nastran::run(file, reports);
+    }
     match LoadedStudy::load(file)? {
         LoadedStudy::Wing(study) => wing::run(&study, reports, resume),
         LoadedStudy::TypicalSection(study) => {

@@ -1,0 +1,377 @@
+//! `gustkit run MODEL.bdf` (or `.dat`, `.inp`, `.nas`): the analysis a Nastran input's executive
+//! and case control ask for — real modes (SOL 103), p-k flutter (SOL 145, APP AERO SOL 10),
+//! random gust response (SOL 146 with RANDOM, APP AERO SOL 11) — written to the usual run folder
+//! (results.json, summary.md). Values stay in the model's units.
+
+use crate::nastran::bulk::BulkData;
+use crate::nastran::case_control::{Selection, Solution};
+use crate::nastran::random::{random_response, KInterpolation, Quantity, RandomRow};
+use crate::nastran::structure::subcase_modes;
+use crate::nastran::{Input, Subcase};
+use anyhow::{bail, Context, Result};
+use serde::Serialize;
+use std::path::Path;
+
+/// The file extensions read as Nastran input.
+pub const EXTENSIONS: [&str; 5] = ["bdf", "dat", "inp", "nas", "blk"];
+
+/// Whether `file` names a Nastran input (by its extension).
+pub fn is_nastran(file: &Path) -> bool {
+    file.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
+}
+
+#[derive(Serialize)]
+struct ModeRow {
+    mode: usize,
+    eigenvalue: f64,
+    frequency_hz: f64,
+}
+
+#[derive(Serialize)]
+struct FlutterPoint {
+    flutter_id: u32,
+    method_run: &'static str,
+    mach: f64,
+    density_ratio: f64,
+    velocities: Vec<f64>,
+    /// Per mode: damping g and frequency (Hz) at each velocity.
+    damping_g: Vec<Vec<f64>>,
+    frequency_hz: Vec<Vec<f64>>,
+    flutter_speed: Option<f64>,
+    flutter_frequency_hz: Option<f64>,
+    flutter_mode: Option<usize>,
+}
+
+#[derive(Serialize)]
+struct RandomResult {
+    label: String,
+    rms: f64,
+    n0_hz: f64,
+    unit: &'static str,
+}
+
+#[derive(Serialize)]
+struct SubcaseResults {
+    subcase: u32,
+    modes: Vec<ModeRow>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    flutter: Vec<FlutterPoint>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    random_response: Vec<RandomResult>,
+}
+
+#[derive(Serialize)]
+struct NastranResults {
+    kind: &'static str,
+    input: String,
+    solution: String,
+    units: &'static str,
+    warnings: Vec<String>,
+    subcases: Vec<SubcaseResults>,
+}
+
+/// Runs a Nastran input and writes reports/<file stem>/.
+pub fn run(file: &Path, reports: &Path) -> Result<crate::runner::Outcome> {
+    let input = Input::read(file)?;
+    let bulk = BulkData::from_cards(&input.deck.bulk)?;
+    let mut warnings = input.warnings();
+    warnings.extend(bulk.warnings.iter().cloned());
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
+    let solution = input.executive.solution().with_context(|| {
+        format!(
+            "{}: the executive control names no solution (SOL 103, 145 or 146)",
+            file.display()
+        )
+    })?;
+    let stem = file
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .context("the input file needs a name")?;
+    let final_dir = reports.join(stem);
+    let folder = crate::report::folder::RunFolder::begin(&final_dir, false)?;
+    let mut subcases = Vec::new();
+    for id in input.case_control.subcase_ids() {
+        let sub = input.case_control.subcase(id).expect("listed subcase");
+        subcases.push(
+            run_subcase(&bulk, &sub, &solution, &input.case_control.sets)
+                .with_context(|| format!("subcase {id}"))?,
+        );
+    }
+    let results = NastranResults {
+        kind: "nastran",
+        input: file.display().to_string(),
+        solution: format!("{solution:?}"),
+        units: "the model's own (gustkit converts nothing in a Nastran input)",
+        warnings,
+        subcases,
+    };
+    let dir = folder.path().to_path_buf();
+    crate::report::write_atomic(
+        &dir.join("results.json"),
+        serde_json::to_string_pretty(&results)?.as_bytes(),
+    )?;
+    let summary = summary(&results);
+    print!("{summary}");
+    crate::report::write_atomic(&dir.join("summary.md"), summary.as_bytes())?;
+    folder.commit()?;
+    println!("results written to {}", final_dir.display());
+    Ok(crate::runner::Outcome::Done)
+}
+
+/// The number of modes the aerodynamic analyses use: PARAM LMODES, else all found.
+fn lmodes(b: &BulkData, found: usize) -> usize {
+    b.params
+        .get("LMODES")
+        .and_then(|v| v.parse::<usize>().ok())
+        .unwrap_or(found)
+        .min(found)
+}
+
+/// Case control SETs by id (None: ALL).
+type Sets = std::collections::BTreeMap<u32, Option<Vec<u32>>>;
+
+fn run_subcase(
+    b: &BulkData,
+    sub: &Subcase,
+    solution: &Solution,
+    sets: &Sets,
+) -> Result<SubcaseResults> {
+    let (s, modes) = subcase_modes(b, sub)?;
+    let rows = modes
+        .lambda
+        .iter()
+        .zip(modes.freq_hz())
+        .enumerate()
+        .map(|(i, (&l, f))| ModeRow {
+            mode: i + 1,
+            eigenvalue: l,
+            frequency_hz: f,
+        })
+        .collect();
+    let mut out = SubcaseResults {
+        subcase: sub.id,
+        modes: rows,
+        flutter: Vec::new(),
+        random_response: Vec::new(),
+    };
+    match solution {
+        Solution::Modes => {}
+        Solution::Flutter => out.flutter = flutter(b, sub, &s, &modes)?,
+        Solution::AeroResponse => {
+            if !sub.selections.contains_key("RANDOM") {
+                bail!("only the random gust response (RANDOM) of SOL 146 is run so far: frequency and transient responses (TSTEP, TLOAD1) are not");
+            }
+            out.random_response = random(b, sub, &s, sets)?;
+        }
+        Solution::Other(sol) => bail!("SOL {sol} is not run by gustkit (it runs 103, 145 and 146)"),
+    }
+    Ok(out)
+}
+
+fn flutter(
+    b: &BulkData,
+    sub: &Subcase,
+    s: &crate::nastran::structure::Structure,
+    modes: &crate::nastran::structure::RealModes,
+) -> Result<Vec<FlutterPoint>> {
+    use gustkit_core::{Aerodynamics, FlightCondition};
+    let fid = *sub.selections.get("FMETHOD").context(
+        "the case control selects no FMETHOD: a flutter analysis needs the id of a FLUTTER card",
+    )?;
+    let f = b
+        .flutter
+        .get(&fid)
+        .with_context(|| format!("FMETHOD = {fid}: no FLUTTER card has this id"))?;
+    let list = |id: u32, what: &str| -> Result<Vec<f64>> {
+        b.flfact
+            .get(&id)
+            .cloned()
+            .with_context(|| format!("FLUTTER {fid}: its {what} FLFACT {id} is not defined"))
+    };
+    let (densities, machs) = (list(f.density, "density")?, list(f.mach, "Mach")?);
+    let mut velocities: Vec<f64> = list(f.velocity, "velocity")?
+        .iter()
+        .map(|v| v.abs())
+        .collect();
+    velocities.sort_by(f64::total_cmp);
+    velocities.dedup();
+    if matches!(f.method.as_str(), "K" | "KE") {
+        bail!(
+            "FLUTTER {fid} asks for the {} method, whose FLFACT {} lists reduced frequencies; gustkit runs the p-k method, which needs velocities: set METHOD to PK and list the velocities in FLFACT {}",
+            f.method,
+            f.velocity,
+            f.velocity
+        );
+    }
+    let n_modes = lmodes(b, modes.lambda.len());
+    let surf = crate::nastran::aero::lifting_surfaces(b, s)?;
+    let (rows, unmoved) = crate::nastran::aero::spline_rows(b, s, &surf)?;
+    if !unmoved.is_empty() {
+        eprintln!(
+            "warning: {} boxes are named by no spline and do not move (first: {})",
+            unmoved.len(),
+            unmoved[0]
+        );
+    }
+    let ms = crate::nastran::aero::modal_surface(&surf, &rows, modes, n_modes);
+    let omega: Vec<f64> = modes.lambda[..n_modes]
+        .iter()
+        .map(|l| l.max(0.0).sqrt())
+        .collect();
+    // reduced frequencies up to twice the highest mode's at the lowest speed (and MKAERO's)
+    let v_min = velocities
+        .first()
+        .copied()
+        .context("no velocity to analyse")?;
+    let k_top = (2.0 * omega.iter().fold(0.0f64, |a, &w| a.max(w)) * surf.b_ref / v_min)
+        .max(b.mkaero.iter().fold(0.0f64, |a, m| a.max(m.1)))
+        .max(0.1);
+    let k: Vec<f64> = (0..=60)
+        .map(|i| k_top * (i as f64 / 60.0).powi(2))
+        .collect();
+    let mut points = Vec::new();
+    for &mach in &machs {
+        let flight = FlightCondition {
+            mach,
+            velocity: v_min,
+            density: surf.rho_ref,
+            b_ref: surf.b_ref,
+            x_ref: 0.0,
+        };
+        let table = surf.dlm.gafs(&flight, &ms, &k)?;
+        for &ratio in &densities {
+            let pk = crate::flutter::PkProblem::from_parts(
+                omega.clone(),
+                0.0,
+                &table,
+                ratio * surf.rho_ref,
+            );
+            let r = pk.sweep(&velocities)?;
+            points.push(FlutterPoint {
+                flutter_id: fid,
+                method_run: "PK",
+                mach,
+                density_ratio: ratio,
+                velocities: velocities.clone(),
+                damping_g: r.curves.iter().map(|c| c.damping_g.clone()).collect(),
+                frequency_hz: r.curves.iter().map(|c| c.frequency_hz.clone()).collect(),
+                flutter_speed: r.flutter_speed_m_s,
+                flutter_frequency_hz: r.flutter_frequency_hz,
+                flutter_mode: r.flutter_mode,
+            });
+        }
+    }
+    Ok(points)
+}
+
+fn random(
+    b: &BulkData,
+    sub: &Subcase,
+    s: &crate::nastran::structure::Structure,
+    sets: &Sets,
+) -> Result<Vec<RandomResult>> {
+    let spc = crate::nastran::structure::constrained(s, b, sub.selections.get("SPC").copied())?;
+    let grids_of = |name: &str| -> Vec<u32> {
+        match sub.outputs.get(name).map(|o| o.selection) {
+            Some(Selection::All) => s.grid_ids.clone(),
+            // the set's ids that are grids of the model (boxes and scalar points left out)
+            Some(Selection::Id(id)) => match sets.get(&id) {
+                Some(Some(ids)) => ids
+                    .iter()
+                    .copied()
+                    .filter(|g| s.index.contains_key(g))
+                    .collect(),
+                _ => s.grid_ids.clone(),
+            },
+            _ => Vec::new(),
+        }
+    };
+    let mut requests = Vec::new();
+    for g in grids_of("DISPLACEMENT") {
+        for c in 1..=6u8 {
+            let dof = s.dof(g, c).expect("grid of the model");
+            if !spc.contains(&dof) {
+                requests.push((g, c, Quantity::Displacement));
+            }
+        }
+    }
+    for g in grids_of("SPCFORCES") {
+        for c in 1..=6u8 {
+            if spc.contains(&s.dof(g, c).expect("grid of the model")) {
+                requests.push((g, c, Quantity::SpcForce));
+            }
+        }
+    }
+    if requests.is_empty() {
+        bail!("the case control requests no output: give DISPLACEMENT = set (grids) or SPCFORCES = set");
+    }
+    // the DLM on reduced frequencies to 5 % beyond the FREQ list's last
+    let freq_id = sub
+        .selections
+        .get("FREQUENCY")
+        .context("no FREQUENCY selected")?;
+    let f_max = b
+        .freq
+        .get(freq_id)
+        .map_or(0.0, |f| f.iter().fold(0.0f64, |a, &x| a.max(x)));
+    let gust = sub
+        .selections
+        .get("GUST")
+        .and_then(|g| b.gusts.get(g))
+        .context("no GUST selected, or its card is missing")?;
+    let aero = b.aero.as_ref().context("no AERO card")?;
+    let k_max = (1.05 * 2.0 * std::f64::consts::PI * f_max * 0.5 * aero.refc / gust.v).max(0.05);
+    let k: Vec<f64> = (0..=40).map(|i| k_max * i as f64 / 40.0).collect();
+    let rows: Vec<RandomRow> = random_response(b, sub, &requests, &KInterpolation::Dense(k))?;
+    Ok(rows
+        .into_iter()
+        .map(|r| RandomResult {
+            label: r.label,
+            rms: r.rms,
+            n0_hz: r.n0_hz,
+            unit: "model",
+        })
+        .collect())
+}
+
+fn summary(r: &NastranResults) -> String {
+    let mut out = format!(
+        "# {}\n\nSolution: {}. Units: {}.\n",
+        r.input, r.solution, r.units
+    );
+    for sc in &r.subcases {
+        out.push_str(&format!(
+            "\n## Subcase {}\n\n| mode | frequency (Hz) |\n|---:|---:|\n",
+            sc.subcase
+        ));
+        for m in &sc.modes {
+            out.push_str(&format!("| {} | {:.4} |\n", m.mode, m.frequency_hz));
+        }
+        for p in &sc.flutter {
+            out.push_str(&format!(
+                "\nFlutter (p-k), Mach {}, density ratio {}: {}\n",
+                p.mach,
+                p.density_ratio,
+                match (p.flutter_speed, p.flutter_frequency_hz, p.flutter_mode) {
+                    (Some(v), Some(f), Some(m)) =>
+                        format!("flutters at V = {v:.4} (mode {m}, {f:.3} Hz)"),
+                    _ => "no flutter crossing in the velocity range".into(),
+                }
+            ));
+        }
+        if !sc.random_response.is_empty() {
+            out.push_str("\n| output | RMS | N0 (Hz) |\n|---|---:|---:|\n");
+            for row in &sc.random_response {
+                out.push_str(&format!(
+                    "| {} | {:.6e} | {:.5} |\n",
+                    row.label, row.rms, row.n0_hz
+                ));
+            }
+        }
+    }
+    out
+}
