@@ -244,12 +244,8 @@ impl Structure {
         for g in b.genels.values() {
             s.add_genel(g)?;
         }
-        if !b.shells.is_empty() {
-            let first = b.shells.values().next().unwrap();
-            return Err(model_error(
-                &format!("CQUAD4/CTRIA3 {}", first.id),
-                "shell elements of a Nastran model are not assembled yet: model the structure with bars, beams, springs, masses and GENELs, or use gustkit's parametric plate wing".into(),
-            ));
+        for e in b.shells.values() {
+            s.add_shell(b, e, coupled)?;
         }
         if let Some(w) = b.params.get("WTMASS") {
             let w: f64 = super::field::parse_real(w)
@@ -508,6 +504,253 @@ impl Structure {
             .collect();
         Self::scatter(&mut self.k_gg, &dofs, &congruence(&k, &t));
         Self::scatter(&mut self.m_gg, &dofs, &congruence(&m, &t));
+        Ok(())
+    }
+
+    /// A CQUAD4: gustkit's flat-plate element in the element's plane (DKQ bending, bilinear
+    /// membrane; Kirchhoff theory, so PSHELL's transverse shear MID3 is not used), in the frame x
+    /// along G1→G2, z along the normal of the diagonals; the material's axis 1 from MCID or
+    /// THETA; lumped translational mass, or with COUPMASS the consistent mass. No drilling
+    /// stiffness: the in-plane rotation of a grid that nothing else holds is removed as
+    /// unconnected.
+    fn add_shell(&mut self, b: &BulkData, e: &super::bulk::Shell, coupled: bool) -> R<()> {
+        use crate::structure::element;
+        let what = format!(
+            "{} {}",
+            if e.grids.len() == 4 {
+                "CQUAD4"
+            } else {
+                "CTRIA3"
+            },
+            e.id
+        );
+        if e.grids.len() != 4 {
+            return Err(model_error(
+                &what,
+                "triangular shells are not assembled yet: mesh with CQUAD4".into(),
+            ));
+        }
+        if e.zoffs != 0.0 {
+            return Err(model_error(
+                &what,
+                format!(
+                    "ZOFFS = {} is not read: give 0 (the mid-surface at the grids)",
+                    e.zoffs
+                ),
+            ));
+        }
+        let p = b.pshells.get(&e.pid).ok_or_else(|| {
+            model_error(
+                &what,
+                format!("refers to property {}, which no PSHELL defines", e.pid),
+            )
+        })?;
+        let t = match e.corner_t.iter().flatten().next() {
+            None => p.t,
+            Some(&t0) => {
+                if e.corner_t
+                    .iter()
+                    .any(|c| c.is_some_and(|v| (v - t0).abs() > 1e-12 * t0.abs()))
+                {
+                    return Err(model_error(
+                        &what,
+                        "corner thicknesses that differ are not read: give one thickness".into(),
+                    ));
+                }
+                t0
+            }
+        };
+        if !(t > 0.0) {
+            return Err(model_error(
+                &what,
+                format!("its thickness must be positive (got {t})"),
+            ));
+        }
+        let idx: Vec<usize> = e
+            .grids
+            .iter()
+            .map(|&g| self.grid(g, &what))
+            .collect::<R<_>>()?;
+        let x: Vec<[f64; 3]> = idx.iter().map(|&i| self.position[i]).collect();
+        let n = cross(sub(x[2], x[0]), sub(x[3], x[1]));
+        if !(norm(n) > 0.0) {
+            return Err(model_error(
+                &what,
+                "its diagonals are parallel: a degenerate quadrilateral".into(),
+            ));
+        }
+        let ez = scale(n, 1.0 / norm(n));
+        let d12 = sub(x[1], x[0]);
+        let ex = sub(d12, scale(ez, dot(d12, ez)));
+        let ex = scale(ex, 1.0 / norm(ex));
+        let ey = cross(ez, ex);
+        let centre = scale(
+            [0, 1, 2, 3].iter().fold([0.0; 3], |a, &i| {
+                [a[0] + x[i][0], a[1] + x[i][1], a[2] + x[i][2]]
+            }),
+            0.25,
+        );
+        let xy: element::Quad<f64> = std::array::from_fn(|i| {
+            let d = sub(x[i], centre);
+            [dot(d, ex), dot(d, ey)]
+        });
+        if !element::is_valid(&xy) {
+            return Err(model_error(
+                &what,
+                "is not a convex quadrilateral ordered around its normal (G1–G4 in turn)".into(),
+            ));
+        }
+        // the material's axis 1 in the element frame
+        let axis1 = match e.mcid {
+            Some(cid) => {
+                let f = *self.frames.get(&cid).ok_or_else(|| {
+                    model_error(
+                        &what,
+                        format!("MCID {cid} is not a coordinate system of the model"),
+                    )
+                })?;
+                let a = f.axes[0];
+                let a = sub(a, scale(ez, dot(a, ez)));
+                if !(norm(a) > 1e-9) {
+                    return Err(model_error(
+                        &what,
+                        format!("the x axis of MCID {cid} is normal to the element"),
+                    ));
+                }
+                scale(a, 1.0 / norm(a))
+            }
+            None => {
+                let (s_, c_) = e.theta.to_radians().sin_cos();
+                [
+                    ex[0] * c_ + ey[0] * s_,
+                    ex[1] * c_ + ey[1] * s_,
+                    ex[2] * c_ + ey[2] * s_,
+                ]
+            }
+        };
+        // gustkit's grain angle: from the frame's +y toward +x
+        let grain = dot(axis1, ex).atan2(dot(axis1, ey));
+        let material = |mid: u32| -> R<(crate::structure::Orthotropic, f64)> {
+            match b.materials.get(&mid) {
+                Some(Material::Mat1 { e, g, nu, rho, .. }) => Ok((
+                    crate::structure::Orthotropic {
+                        e1: *e,
+                        e2: *e,
+                        g12: *g,
+                        nu12: *nu,
+                        density: *rho,
+                        grain_angle: grain,
+                    },
+                    *rho,
+                )),
+                Some(Material::Mat8 {
+                    e1,
+                    e2,
+                    nu12,
+                    g12,
+                    rho,
+                    ..
+                }) => Ok((
+                    crate::structure::Orthotropic {
+                        e1: *e1,
+                        e2: *e2,
+                        g12: *g12,
+                        nu12: *nu12,
+                        density: *rho,
+                        grain_angle: grain,
+                    },
+                    *rho,
+                )),
+                None => Err(model_error(
+                    &what,
+                    format!(
+                        "PSHELL {} refers to material {mid}, which no MAT1 or MAT8 defines",
+                        p.id
+                    ),
+                )),
+            }
+        };
+        let mut k_loc = [[0.0; 20]; 20];
+        let mut m_loc = [[0.0; 20]; 20];
+        // local dofs per node: (w, w_x, w_y, u, v); bending block at 5i..5i+3, membrane 5i+3..
+        let mut rho_t = p.nsm;
+        if let Some(m1) = p.mid1 {
+            let (mat, rho) = material(m1)?;
+            rho_t += rho * t;
+            let km = element::membrane_stiffness(&xy, &mat.qbar());
+            for a in 0..8 {
+                for c in 0..8 {
+                    k_loc[5 * (a / 2) + 3 + a % 2][5 * (c / 2) + 3 + c % 2] += km[a][c] * t;
+                }
+            }
+        }
+        if let Some(m2) = p.mid2 {
+            let (mat, _) = material(m2)?;
+            let d_unit = mat.qbar().map(|r| r.map(|v| v * p.bending_ratio / 12.0));
+            let kb = element::dkq_stiffness(&xy, &d_unit);
+            for a in 0..12 {
+                for c in 0..12 {
+                    k_loc[5 * (a / 3) + a % 3][5 * (c / 3) + c % 3] += kb[a][c] * t * t * t;
+                }
+            }
+        }
+        if coupled {
+            let mb = element::bending_mass(&xy);
+            let mm = element::membrane_mass(&xy);
+            for a in 0..12 {
+                for c in 0..12 {
+                    m_loc[5 * (a / 3) + a % 3][5 * (c / 3) + c % 3] += mb[a][c] * rho_t;
+                }
+            }
+            for a in 0..8 {
+                for c in 0..8 {
+                    m_loc[5 * (a / 2) + 3 + a % 2][5 * (c / 2) + 3 + c % 2] += mm[a][c] * rho_t;
+                }
+            }
+        } else {
+            let quarter = 0.25 * rho_t * element::area(&xy);
+            for i in 0..4 {
+                for d in [0, 3, 4] {
+                    m_loc[5 * i + d][5 * i + d] = quarter;
+                }
+            }
+        }
+        // local (w, w_x, w_y, u, v) of node i from its six components (displacement frame):
+        // w = n·u, w_x = −(e_y·θ), w_y = e_x·θ, u = e_x·u, v = e_y·u
+        let mut t_mat = vec![vec![0.0; 24]; 20];
+        for (i, &gi) in idx.iter().enumerate() {
+            let r = self.cd[gi];
+            for c in 0..3 {
+                let axis = r.axes[c];
+                t_mat[5 * i][6 * i + c] = dot(ez, axis);
+                t_mat[5 * i + 1][6 * i + 3 + c] = -dot(ey, axis);
+                t_mat[5 * i + 2][6 * i + 3 + c] = dot(ex, axis);
+                t_mat[5 * i + 3][6 * i + c] = dot(ex, axis);
+                t_mat[5 * i + 4][6 * i + c] = dot(ey, axis);
+            }
+        }
+        let dofs: Vec<usize> = idx
+            .iter()
+            .flat_map(|&gi| (0..6).map(move |c| 6 * gi + c))
+            .collect();
+        let project = |loc: &[[f64; 20]; 20]| -> Vec<Vec<f64>> {
+            let lt: Vec<Vec<f64>> = (0..20)
+                .map(|a| {
+                    (0..24)
+                        .map(|j| (0..20).map(|q| loc[a][q] * t_mat[q][j]).sum())
+                        .collect()
+                })
+                .collect();
+            (0..24)
+                .map(|i| {
+                    (0..24)
+                        .map(|j| (0..20).map(|a| t_mat[a][i] * lt[a][j]).sum())
+                        .collect()
+                })
+                .collect()
+        };
+        Self::scatter(&mut self.k_gg, &dofs, &project(&k_loc));
+        Self::scatter(&mut self.m_gg, &dofs, &project(&m_loc));
         Ok(())
     }
 
@@ -868,18 +1111,94 @@ impl Structure {
                 auto_spc.push(i);
             }
         }
-        let col: BTreeMap<usize, usize> = a_set.iter().enumerate().map(|(c, &i)| (i, c)).collect();
-        let mut t = Mat::<f64>::zeros(n, a_set.len());
-        for (&i, &c) in &col {
-            t[(i, c)] = 1.0;
-        }
-        for (&d, terms) in &resolved {
-            for &(j, f) in terms {
-                if let Some(&c) = col.get(&j) {
-                    t[(d, c)] += f;
+        // AUTOSPC in any direction: a grid's translations or rotations, all three independent
+        // and free, whose stiffness and mass rows vanish along some direction (the normal
+        // rotation of a grid that only coplanar shells hold) lose that direction
+        let scale_k = (0..n).map(|i| self.k_gg[(i, i)].abs()).fold(0.0, f64::max);
+        let scale_m = (0..n).map(|i| self.m_gg[(i, i)].abs()).fold(0.0, f64::max);
+        let w = if scale_m > 0.0 {
+            scale_k / scale_m
+        } else {
+            1.0
+        };
+        let in_a: BTreeSet<usize> = a_set.iter().copied().collect();
+        // the a-set's columns as combinations of g components
+        let mut columns: Vec<Vec<(usize, f64)>> = Vec::new();
+        let mut done: BTreeSet<usize> = BTreeSet::new();
+        for &i in &a_set {
+            if done.contains(&i) {
+                continue;
+            }
+            let block = 3 * (i / 3);
+            let members = [block, block + 1, block + 2];
+            let whole = members
+                .iter()
+                .all(|m| in_a.contains(m) && !used.contains(m));
+            if !whole {
+                columns.push(vec![(i, 1.0)]);
+                done.insert(i);
+                continue;
+            }
+            done.extend(members);
+            let gram = Mat::<f64>::from_fn(3, 3, |a, c| {
+                (0..n)
+                    .map(|j| {
+                        self.k_gg[(members[a], j)] * self.k_gg[(members[c], j)]
+                            + w * w * self.m_gg[(members[a], j)] * self.m_gg[(members[c], j)]
+                    })
+                    .sum()
+            });
+            let eig = gram
+                .self_adjoint_eigen(Side::Lower)
+                .map_err(|_| model_error("model", "the eigensolver did not converge".into()))?;
+            // the rows' size along each eigenvector, measured on the rows themselves (the
+            // Gram matrix's small eigenvalues carry its round-off, ε ‖G‖)
+            let size: Vec<f64> = (0..3)
+                .map(|d| {
+                    (0..n)
+                        .map(|j| {
+                            let (mut kr, mut mr) = (0.0, 0.0);
+                            for (a, &m) in members.iter().enumerate() {
+                                kr += eig.U()[(a, d)] * self.k_gg[(m, j)];
+                                mr += eig.U()[(a, d)] * self.m_gg[(m, j)];
+                            }
+                            kr * kr + w * w * mr * mr
+                        })
+                        .sum::<f64>()
+                        .sqrt()
+                })
+                .collect();
+            let top = size.iter().fold(0.0f64, |a, &b| a.max(b));
+            for d in 0..3 {
+                if size[d] > 1e-10 * top {
+                    columns.push(
+                        members
+                            .iter()
+                            .enumerate()
+                            .map(|(a, &m)| (m, eig.U()[(a, d)]))
+                            .collect(),
+                    );
+                } else {
+                    auto_spc.push(members[d]);
                 }
             }
         }
+        let mut t = Mat::<f64>::zeros(n, columns.len());
+        let mut col_of: BTreeMap<usize, Vec<(usize, f64)>> = BTreeMap::new();
+        for (c, terms) in columns.iter().enumerate() {
+            for &(i, f) in terms {
+                t[(i, c)] = f;
+                col_of.entry(i).or_default().push((c, f));
+            }
+        }
+        for (&d, terms) in &resolved {
+            for &(j, f) in terms {
+                for &(c, g) in col_of.get(&j).into_iter().flatten() {
+                    t[(d, c)] += f * g;
+                }
+            }
+        }
+        let a_set: Vec<usize> = (0..columns.len()).collect();
         Ok((t, a_set, auto_spc))
     }
 }
