@@ -13,14 +13,6 @@ use std::collections::BTreeMap;
 
 type R<T> = Result<T, NastranError>;
 
-fn model_error(what: &str, reason: String) -> NastranError {
-    NastranError {
-        place: "model".into(),
-        what: what.into(),
-        reason,
-    }
-}
-
 /// The DLM of a Nastran model's CAERO1 panels with its reference values.
 pub struct LiftingSurfaces {
     pub dlm: Dlm,
@@ -41,10 +33,10 @@ pub struct LiftingSurfaces {
 /// The DLM of the CAERO1 panels (uniform divisions or AEFACT fractions), with AERO's symmetry.
 pub fn lifting_surfaces(b: &BulkData, s: &Structure) -> R<LiftingSurfaces> {
     let aero = b.aero.as_ref().ok_or_else(|| {
-        model_error("bulk data", "has no AERO card: a dynamic aeroelastic analysis needs its reference chord, density and coordinate system".into())
+        NastranError::model("bulk data", "has no AERO card: a dynamic aeroelastic analysis needs its reference chord, density and coordinate system".into())
     })?;
     let frame = *s.frames.get(&aero.acsid).ok_or_else(|| {
-        model_error(
+        NastranError::model(
             "AERO",
             format!(
                 "ACSID {} is not a coordinate system of the model",
@@ -53,7 +45,7 @@ pub fn lifting_surfaces(b: &BulkData, s: &Structure) -> R<LiftingSurfaces> {
         )
     })?;
     if aero.symxy != 0 {
-        return Err(model_error(
+        return Err(NastranError::model(
             "AERO",
             "SYMXY (ground effect) is not modelled: set it to 0".into(),
         ));
@@ -63,7 +55,7 @@ pub fn lifting_surfaces(b: &BulkData, s: &Structure) -> R<LiftingSurfaces> {
         1 => Symmetry::Symmetric,
         -1 => Symmetry::Antisymmetric,
         v => {
-            return Err(model_error(
+            return Err(NastranError::model(
                 "AERO",
                 format!("SYMXZ must be −1, 0 or 1 (got {v})"),
             ))
@@ -85,7 +77,7 @@ pub fn lifting_surfaces(b: &BulkData, s: &Structure) -> R<LiftingSurfaces> {
     for c in b.caero1.values() {
         let what = format!("CAERO1 {}", c.id);
         if !b.paero1.contains_key(&c.pid) {
-            return Err(model_error(
+            return Err(NastranError::model(
                 &what,
                 format!(
                     "refers to PAERO1 {}, which the model does not define",
@@ -94,7 +86,7 @@ pub fn lifting_surfaces(b: &BulkData, s: &Structure) -> R<LiftingSurfaces> {
             ));
         }
         if c.igid <= 0 {
-            return Err(model_error(
+            return Err(NastranError::model(
                 &what,
                 format!("IGID must be positive (got {})", c.igid),
             ));
@@ -104,13 +96,13 @@ pub fn lifting_surfaces(b: &BulkData, s: &Structure) -> R<LiftingSurfaces> {
             match list {
                 Some(id) => {
                     let f = b.aefact.get(&id).ok_or_else(|| {
-                        model_error(
+                        NastranError::model(
                             &what,
                             format!("{field} names AEFACT {id}, which the model does not define"),
                         )
                     })?;
                     if f.len() < 2 {
-                        return Err(model_error(
+                        return Err(NastranError::model(
                             &what,
                             format!("AEFACT {id} ({field}) needs at least two fractions"),
                         ));
@@ -123,7 +115,7 @@ pub fn lifting_surfaces(b: &BulkData, s: &Structure) -> R<LiftingSurfaces> {
         let (ns, span_spacing) = division(c.nspan, c.lspan, "LSPAN")?;
         let (nc, chord_spacing) = division(c.nchord, c.lchord, "LCHORD")?;
         let cp = *s.frames.get(&c.cp).ok_or_else(|| {
-            model_error(
+            NastranError::model(
                 &what,
                 format!("CP {} is not a coordinate system of the model", c.cp),
             )
@@ -147,14 +139,18 @@ pub fn lifting_surfaces(b: &BulkData, s: &Structure) -> R<LiftingSurfaces> {
         surfaces.push(spec);
     }
     if surfaces.is_empty() {
-        return Err(model_error("bulk data", "has no CAERO1 panel".into()));
+        return Err(NastranError::model(
+            "bulk data",
+            "has no CAERO1 panel".into(),
+        ));
     }
     let mut sorted = box_ids.clone();
     sorted.sort_unstable();
     if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
-        return Err(model_error("CAERO1", format!("box id {} belongs to two panels: space the panels' EIDs by at least their box counts", w[0])));
+        return Err(NastranError::model("CAERO1", format!("box id {} belongs to two panels: space the panels' EIDs by at least their box counts", w[0])));
     }
-    let dlm = Dlm::new(surfaces, symmetry).map_err(|e| model_error("CAERO1", e.to_string()))?;
+    let dlm =
+        Dlm::new(surfaces, symmetry).map_err(|e| NastranError::model("CAERO1", e.to_string()))?;
     Ok(LiftingSurfaces {
         dlm,
         box_ids,
@@ -201,7 +197,7 @@ pub fn spline_rows(
             sp.id
         );
         let caero = b.caero1.get(&sp.caero).ok_or_else(|| {
-            model_error(
+            NastranError::model(
                 &what,
                 format!(
                     "refers to CAERO1 {}, which the model does not define",
@@ -220,7 +216,7 @@ pub fn spline_rows(
                             index.contains_key(&id) && surf.box_caero[index[&id]] == caero.id
                         })
                         .ok_or_else(|| {
-                            model_error(
+                            NastranError::model(
                                 &what,
                                 format!("names box {id}, which CAERO1 {} does not have", caero.id),
                             )
@@ -229,14 +225,14 @@ pub fn spline_rows(
                 };
                 let ((i1, j1), (i2, j2)) = (at(b1)?, at(b2)?);
                 if i2 < i1 || j2 < j1 {
-                    return Err(model_error(&what, format!("BOX1 {b1} and BOX2 {b2} are not the first and last corners of a rectangle of boxes")));
+                    return Err(NastranError::model(&what, format!("BOX1 {b1} and BOX2 {b2} are not the first and last corners of a rectangle of boxes")));
                 }
                 (j1..=j2)
                     .flat_map(|j| (i1..=i2).map(move |i| caero.id + i + nc * j))
                     .collect()
             }
             (None, Some(list)) => b.aelist.get(&list).cloned().ok_or_else(|| {
-                model_error(
+                NastranError::model(
                     &what,
                     format!("refers to AELIST {list}, which the model does not define"),
                 )
@@ -246,10 +242,10 @@ pub fn spline_rows(
         let mut own = Vec::new();
         for id in boxes {
             let &i = index.get(&id).ok_or_else(|| {
-                model_error(&what, format!("names box {id}, which no CAERO1 has"))
+                NastranError::model(&what, format!("names box {id}, which no CAERO1 has"))
             })?;
             if surf.box_caero[i] != caero.id {
-                return Err(model_error(
+                return Err(NastranError::model(
                     &what,
                     format!(
                         "names box {id}, which belongs to CAERO1 {}, not {}",
@@ -258,7 +254,7 @@ pub fn spline_rows(
                 ));
             }
             if let Some(other) = owner[i] {
-                return Err(model_error(
+                return Err(NastranError::model(
                     &what,
                     format!("names box {id}, which spline {other} moves already"),
                 ));
@@ -267,7 +263,7 @@ pub fn spline_rows(
             own.push(i);
         }
         let set = b.set1.get(&sp.setg).ok_or_else(|| {
-            model_error(
+            NastranError::model(
                 &what,
                 format!(
                     "refers to SET1 {}, which the model does not define",
@@ -279,7 +275,7 @@ pub fn spline_rows(
             .iter()
             .map(|g| {
                 s.index.get(g).copied().ok_or_else(|| {
-                    model_error(
+                    NastranError::model(
                         &what,
                         format!(
                             "SET1 {} names grid {g}, which the model does not define",
@@ -302,7 +298,7 @@ pub fn spline_rows(
         let rows = match sp.kind {
             SplineKind::Beam => {
                 let frame = *s.frames.get(&sp.cid).ok_or_else(|| {
-                    model_error(
+                    NastranError::model(
                         &what,
                         format!("CID {} is not a coordinate system of the model", sp.cid),
                     )
@@ -318,7 +314,7 @@ pub fn spline_rows(
             }
             SplineKind::InfinitePlate | SplineKind::ThinPlate => {
                 if sp.dz != 0.0 {
-                    return Err(model_error(
+                    return Err(NastranError::model(
                         &what,
                         format!("DZ = {} (smoothing) is not read: give 0", sp.dz),
                     ));

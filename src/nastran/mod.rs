@@ -42,6 +42,16 @@ impl NastranError {
         }
     }
 
+    /// An error about the model as a whole (`what`: the card, set or part concerned), where no
+    /// one card line is to blame.
+    pub fn model(what: &str, reason: String) -> Self {
+        Self {
+            place: "model".into(),
+            what: what.into(),
+            reason,
+        }
+    }
+
     /// An error about a whole file.
     pub fn file(file: &Path, reason: String) -> Self {
         Self {

@@ -21,14 +21,6 @@ use gustkit_core::{Aerodynamics, FlightCondition};
 
 type R<T> = Result<T, NastranError>;
 
-fn model_error(what: &str, reason: String) -> NastranError {
-    NastranError {
-        place: "model".into(),
-        what: what.into(),
-        reason,
-    }
-}
-
 /// One output's random response.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RandomRow {
@@ -95,7 +87,7 @@ pub fn random_response(
 ) -> R<Vec<RandomRow>> {
     let sel = |name: &str| -> R<u32> {
         sub.selections.get(name).copied().ok_or_else(|| {
-            model_error(
+            NastranError::model(
                 "case control",
                 format!(
                     "selects no {name}: a random gust response needs GUST, FREQUENCY and RANDOM"
@@ -115,13 +107,13 @@ pub fn random_response(
     let (rows, _unmoved) = spline_rows(b, &s, &surf)?;
     let ms = modal_surface(&surf, &rows, &modes, n_modes);
     let gust = b.gusts.get(&gust_id).ok_or_else(|| {
-        model_error(
+        NastranError::model(
             &format!("GUST = {gust_id}"),
             "no GUST card has this id".into(),
         )
     })?;
     let load = b.dynamic_loads.get(&gust.dload).ok_or_else(|| {
-        model_error(
+        NastranError::model(
             &format!("GUST {gust_id}"),
             format!("its DLOAD {} is no RLOAD1", gust.dload),
         )
@@ -135,14 +127,14 @@ pub fn random_response(
         ..
     } = load
     else {
-        return Err(model_error(
+        return Err(NastranError::model(
             &format!("GUST {gust_id}"),
             "a random response needs an RLOAD1 for its DLOAD (TLOAD1 is for transient response)"
                 .into(),
         ));
     };
     if delay.is_some() || dphase.is_some() {
-        return Err(model_error(
+        return Err(NastranError::model(
             &format!("RLOAD1 {}", gust.dload),
             "DELAY and DPHASE are not read (the gust's phase comes from X0 and the box positions)"
                 .into(),
@@ -154,7 +146,7 @@ pub fn random_response(
     let table = |id: &Option<u32>| -> R<Option<&Table>> {
         id.map(|t| {
             b.tables.get(&t).ok_or_else(|| {
-                model_error(
+                NastranError::model(
                     &format!("RLOAD1 {}", gust.dload),
                     format!("refers to table {t}, which the model does not define"),
                 )
@@ -164,7 +156,7 @@ pub fn random_response(
     };
     let (c_table, d_table) = (table(tc)?, table(td)?);
     let freqs = b.freq.get(&freq_id).ok_or_else(|| {
-        model_error(
+        NastranError::model(
             &format!("FREQUENCY = {freq_id}"),
             "no FREQ, FREQ1 or FREQ2 card has this id".into(),
         )
@@ -178,7 +170,7 @@ pub fn random_response(
         .filter(|r| r.sid == random_id)
         .collect::<Vec<_>>();
     let [psd] = psd.as_slice() else {
-        return Err(model_error(
+        return Err(NastranError::model(
             &format!("RANDOM = {random_id}"),
             format!("needs one RANDPS (found {})", psd.len()),
         ));
@@ -187,7 +179,7 @@ pub fn random_response(
         .tid
         .map(|t| {
             b.tables.get(&t).ok_or_else(|| {
-                model_error(
+                NastranError::model(
                     &format!("RANDPS {random_id}"),
                     format!("refers to TABRND1 {t}, which the model does not define"),
                 )
@@ -197,13 +189,14 @@ pub fn random_response(
     let aero = b.aero.as_ref().expect("lifting_surfaces checked AERO");
     let velocity = gust.v;
     let q = match b.params.get("Q") {
-        Some(v) => super::field::parse_real(v)
-            .ok_or_else(|| model_error("PARAM Q", format!("must be a real number (got '{v}')")))?,
+        Some(v) => super::field::parse_real(v).ok_or_else(|| {
+            NastranError::model("PARAM Q", format!("must be a real number (got '{v}')"))
+        })?,
         None => 0.5 * aero.rhoref * velocity * velocity,
     };
     let mach = match b.params.get("MACH") {
         Some(v) => super::field::parse_real(v).ok_or_else(|| {
-            model_error("PARAM MACH", format!("must be a real number (got '{v}')"))
+            NastranError::model("PARAM MACH", format!("must be a real number (got '{v}')"))
         })?,
         None => b.mkaero.first().map_or(0.0, |m| m.0),
     };
@@ -217,7 +210,10 @@ pub fn random_response(
                     .get(id)
                     .filter(|t| t.card == "TABDMP1")
                     .ok_or_else(|| {
-                        model_error(&format!("SDAMP = {id}"), "no TABDMP1 has this id".into())
+                        NastranError::model(
+                            &format!("SDAMP = {id}"),
+                            "no TABDMP1 has this id".into(),
+                        )
                     })?;
                 let v = table_value(t, f);
                 Ok(match t.damping_type.as_str() {
@@ -233,7 +229,7 @@ pub fn random_response(
         .map(|m| g_of(freq_hz[m]).map(|g| 0.5 * g))
         .collect::<R<_>>()?;
     if zetas.windows(2).any(|w| (w[1] - w[0]).abs() > 1e-12) {
-        return Err(model_error("SDAMP", "modal damping that differs between modes is not read yet: give one value over the modes' frequencies".into()));
+        return Err(NastranError::model("SDAMP", "modal damping that differs between modes is not read yet: give one value over the modes' frequencies".into()));
     }
     let flight = FlightCondition {
         mach,
@@ -242,7 +238,7 @@ pub fn random_response(
         b_ref: surf.b_ref,
         x_ref: gust.x0,
     };
-    let dlm_error = |e: gustkit_core::AeroError| model_error("DLM", e.to_string());
+    let dlm_error = |e: gustkit_core::AeroError| NastranError::model("DLM", e.to_string());
     let table_gaf = match interpolation {
         KInterpolation::Dense(k) => surf.dlm.gafs(&flight, &ms, k).map_err(dlm_error)?,
         KInterpolation::LinearOnMkaero(k) => {
@@ -255,7 +251,7 @@ pub fn random_response(
             ks.sort_by(f64::total_cmp);
             ks.dedup();
             if ks.is_empty() {
-                return Err(model_error(
+                return Err(NastranError::model(
                     "MKAERO1",
                     format!("has no reduced frequency at Mach {mach}"),
                 ));
@@ -313,19 +309,19 @@ pub fn random_response(
         )
     };
     let response = crate::gust::response::frequency_response(&problem)
-        .map_err(|e| model_error("frequency response", e.to_string()))?;
+        .map_err(|e| NastranError::model("frequency response", e.to_string()))?;
     let spc: std::collections::BTreeSet<usize> =
         constrained(&s, b, sub.selections.get("SPC").copied())?;
     let mut out = Vec::new();
     for &(grid_id, comp, quantity) in requests {
         let dof = s.dof(grid_id, comp).ok_or_else(|| {
-            model_error(
+            NastranError::model(
                 "output request",
                 format!("names grid {grid_id}, which the model does not define"),
             )
         })?;
         if quantity == Quantity::SpcForce && !spc.contains(&dof) {
-            return Err(model_error(
+            return Err(NastranError::model(
                 "SPCFORCES",
                 format!("component {comp} of grid {grid_id} is not constrained"),
             ));

@@ -87,11 +87,10 @@ fn solve(system: &Mat<f64>, rhs: &Mat<f64>, what: &str, hint: &str) -> R<Mat<f64
         || !(rn <= 1e-8 * (sn * zn).max(rhs_n))
         || zn > 1e14 * rhs_n.max(1.0) / sn.max(f64::MIN_POSITIVE)
     {
-        return Err(NastranError {
-            place: "model".into(),
-            what: what.into(),
-            reason: format!("its spline system is singular: {hint}"),
-        });
+        return Err(NastranError::model(
+            what,
+            format!("its spline system is singular: {hint}"),
+        ));
     }
     Ok(z)
 }
@@ -115,13 +114,12 @@ pub fn infinite_plate(
     let mut xy: Vec<[f64; 2]> = grids.iter().map(|&g| local(s.position[g])).collect();
     let m = xy.len();
     if m < 3 {
-        return Err(NastranError {
-            place: "model".into(),
-            what: what.into(),
-            reason: format!(
+        return Err(NastranError::model(
+            what,
+            format!(
                 "an infinite-plate spline needs at least 3 grids not on one line (its set has {m})"
             ),
-        });
+        ));
     }
     // centre and scale (the interpolant does not depend on either)
     let c = [
@@ -153,11 +151,8 @@ pub fn infinite_plate(
             0.0
         }
     };
-    let singular = |why: &str| NastranError {
-        place: "model".into(),
-        what: what.into(),
-        reason: format!("its spline system is singular: {why}"),
-    };
+    let singular =
+        |why: &str| NastranError::model(what, format!("its spline system is singular: {why}"));
     let rigid: Vec<[f64; 3]> = xy.iter().map(|p| [1.0, p[0], p[1]]).collect();
     if !full_rank(&rigid) {
         return Err(singular(
@@ -327,11 +322,7 @@ pub fn beam(
     // the spline's w is along its frame's z; the surface's normal is that or its opposite
     let orientation = dot(fz, normal);
     if orientation.abs() < 0.999 {
-        return Err(NastranError {
-            place: "model".into(),
-            what: what.into(),
-            reason: "its coordinate system (CID) must have its x–y plane in the plane of the lifting surface (z along the surface's normal or against it)".into(),
-        });
+        return Err(NastranError::model(what, "its coordinate system (CID) must have its x–y plane in the plane of the lifting surface (z along the surface's normal or against it)".into()));
     }
     let sign = orientation.signum();
     let local = |p: [f64; 3]| {
@@ -369,11 +360,7 @@ pub fn beam(
         })
     });
     if !full_rank(&rigid) || duplicate {
-        return Err(NastranError {
-            place: "model".into(),
-            what: what.into(),
-            reason: "its spline system is singular: it needs grids at two span stations at least, a twist (a grid off the axis or an attached rotation, DTHY ≠ −1) and no two grids at the same place".into(),
-        });
+        return Err(NastranError::model(what, "its spline system is singular: it needs grids at two span stations at least, a twist (a grid off the axis or an attached rotation, DTHY ≠ −1) and no two grids at the same place".into()));
     }
     let n = m + 3;
     let system = Mat::from_fn(n, n, |i, j| match (i < m, j < m) {
@@ -440,6 +427,24 @@ mod tests {
         Structure::assemble(&BulkData::from_cards(&d.bulk).unwrap(), None).unwrap()
     }
 
+    /// `v` with its components along `columns` removed (Gram–Schmidt on the columns).
+    fn orthogonal_to(mut v: Vec<f64>, columns: &[Vec<f64>]) -> Vec<f64> {
+        let mut basis: Vec<Vec<f64>> = Vec::new();
+        for col in columns {
+            let mut u = col.clone();
+            for b in &basis {
+                let d: f64 = u.iter().zip(b).map(|(x, y)| x * y).sum();
+                u.iter_mut().zip(b).for_each(|(x, y)| *x -= d * y);
+            }
+            let nu = u.iter().map(|x| x * x).sum::<f64>().sqrt();
+            u.iter_mut().for_each(|x| *x /= nu);
+            let d: f64 = v.iter().zip(&u).map(|(x, y)| x * y).sum();
+            v.iter_mut().zip(&u).for_each(|(x, y)| *x -= d * y);
+            basis.push(u);
+        }
+        v
+    }
+
     fn lcg(seed: &mut u64) -> f64 {
         *seed = seed
             .wrapping_mul(6364136223846793005)
@@ -459,21 +464,15 @@ mod tests {
             .collect();
         let cd = "CORD2R,5,,0.,0.,0.,0.2,-0.3,1.\n,1.,0.4,0.1\n";
         let s = grids(&xy, cd, 5);
-        // coefficients orthogonal to [1, x, y] (Gram–Schmidt on the three polynomial columns)
-        let mut c: Vec<f64> = (0..xy.len()).map(|_| lcg(&mut seed) - 0.5).collect();
-        let mut basis: Vec<Vec<f64>> = Vec::new();
-        for col in [|_: [f64; 2]| 1.0, |p: [f64; 2]| p[0], |p: [f64; 2]| p[1]] {
-            let mut v: Vec<f64> = xy.iter().map(|&p| col(p)).collect();
-            for b in &basis {
-                let d: f64 = v.iter().zip(b).map(|(x, y)| x * y).sum();
-                v.iter_mut().zip(b).for_each(|(x, y)| *x -= d * y);
-            }
-            let nv = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-            v.iter_mut().for_each(|x| *x /= nv);
-            let d: f64 = c.iter().zip(&v).map(|(x, y)| x * y).sum();
-            c.iter_mut().zip(&v).for_each(|(x, y)| *x -= d * y);
-            basis.push(v);
-        }
+        // coefficients orthogonal to [1, x, y]
+        let c = orthogonal_to(
+            (0..xy.len()).map(|_| lcg(&mut seed) - 0.5).collect(),
+            &[
+                xy.iter().map(|_| 1.0).collect(),
+                xy.iter().map(|p| p[0]).collect(),
+                xy.iter().map(|p| p[1]).collect(),
+            ],
+        );
         let f = |p: [f64; 2]| {
             let mut v = 0.3 + 0.01 * p[0] - 0.02 * p[1];
             let mut vx = 0.01;
@@ -577,20 +576,12 @@ mod tests {
             })
             .collect();
         // equilibrated loads: orthogonal to the rigid rows
-        let mut l: Vec<f64> = (0..loads.len()).map(|_| lcg(&mut seed) - 0.5).collect();
-        let mut basis: Vec<Vec<f64>> = Vec::new();
-        for k in 0..3 {
-            let mut v: Vec<f64> = loads.iter().map(|m| m.rigid()[k]).collect();
-            for b in &basis {
-                let d: f64 = v.iter().zip(b).map(|(x, y)| x * y).sum();
-                v.iter_mut().zip(b).for_each(|(x, y)| *x -= d * y);
-            }
-            let nv = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-            v.iter_mut().for_each(|x| *x /= nv);
-            let d: f64 = l.iter().zip(&v).map(|(x, y)| x * y).sum();
-            l.iter_mut().zip(&v).for_each(|(x, y)| *x -= d * y);
-            basis.push(v);
-        }
+        let l = orthogonal_to(
+            (0..loads.len()).map(|_| lcg(&mut seed) - 0.5).collect(),
+            &(0..3)
+                .map(|k| loads.iter().map(|m| m.rigid()[k]).collect())
+                .collect::<Vec<_>>(),
+        );
         let rigid = [0.1, -0.05, 0.02];
         let field = |m: &Measure| -> f64 {
             loads

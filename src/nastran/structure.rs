@@ -20,15 +20,6 @@ pub const MAX_DENSE_DOFS: usize = 6000;
 
 type R<T> = Result<T, NastranError>;
 
-/// A model-level error without one card to blame.
-fn model_error(what: &str, reason: String) -> NastranError {
-    NastranError {
-        place: "model".into(),
-        what: what.into(),
-        reason,
-    }
-}
-
 /// A rectangular frame: origin and axes (columns) in the basic system.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frame {
@@ -113,7 +104,7 @@ fn frames(b: &BulkData) -> R<BTreeMap<u32, Frame>> {
                     let y = cross(z, sub(cc, a));
                     let (nz, ny) = (norm(z), norm(y));
                     if !(nz > 0.0 && ny > 1e-12 * nz * norm(sub(cc, a)).max(f64::MIN_POSITIVE)) {
-                        return Err(model_error(
+                        return Err(NastranError::model(
                             &format!("CORD2R {top}"),
                             "its points A, B and C do not span a frame (B = A, or C on the z axis)"
                                 .into(),
@@ -133,7 +124,7 @@ fn frames(b: &BulkData) -> R<BTreeMap<u32, Frame>> {
                 }
                 None => {
                     if !b.coords.contains_key(&c.rid) {
-                        return Err(model_error(
+                        return Err(NastranError::model(
                             &format!("CORD2R {top}"),
                             format!(
                                 "refers to coordinate system {}, which the model does not define",
@@ -142,7 +133,7 @@ fn frames(b: &BulkData) -> R<BTreeMap<u32, Frame>> {
                         ));
                     }
                     if chain.contains(&c.rid) {
-                        return Err(model_error(
+                        return Err(NastranError::model(
                             &format!("CORD2R {top}"),
                             "its reference systems form a circle".into(),
                         ));
@@ -186,10 +177,10 @@ impl Structure {
         let grid_ids: Vec<u32> = b.grids.keys().copied().collect();
         let n = 6 * grid_ids.len();
         if n == 0 {
-            return Err(model_error("bulk data", "has no GRID".into()));
+            return Err(NastranError::model("bulk data", "has no GRID".into()));
         }
         if n > MAX_DENSE_DOFS {
-            return Err(model_error(
+            return Err(NastranError::model(
                 "bulk data",
                 format!(
                     "{} grids ({n} components) exceed the dense assembly's limit of {MAX_DENSE_DOFS} components (about {:.1} GB for stiffness and mass)",
@@ -202,7 +193,7 @@ impl Structure {
             grid_ids.iter().enumerate().map(|(i, &g)| (g, i)).collect();
         let frame_of = |cid: u32, what: &str| -> R<Frame> {
             frames.get(&cid).copied().ok_or_else(|| {
-                model_error(
+                NastranError::model(
                     what,
                     format!("uses coordinate system {cid}, which the model does not define"),
                 )
@@ -252,7 +243,7 @@ impl Structure {
                 .or_else(|| w.parse::<i64>().ok().map(|v| v as f64))
                 .filter(|v| *v > 0.0)
                 .ok_or_else(|| {
-                    model_error(
+                    NastranError::model(
                         "PARAM WTMASS",
                         format!("must be a positive real (got '{w}')"),
                     )
@@ -270,7 +261,7 @@ impl Structure {
         if let Some(sid) = mpc {
             let eqs: Vec<_> = b.mpcs.iter().filter(|m| m.sid == sid).collect();
             if eqs.is_empty() {
-                return Err(model_error(
+                return Err(NastranError::model(
                     &format!("MPC = {sid}"),
                     "the case control selects an MPC set that no MPC card defines".into(),
                 ));
@@ -299,7 +290,7 @@ impl Structure {
 
     fn grid(&self, g: u32, what: &str) -> R<usize> {
         self.index.get(&g).copied().ok_or_else(|| {
-            model_error(
+            NastranError::model(
                 what,
                 format!("refers to grid {g}, which the model does not define"),
             )
@@ -321,7 +312,7 @@ impl Structure {
     fn add_bar(&mut self, b: &BulkData, bar: &Bar, coupled: bool) -> R<()> {
         let what = format!("{} {}", if bar.beam { "CBEAM" } else { "CBAR" }, bar.id);
         let p = b.bar_properties.get(&bar.pid).ok_or_else(|| {
-            model_error(
+            NastranError::model(
                 &what,
                 format!(
                     "refers to property {}, which no PBAR or PBEAM defines",
@@ -332,13 +323,13 @@ impl Structure {
         let (e, g, rho) = match b.materials.get(&p.mid) {
             Some(Material::Mat1 { e, g, rho, .. }) => (*e, *g, *rho),
             Some(Material::Mat8 { .. }) => {
-                return Err(model_error(
+                return Err(NastranError::model(
                     &what,
                     format!("property {} uses the shell material MAT8 {}", p.id, p.mid),
                 ))
             }
             None => {
-                return Err(model_error(
+                return Err(NastranError::model(
                     &what,
                     format!(
                         "property {} refers to material {}, which no MAT1 defines",
@@ -348,7 +339,7 @@ impl Structure {
             }
         };
         if p.i12 != 0.0 {
-            return Err(model_error(
+            return Err(NastranError::model(
                 &what,
                 format!(
                     "property {} has a product of inertia I12; unsymmetric sections are not read",
@@ -373,7 +364,7 @@ impl Structure {
         let axis = sub(xb, xa);
         let l = norm(axis);
         if !(l > 0.0) {
-            return Err(model_error(&what, "has zero length".into()));
+            return Err(NastranError::model(&what, "has zero length".into()));
         }
         let ex = scale(axis, 1.0 / l);
         let v = match bar.orientation {
@@ -385,7 +376,7 @@ impl Structure {
         };
         let ez = cross(ex, v);
         if !(norm(ez) > 1e-9 * norm(v).max(f64::MIN_POSITIVE)) || norm(v) == 0.0 {
-            return Err(model_error(
+            return Err(NastranError::model(
                 &what,
                 "its orientation vector is zero or parallel to the bar axis".into(),
             ));
@@ -442,7 +433,7 @@ impl Structure {
             .chain(bar.pb.iter().map(|&c| c as usize + 5))
             .collect();
         if !released.is_empty() {
-            condense(&mut k, &released).map_err(|r| model_error(&what, r))?;
+            condense(&mut k, &released).map_err(|r| NastranError::model(&what, r))?;
         }
         let mass_per_length = rho * p.area + p.nsm;
         let mut m = vec![vec![0.0; 12]; 12];
@@ -525,13 +516,13 @@ impl Structure {
             e.id
         );
         if e.grids.len() != 4 {
-            return Err(model_error(
+            return Err(NastranError::model(
                 &what,
                 "triangular shells are not assembled yet: mesh with CQUAD4".into(),
             ));
         }
         if e.zoffs != 0.0 {
-            return Err(model_error(
+            return Err(NastranError::model(
                 &what,
                 format!(
                     "ZOFFS = {} is not read: give 0 (the mid-surface at the grids)",
@@ -540,7 +531,7 @@ impl Structure {
             ));
         }
         let p = b.pshells.get(&e.pid).ok_or_else(|| {
-            model_error(
+            NastranError::model(
                 &what,
                 format!("refers to property {}, which no PSHELL defines", e.pid),
             )
@@ -552,7 +543,7 @@ impl Structure {
                     .iter()
                     .any(|c| c.is_some_and(|v| (v - t0).abs() > 1e-12 * t0.abs()))
                 {
-                    return Err(model_error(
+                    return Err(NastranError::model(
                         &what,
                         "corner thicknesses that differ are not read: give one thickness".into(),
                     ));
@@ -561,7 +552,7 @@ impl Structure {
             }
         };
         if !(t > 0.0) {
-            return Err(model_error(
+            return Err(NastranError::model(
                 &what,
                 format!("its thickness must be positive (got {t})"),
             ));
@@ -574,7 +565,7 @@ impl Structure {
         let x: Vec<[f64; 3]> = idx.iter().map(|&i| self.position[i]).collect();
         let n = cross(sub(x[2], x[0]), sub(x[3], x[1]));
         if !(norm(n) > 0.0) {
-            return Err(model_error(
+            return Err(NastranError::model(
                 &what,
                 "its diagonals are parallel: a degenerate quadrilateral".into(),
             ));
@@ -595,7 +586,7 @@ impl Structure {
             [dot(d, ex), dot(d, ey)]
         });
         if !element::is_valid(&xy) {
-            return Err(model_error(
+            return Err(NastranError::model(
                 &what,
                 "is not a convex quadrilateral ordered around its normal (G1–G4 in turn)".into(),
             ));
@@ -604,7 +595,7 @@ impl Structure {
         let axis1 = match e.mcid {
             Some(cid) => {
                 let f = *self.frames.get(&cid).ok_or_else(|| {
-                    model_error(
+                    NastranError::model(
                         &what,
                         format!("MCID {cid} is not a coordinate system of the model"),
                     )
@@ -612,7 +603,7 @@ impl Structure {
                 let a = f.axes[0];
                 let a = sub(a, scale(ez, dot(a, ez)));
                 if !(norm(a) > 1e-9) {
-                    return Err(model_error(
+                    return Err(NastranError::model(
                         &what,
                         format!("the x axis of MCID {cid} is normal to the element"),
                     ));
@@ -661,7 +652,7 @@ impl Structure {
                     },
                     *rho,
                 )),
-                None => Err(model_error(
+                None => Err(NastranError::model(
                     &what,
                     format!(
                         "PSHELL {} refers to material {mid}, which no MAT1 or MAT8 defines",
@@ -763,7 +754,7 @@ impl Structure {
                 continue;
             }
             if c == 0 {
-                return Err(model_error(
+                return Err(NastranError::model(
                     &what,
                     format!("names grid {g} without a component (scalar points are not read)"),
                 ));
@@ -800,7 +791,7 @@ impl Structure {
         let i = self.grid(grid, &what)?;
         let frame_of = |cid: u32| -> R<Frame> {
             self.frames.get(&cid).copied().ok_or_else(|| {
-                model_error(
+                NastranError::model(
                     &what,
                     format!("uses coordinate system {cid}, which the model does not define"),
                 )
@@ -823,7 +814,7 @@ impl Structure {
                         (f, f.rotate(*offset))
                     }
                     c => {
-                        return Err(model_error(
+                        return Err(NastranError::model(
                             &what,
                             format!("CID must be −1 or a coordinate system (got {c})"),
                         ))
@@ -903,7 +894,7 @@ impl Structure {
         let mut dofs = Vec::with_capacity(m + n);
         for &(grid, c) in g.ui.iter().chain(&g.ud) {
             if c == 0 {
-                return Err(model_error(
+                return Err(NastranError::model(
                     &what,
                     format!("names grid {grid} without a component"),
                 ));
@@ -922,7 +913,7 @@ impl Structure {
         }
         let kk = if g.flexibility {
             let llt = mat.llt(Side::Lower).map_err(|_| {
-                model_error(
+                NastranError::model(
                     &what,
                     "its flexibility matrix Z is not positive definite".into(),
                 )
@@ -983,7 +974,7 @@ impl Structure {
                         vec![(*ga, if cma.is_empty() { all } else { cma.clone() })],
                     )
                 } else {
-                    return Err(model_error(&format!("RBAR {id}"), "only an RBAR with all six components independent at one end (CNA = 123456 or CNB = 123456) is read".into()));
+                    return Err(NastranError::model(&format!("RBAR {id}"), "only an RBAR with all six components independent at one end (CNA = 123456 or CNB = 123456) is read".into()));
                 }
             }
         };
@@ -1025,7 +1016,7 @@ impl Structure {
 
     fn add_dependent(&mut self, d: usize, terms: Vec<(usize, f64)>, what: &str) -> R<()> {
         if self.dependent.insert(d, terms).is_some() {
-            return Err(model_error(what, format!(
+            return Err(NastranError::model(what, format!(
                 "makes component {} of grid {} dependent a second time (a component belongs to one rigid element or MPC)",
                 d % 6 + 1,
                 self.grid_ids[d / 6]
@@ -1041,7 +1032,7 @@ impl Structure {
         let n = self.k_gg.nrows();
         for d in spc {
             if self.dependent.contains_key(d) {
-                return Err(model_error("SPC", format!(
+                return Err(NastranError::model("SPC", format!(
                     "constrains component {} of grid {}, which a rigid element or MPC makes dependent",
                     d % 6 + 1,
                     self.grid_ids[d / 6]
@@ -1080,7 +1071,7 @@ impl Structure {
         }
         for &d in self.dependent.keys() {
             resolve(d, &self.dependent, &mut resolved, &mut Vec::new()).map_err(|c| {
-                model_error(
+                NastranError::model(
                     "rigid elements and MPCs",
                     format!(
                         "make component {} of grid {} depend on itself",
@@ -1148,9 +1139,9 @@ impl Structure {
                     })
                     .sum()
             });
-            let eig = gram
-                .self_adjoint_eigen(Side::Lower)
-                .map_err(|_| model_error("model", "the eigensolver did not converge".into()))?;
+            let eig = gram.self_adjoint_eigen(Side::Lower).map_err(|_| {
+                NastranError::model("model", "the eigensolver did not converge".into())
+            })?;
             // the rows' size along each eigenvector, measured on the rows themselves (the
             // Gram matrix's small eigenvalues carry its round-off, ε ‖G‖)
             let size: Vec<f64> = (0..3)
@@ -1296,7 +1287,7 @@ pub fn real_modes(s: &Structure, spc: &BTreeSet<usize>, rigid_body: usize) -> R<
     let m = t.transpose() * &s.m_gg * &t;
     let n = k.nrows();
     if n == 0 {
-        return Err(model_error(
+        return Err(NastranError::model(
             "model",
             "every component is constrained: no mode is left".into(),
         ));
@@ -1306,7 +1297,7 @@ pub fn real_modes(s: &Structure, spc: &BTreeSet<usize>, rigid_body: usize) -> R<
     let scale_k = (0..n).map(|i| k[(i, i)].abs()).fold(0.0, f64::max);
     let scale_m = (0..n).map(|i| m[(i, i)].abs()).fold(0.0, f64::max);
     if !(scale_m > 0.0) {
-        return Err(model_error(
+        return Err(NastranError::model(
             "model",
             "has no mass on its free components".into(),
         ));
@@ -1318,7 +1309,7 @@ pub fn real_modes(s: &Structure, spc: &BTreeSet<usize>, rigid_body: usize) -> R<
             let sigma = 1e-6 * scale_k / scale_m;
             let shifted = Mat::from_fn(n, n, |i, j| k[(i, j)] + sigma * m[(i, j)]);
             let l = shifted.llt(Side::Lower).map_err(|_| {
-                model_error("model", "stiffness plus a shifted mass is not positive definite: a component with neither stiffness nor mass coupling, or negative stiffness".into())
+                NastranError::model("model", "stiffness plus a shifted mass is not positive definite: a component with neither stiffness nor mass coupling, or negative stiffness".into())
             })?;
             (sigma, l.L().to_owned())
         }
@@ -1330,7 +1321,7 @@ pub fn real_modes(s: &Structure, spc: &BTreeSet<usize>, rigid_body: usize) -> R<
     let c = Mat::from_fn(n, n, |i, j| 0.5 * (bt[(i, j)] + bt[(j, i)]));
     let eig = c
         .self_adjoint_eigen(Side::Lower)
-        .map_err(|_| model_error("model", "the eigensolver did not converge".into()))?;
+        .map_err(|_| NastranError::model("model", "the eigensolver did not converge".into()))?;
     let mu_max = eig.S()[n - 1];
     let mut pairs: Vec<(f64, Vec<f64>)> = Vec::new();
     for j in (0..n).rev() {
@@ -1356,7 +1347,7 @@ pub fn real_modes(s: &Structure, spc: &BTreeSet<usize>, rigid_body: usize) -> R<
         .filter(|(l, _)| l.abs() < 1e-8 * scale_k / scale_m)
         .count();
     if zero > rigid_body {
-        return Err(model_error("model", format!(
+        return Err(NastranError::model("model", format!(
             "has {zero} zero-frequency modes but SUPORT names {rigid_body} components: a mechanism (an unconnected or unconstrained component); constrain it (SPC, GRID PS) or add it to SUPORT for a free body"
         )));
     }
@@ -1388,7 +1379,7 @@ pub fn constrained(s: &Structure, b: &BulkData, spc: Option<u32>) -> R<BTreeSet<
     if let Some(sid) = spc {
         let cards: Vec<_> = b.spcs.iter().filter(|c| c.sid == sid).collect();
         if cards.is_empty() {
-            return Err(model_error(
+            return Err(NastranError::model(
                 &format!("SPC = {sid}"),
                 "the case control selects an SPC set that no SPC or SPC1 card defines".into(),
             ));
@@ -1421,13 +1412,13 @@ pub fn subcase_modes(b: &BulkData, sub: &super::Subcase) -> R<(Structure, RealMo
     let s = Structure::assemble(b, sub.selections.get("MPC").copied())?;
     let spc = constrained(&s, b, sub.selections.get("SPC").copied())?;
     let method = sub.selections.get("METHOD").copied().ok_or_else(|| {
-        model_error(
+        NastranError::model(
             "case control",
             "selects no METHOD: a modal analysis needs METHOD = the id of an EIGR or EIGRL".into(),
         )
     })?;
     let eig = b.eigr.get(&method).ok_or_else(|| {
-        model_error(
+        NastranError::model(
             &format!("METHOD = {method}"),
             "no EIGR or EIGRL card has this id".into(),
         )

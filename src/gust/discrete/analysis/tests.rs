@@ -164,6 +164,21 @@ fn plunge_history_matches_state_space_time_marching() {
     );
 }
 
+/// The plunging section of mass ratio `mu` with exact 2-D theory (Theodorsen, Sears) and
+/// Pratt's 1-cos gust of 25 chords, unit amplitude.
+fn exact_plunge_in_pratt_gust(mu: f64) -> (Plunge, GustProfile) {
+    let sec = Plunge::new(mu, |k| {
+        let (ss, gs) = strip_gafs(k, 1.0, 0.0);
+        (ss[0][0], gs[0])
+    });
+    let gust = GustProfile::OneMinusCosine {
+        gradient: 12.5 * 2.0 * sec.b,
+        amplitude: 1.0,
+        velocity: sec.velocity,
+    };
+    (sec, gust)
+}
+
 /// Pratt & Walker's gust factor (NACA TN 2964 / Report 1206): the peak plunge acceleration of a
 /// rigid wing in a 1-cos gust 25 chords long (H = 12.5 c), over the quasi-static sharp-edge
 /// value ρUVa/(2m/c), is fitted by K_g = 0.88 μ_g/(5.3 + μ_g). With exact 2-D incompressible
@@ -175,15 +190,7 @@ fn plunge_history_matches_state_space_time_marching() {
 #[test]
 fn rigid_plunge_reproduces_pratt_gust_factor() {
     for mu in [5.0, 10.0, 20.0, 50.0, 100.0, 200.0] {
-        let sec = Plunge::new(mu, |k| {
-            let (ss, gs) = strip_gafs(k, 1.0, 0.0);
-            (ss[0][0], gs[0])
-        });
-        let gust = GustProfile::OneMinusCosine {
-            gradient: 12.5 * 2.0 * sec.b,
-            amplitude: 1.0,
-            velocity: sec.velocity,
-        };
+        let (sec, gust) = exact_plunge_in_pratt_gust(mu);
         let (r, _) =
             transient(&sec.problem(), std::slice::from_ref(&gust), &sec.settings()).unwrap();
         let peak = r.profiles[0].peaks[0].0.value;
@@ -209,15 +216,7 @@ fn rigid_plunge_reproduces_pratt_gust_factor() {
 /// and below 1e-2 of the peak.
 #[test]
 fn fft_response_converges_in_spacing_and_cut() {
-    let sec = Plunge::new(20.0, |k| {
-        let (ss, gs) = strip_gafs(k, 1.0, 0.0);
-        (ss[0][0], gs[0])
-    });
-    let gust = GustProfile::OneMinusCosine {
-        gradient: 12.5 * 2.0 * sec.b,
-        amplitude: 1.0,
-        velocity: sec.velocity,
-    };
+    let (sec, gust) = exact_plunge_in_pratt_gust(20.0);
     let base = sec.settings();
     let b = sec.b;
     let tau = (sec.mass + PI * sec.density * b * b) / (2.0 * PI * sec.density * sec.velocity * b);
