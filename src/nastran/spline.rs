@@ -606,17 +606,20 @@ mod tests {
             .map(|_| frame.to_basic([1.0 * lcg(&mut seed) - 0.5, 6.0 * lcg(&mut seed), 0.0]))
             .collect();
         let idx: Vec<usize> = (0..stations.len()).collect();
-        let rows = beam(
-            &s,
-            &idx,
-            &frame,
-            [0.0, 0.0, 1.0],
-            [1.0, 0.0, 0.0],
-            att,
-            &points,
-            "SPLINE2 3",
-        )
-        .unwrap();
+        let spline_at = |pts: &[[f64; 3]]| {
+            beam(
+                &s,
+                &idx,
+                &frame,
+                [0.0, 0.0, 1.0],
+                [1.0, 0.0, 0.0],
+                att,
+                pts,
+                "SPLINE2 3",
+            )
+            .unwrap()
+        };
+        let rows = spline_at(&points);
         let range = stations
             .iter()
             .map(|&(xi, eta)| field(&Measure::W { xi, eta }).abs())
@@ -624,28 +627,8 @@ mod tests {
         let h = 1e-5;
         let shifted =
             |dx: f64| -> Vec<[f64; 3]> { points.iter().map(|p| [p[0] + dx, p[1], p[2]]).collect() };
-        let plus = beam(
-            &s,
-            &idx,
-            &frame,
-            [0.0, 0.0, 1.0],
-            [1.0, 0.0, 0.0],
-            att,
-            &shifted(h),
-            "x",
-        )
-        .unwrap();
-        let minus = beam(
-            &s,
-            &idx,
-            &frame,
-            [0.0, 0.0, 1.0],
-            [1.0, 0.0, 0.0],
-            att,
-            &shifted(-h),
-            "x",
-        )
-        .unwrap();
+        let plus = spline_at(&shifted(h));
+        let minus = spline_at(&shifted(-h));
         let apply =
             |m: &Mat<f64>, p: usize| -> f64 { (0..u.len()).map(|j| m[(p, j)] * u[j]).sum() };
         for (p, &pt) in points.iter().enumerate() {
