@@ -549,6 +549,21 @@ fn gustkit_runs_nastran_decks() {
     };
     assert!((row("9T3")["rms"].as_f64().unwrap() / 0.2961114 - 1.0).abs() < 5e-3);
     assert!((row("SPCF 11R3")["rms"].as_f64().unwrap() / 1.665699e4 - 1.0).abs() < 5e-3);
+    // `gustkit report` writes the summary again from results.json alone
+    let summary = dir.join("d11031a/summary.md");
+    let before = std::fs::read_to_string(&summary).unwrap();
+    std::fs::remove_file(&summary).unwrap();
+    let out = common::gustkit()
+        .arg("report")
+        .arg(dir.join("d11031a"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(std::fs::read_to_string(&summary).unwrap(), before);
     for (deck, needle) in [("d10021a.inp", "KE method"), ("d11032a.inp", "transient")] {
         let out = run(&data.join(deck));
         let err = String::from_utf8_lossy(&out.stderr);

@@ -64,6 +64,9 @@ pub fn report(dir: &Path) -> Result<()> {
     }
     let results = dir.join("results.json");
     let value = report::read_json(&results)?;
+    if value["kind"] == "nastran" {
+        return nastran::rerender(dir, value);
+    }
     let kind = StudyKind::of_results(&results, &value)?;
     let mismatch = |e: anyhow::Error| {
         anyhow::anyhow!(

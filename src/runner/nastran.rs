@@ -9,7 +9,7 @@ use crate::nastran::random::{random_response, KInterpolation, Quantity, RandomRo
 use crate::nastran::structure::subcase_modes;
 use crate::nastran::{Input, Subcase};
 use anyhow::{bail, Context, Result};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// The file extensions read as Nastran input.
@@ -22,17 +22,17 @@ pub fn is_nastran(file: &Path) -> bool {
         .is_some_and(|e| EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 struct ModeRow {
     mode: usize,
     eigenvalue: f64,
     frequency_hz: f64,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 struct FlutterPoint {
     flutter_id: u32,
-    method_run: &'static str,
+    method_run: String,
     mach: f64,
     density_ratio: f64,
     velocities: Vec<f64>,
@@ -44,30 +44,30 @@ struct FlutterPoint {
     flutter_mode: Option<usize>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 struct RandomResult {
     label: String,
     rms: f64,
     n0_hz: f64,
-    unit: &'static str,
+    unit: String,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 struct SubcaseResults {
     subcase: u32,
     modes: Vec<ModeRow>,
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     flutter: Vec<FlutterPoint>,
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     random_response: Vec<RandomResult>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 struct NastranResults {
-    kind: &'static str,
+    kind: String,
     input: String,
     solution: String,
-    units: &'static str,
+    units: String,
     warnings: Vec<String>,
     subcases: Vec<SubcaseResults>,
 }
@@ -102,10 +102,10 @@ pub fn run(file: &Path, reports: &Path) -> Result<crate::runner::Outcome> {
         );
     }
     let results = NastranResults {
-        kind: "nastran",
+        kind: "nastran".into(),
         input: file.display().to_string(),
         solution: format!("{solution:?}"),
-        units: "the model's own (gustkit converts nothing in a Nastran input)",
+        units: "the model's own (gustkit converts nothing in a Nastran input)".into(),
         warnings,
         subcases,
     };
@@ -253,7 +253,7 @@ fn flutter(
             let r = pk.sweep(&velocities)?;
             points.push(FlutterPoint {
                 flutter_id: fid,
-                method_run: "PK",
+                method_run: "PK".into(),
                 mach,
                 density_ratio: ratio,
                 velocities: velocities.clone(),
@@ -333,9 +333,26 @@ fn random(
             label: r.label,
             rms: r.rms,
             n0_hz: r.n0_hz,
-            unit: "model",
+            unit: "model".into(),
         })
         .collect())
+}
+
+/// `gustkit report` of a Nastran run folder: summary.md again from results.json alone.
+pub fn rerender(dir: &Path, value: serde_json::Value) -> Result<()> {
+    let results: NastranResults = serde_json::from_value(value).with_context(|| {
+        format!(
+            "{}: not the results of a Nastran input run",
+            dir.join("results.json").display()
+        )
+    })?;
+    crate::report::write_atomic(&dir.join("summary.md"), summary(&results).as_bytes())?;
+    println!(
+        "summary of {} re-rendered in {}",
+        results.input,
+        dir.display()
+    );
+    Ok(())
 }
 
 fn summary(r: &NastranResults) -> String {
