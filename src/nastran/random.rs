@@ -72,9 +72,9 @@ pub enum KInterpolation {
     /// The DLM evaluated on these reduced frequencies (dense enough for the FREQ list's range)
     /// and spline-interpolated in k: gustkit's way.
     Dense(Vec<f64>),
-    /// The DLM at MKAERO's reduced frequencies only, linear in k between them and constant
-    /// beyond (NASTRAN's linear interpolation of the aerodynamic matrix list), sampled on these
-    /// reduced frequencies.
+    /// The DLM at MKAERO's reduced frequencies only, linear in k between them and the end
+    /// segments' lines beyond (a linear interpolation of the aerodynamic matrix list), sampled
+    /// on these reduced frequencies.
     LinearOnMkaero(Vec<f64>),
 }
 
@@ -260,10 +260,17 @@ pub fn random_response(
             let mut t = surf.dlm.gafs(&flight, &ms, k).map_err(dlm_error)?;
             for (i, &kk) in k.iter().enumerate() {
                 let seg = ks.windows(2).position(|w| kk >= w[0] && kk <= w[1]);
+                let last = ks.len() - 1;
                 let (a, bb, u) = match seg {
                     Some(j) => (j, j + 1, (kk - ks[j]) / (ks[j + 1] - ks[j])),
-                    None if kk < ks[0] => (0, 0, 0.0),
-                    None => (ks.len() - 1, ks.len() - 1, 0.0),
+                    // beyond the ends: the end segments' lines, extrapolated
+                    None if ks.len() == 1 => (0, 0, 0.0),
+                    None if kk < ks[0] => (0, 1, (kk - ks[0]) / (ks[1] - ks[0])),
+                    None => (
+                        last - 1,
+                        last,
+                        (kk - ks[last - 1]) / (ks[last] - ks[last - 1]),
+                    ),
                 };
                 let mix = |x: c64, y: c64| x * (1.0 - u) + y * u;
                 for r in 0..t.q_ss[i].len() {
