@@ -1,8 +1,8 @@
 //! Random gust response of a Nastran model the way SOL 146 (NASTRAN-95's APP AERO SOL 11)
 //! computes it: the modal frequency response to the GUST's downwash at the FREQ list's
 //! frequencies, PSDs from RANDPS and TABRND1, RMS and zero-crossing rate N0 by the trapezoidal
-//! rule over the frequency list, for grid displacements ("9T3") and single-point constraint
-//! forces ("SPCF 11R3"), in the model's units.
+//! rule over the frequency list, for grid displacements ("9T3"), accelerations ("ACCE 9T3")
+//! and single-point constraint forces ("SPCF 11R3"), in the model's units.
 //!
 //! Per frequency f (ω = 2πf, k = ω REFC / 2V):
 //!   [−ω² + iω 2ζᵢωᵢ + ωᵢ² − q Q_hh(ik)] η = q Q_hg(ik) α(f),   α(f) = WG · A · C(f) e^{iφ(f)}
@@ -28,12 +28,16 @@ pub struct RandomRow {
     pub label: String,
     pub rms: f64,
     pub n0_hz: f64,
+    /// The PSD at the FREQ list's frequencies (`frequencies_hz`), per Hz.
+    pub psd: Vec<f64>,
+    pub frequencies_hz: Vec<f64>,
 }
 
 /// What to report: a grid component's displacement or constraint force.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Quantity {
     Displacement,
+    Acceleration,
     SpcForce,
 }
 
@@ -337,6 +341,8 @@ pub fn random_response(
         let (k_row, m_row): (Vec<f64>, Vec<f64>) = (0..n_modes)
             .map(|m| match quantity {
                 Quantity::Displacement => (modes.phi_g[(dof, m)], 0.0),
+                // ü = −ω² u
+                Quantity::Acceleration => (0.0, modes.phi_g[(dof, m)]),
                 Quantity::SpcForce => {
                     let n = s.k_gg.nrows();
                     let kp: f64 = (0..n).map(|j| s.k_gg[(dof, j)] * modes.phi_g[(j, m)]).sum();
@@ -366,12 +372,15 @@ pub fn random_response(
         }
         let label = match quantity {
             Quantity::Displacement => format!("{grid_id}{}", component_label(comp)),
+            Quantity::Acceleration => format!("ACCE {grid_id}{}", component_label(comp)),
             Quantity::SpcForce => format!("SPCF {grid_id}{}", component_label(comp)),
         };
         out.push(RandomRow {
             label,
             rms: m0.sqrt(),
             n0_hz: if m0 > 0.0 { (m2 / m0).sqrt() } else { 0.0 },
+            psd: psd_values,
+            frequencies_hz: freqs.clone(),
         });
     }
     Ok(out)

@@ -299,6 +299,13 @@ fn random(
             }
         }
     }
+    for g in grids_of("ACCELERATION") {
+        for c in 1..=6u8 {
+            if !spc.contains(&s.dof(g, c).expect("grid of the model")) {
+                requests.push((g, c, Quantity::Acceleration));
+            }
+        }
+    }
     for g in grids_of("SPCFORCES") {
         for c in 1..=6u8 {
             if spc.contains(&s.dof(g, c).expect("grid of the model")) {
@@ -307,7 +314,7 @@ fn random(
         }
     }
     if requests.is_empty() {
-        bail!("the case control requests no output: give DISPLACEMENT = set (grids) or SPCFORCES = set");
+        bail!("the case control requests no output: give DISPLACEMENT, ACCELERATION or SPCFORCES = set (grids)");
     }
     // the DLM on reduced frequencies to 5 % beyond the FREQ list's last
     let freq_id = sub
