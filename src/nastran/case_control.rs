@@ -127,7 +127,7 @@ pub struct Subcase {
     /// `SDAMPING`, `FREQUENCY`, `GUST`, `RANDOM`, `DLOAD`, `TSTEP`) → the set id.
     pub selections: BTreeMap<&'static str, u32>,
     /// Output requests by their full name (`DISPLACEMENT`, `ACCELERATION`, `SPCFORCES`,
-    /// `MONITOR`).
+    /// `MONITOR`, `SDISPLACEMENT`: the modal coordinates).
     pub outputs: BTreeMap<&'static str, OutputRequest>,
 }
 
@@ -148,11 +148,12 @@ const SELECTIONS: [(&str, &str); 11] = [
 
 /// The output requests gustkit writes: full name and accepted forms (by their first four
 /// letters; VECTOR is Nastran's other name for DISPLACEMENT).
-const OUTPUTS: [(&str, &[&str]); 4] = [
+const OUTPUTS: [(&str, &[&str]); 5] = [
     ("DISPLACEMENT", &["DISP", "VECT"]),
     ("ACCELERATION", &["ACCE"]),
     ("SPCFORCES", &["SPCF"]),
     ("MONITOR", &["MONI"]),
+    ("SDISPLACEMENT", &["SDIS"]),
 ];
 
 /// Selections of direct matrix input, which change the model and which gustkit cannot read.
@@ -348,7 +349,7 @@ impl CaseControl {
         }
         if !not_written.is_empty() {
             out.warnings.push(format!(
-                "case control: output requests gustkit does not write: {} (it writes DISPLACEMENT, ACCELERATION, SPCFORCES and MONITOR)",
+                "case control: output requests gustkit does not write: {} (it writes DISPLACEMENT, ACCELERATION, SPCFORCES, SDISPLACEMENT and MONITOR)",
                 not_written.join(", ")
             ));
         }

@@ -39,6 +39,9 @@ pub enum Quantity {
     Displacement,
     Acceleration,
     SpcForce,
+    /// The modal coordinate of a mode (1-based; the request's grid field holds it, the
+    /// component is unused).
+    Mode,
 }
 
 /// A table's value at x, linear between points and constant beyond the ends.
@@ -144,9 +147,21 @@ pub fn random_response(
                 .into(),
         ));
     }
-    let area: f64 = b.darea.get(excite).map_or(1.0, |v| {
-        v.iter().map(|e| e.2).sum::<f64>() / v.len().max(1) as f64
-    });
+    // the gust's scale A: one DAREA value (its point does not matter, the load is the gust's)
+    let area = match b.darea.get(excite).map(|v| v.as_slice()) {
+        None | Some([]) => 1.0,
+        Some([(_, _, a)]) => *a,
+        Some(v) => {
+            if v.iter().any(|e| e.2 != v[0].2) {
+                return Err(NastranError::model(
+                    &format!("DAREA {excite}"),
+                    "a GUST's load takes one scale factor: its DAREA entries give different ones"
+                        .into(),
+                ));
+            }
+            v[0].2
+        }
+    };
     let table = |id: &Option<u32>| -> R<Option<&Table>> {
         id.map(|t| {
             b.tables.get(&t).ok_or_else(|| {
@@ -325,12 +340,21 @@ pub fn random_response(
         constrained(&s, b, sub.selections.get("SPC").copied())?;
     let mut out = Vec::new();
     for &(grid_id, comp, quantity) in requests {
-        let dof = s.dof(grid_id, comp).ok_or_else(|| {
-            NastranError::model(
-                "output request",
-                format!("names grid {grid_id}, which the model does not define"),
-            )
-        })?;
+        if quantity == Quantity::Mode && !(1..=n_modes).contains(&(grid_id as usize)) {
+            return Err(NastranError::model(
+                "SDISPLACEMENT",
+                format!("asks for mode {grid_id}; the analysis keeps modes 1–{n_modes}"),
+            ));
+        }
+        let dof = match quantity {
+            Quantity::Mode => 0,
+            _ => s.dof(grid_id, comp).ok_or_else(|| {
+                NastranError::model(
+                    "output request",
+                    format!("names grid {grid_id}, which the model does not define"),
+                )
+            })?,
+        };
         if quantity == Quantity::SpcForce && !spc.contains(&dof) {
             return Err(NastranError::model(
                 "SPCFORCES",
@@ -343,6 +367,7 @@ pub fn random_response(
                 Quantity::Displacement => (modes.phi_g[(dof, m)], 0.0),
                 // ü = −ω² u
                 Quantity::Acceleration => (0.0, modes.phi_g[(dof, m)]),
+                Quantity::Mode => (if m + 1 == grid_id as usize { 1.0 } else { 0.0 }, 0.0),
                 Quantity::SpcForce => {
                     let n = s.k_gg.nrows();
                     let kp: f64 = (0..n).map(|j| s.k_gg[(dof, j)] * modes.phi_g[(j, m)]).sum();
@@ -373,6 +398,7 @@ pub fn random_response(
         let label = match quantity {
             Quantity::Displacement => format!("{grid_id}{}", component_label(comp)),
             Quantity::Acceleration => format!("ACCE {grid_id}{}", component_label(comp)),
+            Quantity::Mode => format!("MODE {grid_id}"),
             Quantity::SpcForce => format!("SPCF {grid_id}{}", component_label(comp)),
         };
         out.push(RandomRow {

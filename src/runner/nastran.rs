@@ -165,7 +165,7 @@ fn run_subcase(
             if !sub.selections.contains_key("RANDOM") {
                 bail!("only the random gust response (RANDOM) of SOL 146 is run so far: frequency and transient responses (TSTEP, TLOAD1) are not");
             }
-            out.random_response = random(b, sub, &s, sets)?;
+            out.random_response = random(b, sub, &s, sets, lmodes(b, modes.lambda.len()))?;
         }
         Solution::Other(sol) => bail!("SOL {sol} is not run by gustkit (it runs 103, 145 and 146)"),
     }
@@ -273,6 +273,7 @@ fn random(
     sub: &Subcase,
     s: &crate::nastran::structure::Structure,
     sets: &Sets,
+    n_modes: usize,
 ) -> Result<Vec<RandomResult>> {
     let spc = crate::nastran::structure::constrained(s, b, sub.selections.get("SPC").copied())?;
     let grids_of = |name: &str| -> Vec<u32> {
@@ -306,6 +307,18 @@ fn random(
             }
         }
     }
+    // SDISPLACEMENT: the set's ids are mode numbers (those beyond the modes kept are refused)
+    if let Some(req) = sub.outputs.get("SDISPLACEMENT") {
+        let modes: Vec<u32> = match req.selection {
+            Selection::All => (1..=n_modes as u32).collect(),
+            Selection::Id(id) => match sets.get(&id) {
+                Some(Some(ids)) => ids.clone(),
+                _ => (1..=n_modes as u32).collect(),
+            },
+            Selection::None => Vec::new(),
+        };
+        requests.extend(modes.into_iter().map(|m| (m, 0, Quantity::Mode)));
+    }
     for g in grids_of("SPCFORCES") {
         for c in 1..=6u8 {
             if spc.contains(&s.dof(g, c).expect("grid of the model")) {
@@ -314,7 +327,7 @@ fn random(
         }
     }
     if requests.is_empty() {
-        bail!("the case control requests no output: give DISPLACEMENT, ACCELERATION or SPCFORCES = set (grids)");
+        bail!("the case control requests no output: give DISPLACEMENT, ACCELERATION, SPCFORCES = set (grids) or SDISPLACEMENT = set (modes)");
     }
     // the DLM on reduced frequencies to 5 % beyond the FREQ list's last
     let freq_id = sub
