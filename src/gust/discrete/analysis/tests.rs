@@ -213,7 +213,8 @@ fn rigid_plunge_reproduces_pratt_gust_factor() {
 /// what remains is the parabolic refinement of the peak between samples that fall elsewhere on
 /// each grid, of order (ω_g Δt)⁴ = 2e-6 (ω_g = πU/H, Δt = 3 ms); the cut leaves the 1-cos spectrum beyond ω_M, whose amplitude falls as
 /// ω⁻³ (gust corners) so the change from k = 2 to k = 4 must be below that from k = 1 to 2
-/// and below 1e-2 of the peak.
+/// and below 1e-2 of the peak (measured: 5.6e-6 and 2.9e-7 for the spans; 8.2e-5 then 9.8e-6,
+/// a ratio of 8.3, for the cuts).
 #[test]
 fn fft_response_converges_in_spacing_and_cut() {
     let (sec, gust) = exact_plunge_in_pratt_gust(20.0);
