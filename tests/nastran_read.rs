@@ -452,13 +452,14 @@ fn jet_transport_random_gust_matches_nastran95() {
         (0.2961114, 0.3120188),
         (1.665699e4, 1.692268),
     ];
+    let (s, modes) = gustkit::nastran::structure::subcase_modes(&b, &sub).unwrap();
     let k: Vec<f64> = (0..=30).map(|i| 0.6 * i as f64 / 30.0).collect();
     let fine: Vec<f64> = (0..=120).map(|i| 0.6 * i as f64 / 120.0).collect();
     for how in [
         KInterpolation::Dense(k.clone()),
         KInterpolation::LinearOnMkaero(fine),
     ] {
-        let rows = random_response(&b, &sub, &requests, &how).unwrap();
+        let rows = random_response(&b, &sub, &s, &modes, &requests, &how).unwrap();
         eprintln!(
             "{}",
             if matches!(how, KInterpolation::Dense(_)) {
@@ -498,7 +499,15 @@ fn jet_transport_random_gust_matches_nastran95() {
                 ["11T3", "9T3", "SPCF 11R3"]
             );
             // an acceleration's PSD is (2πf)⁴ times its displacement's, at every frequency
-            let acc = random_response(&b, &sub, &[(9, 3, Quantity::Acceleration)], &how).unwrap();
+            let acc = random_response(
+                &b,
+                &sub,
+                &s,
+                &modes,
+                &[(9, 3, Quantity::Acceleration)],
+                &how,
+            )
+            .unwrap();
             assert_eq!(acc[0].label, "ACCE 9T3");
             for ((pa, pd), f) in acc[0]
                 .psd
@@ -515,13 +524,13 @@ fn jet_transport_random_gust_matches_nastran95() {
             }
             // modal coordinates: mode 13 is refused (12 kept); the fuselage plunge 11T3 is
             // mostly the free body's plunge, mode 1 (its RMS times φ₁ at 11T3)
-            let e = random_response(&b, &sub, &[(13, 0, Quantity::Mode)], &how)
+            let e = random_response(&b, &sub, &s, &modes, &[(13, 0, Quantity::Mode)], &how)
                 .unwrap_err()
                 .to_string();
             assert!(e.contains("mode 13") && e.contains("1–12"), "{e}");
-            let modal = random_response(&b, &sub, &[(1, 0, Quantity::Mode)], &how).unwrap();
+            let modal =
+                random_response(&b, &sub, &s, &modes, &[(1, 0, Quantity::Mode)], &how).unwrap();
             assert_eq!(modal[0].label, "MODE 1");
-            let (s, modes) = gustkit::nastran::structure::subcase_modes(&b, &sub).unwrap();
             let phi = modes.phi_g[(s.dof(11, 3).unwrap(), 0)];
             let ratio = modal[0].rms * phi.abs() / rows[0].rms;
             eprintln!(

@@ -14,7 +14,7 @@
 
 use super::aero::{lifting_surfaces, modal_surface, spline_rows};
 use super::bulk::{BulkData, DynamicLoad, Table};
-use super::structure::{constrained, subcase_modes};
+use super::structure::{constrained, RealModes, Structure};
 use super::{NastranError, Subcase};
 use faer::c64;
 use gustkit_core::{Aerodynamics, FlightCondition};
@@ -85,10 +85,13 @@ pub enum KInterpolation {
     LinearOnMkaero(Vec<f64>),
 }
 
-/// The random response of `requests` ((grid, component 1–6, quantity)) for subcase `sub`.
+/// The random response of `requests` ((grid, component 1–6, quantity)) for subcase `sub`,
+/// whose structure `s` and modes (`subcase_modes`) the caller has solved once.
 pub fn random_response(
     b: &BulkData,
     sub: &Subcase,
+    s: &Structure,
+    modes: &RealModes,
     requests: &[(u32, u8, Quantity)],
     interpolation: &KInterpolation,
 ) -> R<Vec<RandomRow>> {
@@ -103,16 +106,15 @@ pub fn random_response(
         })
     };
     let (gust_id, freq_id, random_id) = (sel("GUST")?, sel("FREQUENCY")?, sel("RANDOM")?);
-    let (s, modes) = subcase_modes(b, sub)?;
     let n_modes = b
         .params
         .get("LMODES")
         .and_then(|v| v.parse::<usize>().ok())
         .unwrap_or(modes.lambda.len())
         .min(modes.lambda.len());
-    let surf = lifting_surfaces(b, &s)?;
-    let (rows, _unmoved) = spline_rows(b, &s, &surf)?;
-    let ms = modal_surface(&surf, &rows, &modes, n_modes);
+    let surf = lifting_surfaces(b, s)?;
+    let (rows, _unmoved) = spline_rows(b, s, &surf)?;
+    let ms = modal_surface(&surf, &rows, modes, n_modes);
     let gust = b.gusts.get(&gust_id).ok_or_else(|| {
         NastranError::model(
             &format!("GUST = {gust_id}"),
@@ -337,7 +339,7 @@ pub fn random_response(
     let response = crate::gust::response::frequency_response(&problem)
         .map_err(|e| NastranError::model("frequency response", e.to_string()))?;
     let spc: std::collections::BTreeSet<usize> =
-        constrained(&s, b, sub.selections.get("SPC").copied())?;
+        constrained(s, b, sub.selections.get("SPC").copied())?;
     let mut out = Vec::new();
     for &(grid_id, comp, quantity) in requests {
         if quantity == Quantity::Mode && !(1..=n_modes).contains(&(grid_id as usize)) {

@@ -165,7 +165,7 @@ fn run_subcase(
             if !sub.selections.contains_key("RANDOM") {
                 bail!("only the random gust response (RANDOM) of SOL 146 is run so far: frequency and transient responses (TSTEP, TLOAD1) are not");
             }
-            out.random_response = random(b, sub, &s, sets, lmodes(b, modes.lambda.len()))?;
+            out.random_response = random(b, sub, &s, sets, &modes)?;
         }
         Solution::Other(sol) => bail!("SOL {sol} is not run by gustkit (it runs 103, 145 and 146)"),
     }
@@ -273,8 +273,9 @@ fn random(
     sub: &Subcase,
     s: &crate::nastran::structure::Structure,
     sets: &Sets,
-    n_modes: usize,
+    modes: &crate::nastran::structure::RealModes,
 ) -> Result<Vec<RandomResult>> {
+    let n_modes = lmodes(b, modes.lambda.len());
     let spc = crate::nastran::structure::constrained(s, b, sub.selections.get("SPC").copied())?;
     let grids_of = |name: &str| -> Vec<u32> {
         match sub.outputs.get(name).map(|o| o.selection) {
@@ -346,7 +347,8 @@ fn random(
     let aero = b.aero.as_ref().context("no AERO card")?;
     let k_max = (1.05 * 2.0 * std::f64::consts::PI * f_max * 0.5 * aero.refc / gust.v).max(0.05);
     let k: Vec<f64> = (0..=40).map(|i| k_max * i as f64 / 40.0).collect();
-    let rows: Vec<RandomRow> = random_response(b, sub, &requests, &KInterpolation::Dense(k))?;
+    let rows: Vec<RandomRow> =
+        random_response(b, sub, s, modes, &requests, &KInterpolation::Dense(k))?;
     Ok(rows
         .into_iter()
         .map(|r| RandomResult {
