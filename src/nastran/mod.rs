@@ -12,8 +12,10 @@ pub mod case_control;
 pub mod deck;
 pub mod field;
 pub mod random;
+pub mod response;
 pub mod spline;
 pub mod structure;
+pub mod transient;
 
 pub use case_control::{CaseControl, Executive, Subcase};
 pub use deck::{Card, Deck, Source};

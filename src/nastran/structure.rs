@@ -1027,8 +1027,10 @@ impl Structure {
 
     /// The transformation u_g = T u_a onto the analysis set: dependent components expressed in
     /// independent ones, the constrained (`spc`, g indices) and unconnected (neither stiffness
-    /// nor mass: Nastran's AUTOSPC) components removed. Returns T and the a-set's g indices.
-    pub fn reduction(&self, spc: &BTreeSet<usize>) -> R<(Mat<f64>, Vec<usize>, Vec<usize>)> {
+    /// nor mass: Nastran's AUTOSPC) components removed. Returns T (one column an a-set
+    /// coordinate: an independent component, or a direction of a grid's translations or
+    /// rotations) and the components AUTOSPC removed.
+    pub fn reduction(&self, spc: &BTreeSet<usize>) -> R<(Mat<f64>, Vec<usize>)> {
         let n = self.k_gg.nrows();
         for d in spc {
             if self.dependent.contains_key(d) {
@@ -1189,8 +1191,7 @@ impl Structure {
                 }
             }
         }
-        let a_set: Vec<usize> = (0..columns.len()).collect();
-        Ok((t, a_set, auto_spc))
+        Ok((t, auto_spc))
     }
 }
 
@@ -1282,7 +1283,7 @@ impl RealModes {
 /// is singular (a free body), the eigenvalues of L⁻¹ M L⁻ᵀ (μ = 1/(λ + σ); μ = 0 belongs to
 /// massless components and is dropped), each λ refined by its Rayleigh quotient.
 pub fn real_modes(s: &Structure, spc: &BTreeSet<usize>, rigid_body: usize) -> R<RealModes> {
-    let (t, a_set, auto_spc) = s.reduction(spc)?;
+    let (t, auto_spc) = s.reduction(spc)?;
     let k = t.transpose() * &s.k_gg * &t;
     let m = t.transpose() * &s.m_gg * &t;
     let n = k.nrows();
@@ -1362,7 +1363,7 @@ pub fn real_modes(s: &Structure, spc: &BTreeSet<usize>, rigid_body: usize) -> R<
     Ok(RealModes {
         lambda: pairs.iter().map(|p| p.0).collect(),
         phi_g,
-        n_a: a_set.len(),
+        n_a: t.ncols(),
         auto_spc,
     })
 }

@@ -7,6 +7,7 @@ use crate::nastran::bulk::BulkData;
 use crate::nastran::case_control::{Selection, Solution};
 use crate::nastran::random::{random_response, KInterpolation, Quantity, RandomRow};
 use crate::nastran::structure::subcase_modes;
+use crate::nastran::transient::transient_response;
 use crate::nastran::{Input, Subcase};
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
@@ -52,6 +53,25 @@ struct RandomResult {
     unit: String,
 }
 
+/// One output's time history with its extremes (as Nastran's XY summary gives them).
+#[derive(Serialize, Deserialize)]
+struct TransientResult {
+    label: String,
+    unit: String,
+    min: f64,
+    time_at_min: f64,
+    max: f64,
+    time_at_max: f64,
+    values: Vec<f64>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct TransientResults {
+    /// The TSTEP's output times (the model's time unit).
+    times: Vec<f64>,
+    rows: Vec<TransientResult>,
+}
+
 #[derive(Serialize, Deserialize)]
 struct SubcaseResults {
     subcase: u32,
@@ -60,6 +80,8 @@ struct SubcaseResults {
     flutter: Vec<FlutterPoint>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     random_response: Vec<RandomResult>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    transient_response: Option<TransientResults>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -96,10 +118,13 @@ pub fn run(file: &Path, reports: &Path) -> Result<crate::runner::Outcome> {
     let mut subcases = Vec::new();
     for id in input.case_control.subcase_ids() {
         let sub = input.case_control.subcase(id).expect("listed subcase");
-        subcases.push(
-            run_subcase(&bulk, &sub, &solution, &input.case_control.sets)
-                .with_context(|| format!("subcase {id}"))?,
-        );
+        let (results, notes) = run_subcase(&bulk, &sub, &solution, &input.case_control.sets)
+            .with_context(|| format!("subcase {id}"))?;
+        for w in &notes {
+            eprintln!("warning: subcase {id}: {w}");
+        }
+        warnings.extend(notes.into_iter().map(|w| format!("subcase {id}: {w}")));
+        subcases.push(results);
     }
     let results = NastranResults {
         kind: "nastran".into(),
@@ -110,6 +135,14 @@ pub fn run(file: &Path, reports: &Path) -> Result<crate::runner::Outcome> {
         subcases,
     };
     let dir = folder.path().to_path_buf();
+    for sc in &results.subcases {
+        if let Some(t) = &sc.transient_response {
+            crate::report::write_atomic(
+                &dir.join(format!("transient_subcase{}.csv", sc.subcase)),
+                transient_csv(t).as_bytes(),
+            )?;
+        }
+    }
     crate::report::write_atomic(
         &dir.join("results.json"),
         serde_json::to_string_pretty(&results)?.as_bytes(),
@@ -134,12 +167,13 @@ fn lmodes(b: &BulkData, found: usize) -> usize {
 /// Case control SETs by id (None: ALL).
 type Sets = std::collections::BTreeMap<u32, Option<Vec<u32>>>;
 
+/// One subcase's results and the warnings its analysis noticed.
 fn run_subcase(
     b: &BulkData,
     sub: &Subcase,
     solution: &Solution,
     sets: &Sets,
-) -> Result<SubcaseResults> {
+) -> Result<(SubcaseResults, Vec<String>)> {
     let (s, modes) = subcase_modes(b, sub)?;
     let rows = modes
         .lambda
@@ -157,19 +191,82 @@ fn run_subcase(
         modes: rows,
         flutter: Vec::new(),
         random_response: Vec::new(),
+        transient_response: None,
     };
+    let mut warnings = Vec::new();
     match solution {
         Solution::Modes => {}
         Solution::Flutter => out.flutter = flutter(b, sub, &s, &modes)?,
         Solution::AeroResponse => {
-            if !sub.selections.contains_key("RANDOM") {
-                bail!("only the random gust response (RANDOM) of SOL 146 is run so far: frequency and transient responses (TSTEP, TLOAD1) are not");
+            let requests = requests(b, sub, &s, sets, &modes)?;
+            let interpolation = dense_k(b, sub)?;
+            if sub.selections.contains_key("RANDOM") {
+                let (rows, notes) = random_response(b, sub, &s, &modes, &requests, &interpolation)?;
+                warnings.extend(notes);
+                out.random_response = rows
+                    .into_iter()
+                    .map(|r: RandomRow| RandomResult {
+                        label: r.label,
+                        rms: r.rms,
+                        n0_hz: r.n0_hz,
+                        unit: "model".into(),
+                    })
+                    .collect();
+            } else if sub.selections.contains_key("TSTEP") {
+                let t = transient_response(b, sub, &s, &modes, &requests, &interpolation)?;
+                warnings.extend(t.warnings);
+                out.transient_response = Some(TransientResults {
+                    rows: t
+                        .rows
+                        .into_iter()
+                        .map(|r| {
+                            let (mut lo, mut hi) = (0, 0);
+                            for (i, v) in r.values.iter().enumerate() {
+                                if *v < r.values[lo] {
+                                    lo = i;
+                                }
+                                if *v > r.values[hi] {
+                                    hi = i;
+                                }
+                            }
+                            TransientResult {
+                                label: r.label,
+                                unit: "model".into(),
+                                min: r.values[lo],
+                                time_at_min: t.times[lo],
+                                max: r.values[hi],
+                                time_at_max: t.times[hi],
+                                values: r.values,
+                            }
+                        })
+                        .collect(),
+                    times: t.times,
+                });
+            } else {
+                bail!("the subcase selects neither RANDOM (a random gust response) nor TSTEP (a transient one): a plain frequency response of SOL 146 is not run yet");
             }
-            out.random_response = random(b, sub, &s, sets, &modes)?;
         }
         Solution::Other(sol) => bail!("SOL {sol} is not run by gustkit (it runs 103, 145 and 146)"),
     }
-    Ok(out)
+    Ok((out, warnings))
+}
+
+/// The time histories as CSV: a time column, then one column an output.
+fn transient_csv(t: &TransientResults) -> String {
+    let mut out = String::from("time");
+    for r in &t.rows {
+        out.push(',');
+        out.push_str(&r.label);
+    }
+    out.push('\n');
+    for (i, time) in t.times.iter().enumerate() {
+        out.push_str(&format!("{time:.6e}"));
+        for r in &t.rows {
+            out.push_str(&format!(",{:.9e}", r.values[i]));
+        }
+        out.push('\n');
+    }
+    out
 }
 
 fn flutter(
@@ -268,13 +365,15 @@ fn flutter(
     Ok(points)
 }
 
-fn random(
+/// The outputs the case control requests of a gust response: DISPLACEMENT and ACCELERATION of
+/// the free components, SPCFORCES of the constrained ones, SDISPLACEMENT's modes.
+fn requests(
     b: &BulkData,
     sub: &Subcase,
     s: &crate::nastran::structure::Structure,
     sets: &Sets,
     modes: &crate::nastran::structure::RealModes,
-) -> Result<Vec<RandomResult>> {
+) -> Result<Vec<(u32, u8, Quantity)>> {
     let n_modes = lmodes(b, modes.lambda.len());
     let spc = crate::nastran::structure::constrained(s, b, sub.selections.get("SPC").copied())?;
     let grids_of = |name: &str| -> Vec<u32> {
@@ -330,6 +429,12 @@ fn random(
     if requests.is_empty() {
         bail!("the case control requests no output: give DISPLACEMENT, ACCELERATION, SPCFORCES = set (grids) or SDISPLACEMENT = set (modes)");
     }
+    Ok(requests)
+}
+
+/// The reduced frequencies of a gust response's GAFs: 41 evenly spaced to 5 % beyond the
+/// FREQ list's last frequency.
+fn dense_k(b: &BulkData, sub: &Subcase) -> Result<KInterpolation> {
     // the DLM on reduced frequencies to 5 % beyond the FREQ list's last
     let freq_id = sub
         .selections
@@ -347,17 +452,7 @@ fn random(
     let aero = b.aero.as_ref().context("no AERO card")?;
     let k_max = (1.05 * 2.0 * std::f64::consts::PI * f_max * 0.5 * aero.refc / gust.v).max(0.05);
     let k: Vec<f64> = (0..=40).map(|i| k_max * i as f64 / 40.0).collect();
-    let rows: Vec<RandomRow> =
-        random_response(b, sub, s, modes, &requests, &KInterpolation::Dense(k))?;
-    Ok(rows
-        .into_iter()
-        .map(|r| RandomResult {
-            label: r.label,
-            rms: r.rms,
-            n0_hz: r.n0_hz,
-            unit: "model".into(),
-        })
-        .collect())
+    Ok(KInterpolation::Dense(k))
 }
 
 /// `gustkit report` of a Nastran run folder: summary.md again from results.json alone.
@@ -408,6 +503,21 @@ fn summary(r: &NastranResults) -> String {
                 out.push_str(&format!(
                     "| {} | {:.6e} | {:.5} |\n",
                     row.label, row.rms, row.n0_hz
+                ));
+            }
+        }
+        if let Some(t) = &sc.transient_response {
+            out.push_str(&format!(
+                "\nTransient response at {} times from {} to {} (time histories in transient_subcase{}.csv):\n\n| output | min | at t | max | at t |\n|---|---:|---:|---:|---:|\n",
+                t.times.len(),
+                t.times.first().copied().unwrap_or(0.0),
+                t.times.last().copied().unwrap_or(0.0),
+                sc.subcase
+            ));
+            for row in &t.rows {
+                out.push_str(&format!(
+                    "| {} | {:.6e} | {:.4} | {:.6e} | {:.4} |\n",
+                    row.label, row.min, row.time_at_min, row.max, row.time_at_max
                 ));
             }
         }

@@ -1,0 +1,558 @@
+//! The modal frequency response of a Nastran model to its GUST card: what SOL 146 (NASTRAN-95's
+//! APP AERO SOL 11) solves before it forms PSDs (RANDOM, `random.rs`) or time histories by the
+//! inverse Fourier transform (TSTEP, `transient.rs`).
+//!
+//! Per frequency f of the FREQ list (ω = 2πf, k = ω REFC / 2V):
+//!   [−ω² + iω 2ζᵢωᵢ + ωᵢ² − q Q_hh(ik)] η = q Q_hg(ik) α(f)
+//! with mass-normalized modes, ζᵢ = g(fᵢ)/2 from TABDMP1 (SDAMP) and α the gust angle w_g/V at X0:
+//!   RLOAD1:  α(f) = WG · C(f) e^{iD(f)}          (tables TC and TD, D in degrees)
+//!   TLOAD1:  α(f) = WG · ∫ T(t) e^{−iωt} dt · e^{−iωτ}   (table TID, exact for its segments)
+//! The DAREA that the load names is not a gust's scale: NASTRAN-95 sets its amplitude to 1 for a
+//! gust load (FRLGA), and so does gustkit (a value other than 1 is reported in a warning). The
+//! transform takes the table as zero outside its range, as NASTRAN-95's TAB1 does. Outputs:
+//! displacements u = Φ η, accelerations −ω² u, constraint forces K_sg u − ω² M_sg u (the rows of
+//! the constrained components) and modal coordinates.
+
+use super::aero::{lifting_surfaces, modal_surface, spline_rows};
+use super::bulk::{BulkData, DynamicLoad, Table};
+use super::structure::{constrained, RealModes, Structure};
+use super::{NastranError, Subcase};
+use faer::c64;
+use gustkit_core::{Aerodynamics, FlightCondition};
+
+type R<T> = Result<T, NastranError>;
+
+/// What to report: a grid component's displacement, acceleration or constraint force, or a
+/// modal coordinate.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Quantity {
+    Displacement,
+    Acceleration,
+    SpcForce,
+    /// The modal coordinate of a mode (1-based; the request's grid field holds it, the
+    /// component is unused).
+    Mode,
+}
+
+/// How the GAFs reach the frequencies of the response.
+#[derive(Clone, Debug, PartialEq)]
+pub enum KInterpolation {
+    /// The DLM evaluated on these reduced frequencies (dense enough for the FREQ list's range)
+    /// and spline-interpolated in k: gustkit's way.
+    Dense(Vec<f64>),
+    /// The DLM at MKAERO's reduced frequencies only, linear in k between them and the end
+    /// segments' lines beyond (a linear interpolation of the aerodynamic matrix list), sampled
+    /// on these reduced frequencies.
+    LinearOnMkaero(Vec<f64>),
+}
+
+/// A table's value at x, linear between points and constant beyond the ends.
+pub fn table_value(t: &Table, x: f64) -> f64 {
+    let p = &t.points;
+    if x <= p[0].0 {
+        return p[0].1;
+    }
+    if x >= p[p.len() - 1].0 {
+        return p[p.len() - 1].1;
+    }
+    let i = p
+        .windows(2)
+        .position(|w| x >= w[0].0 && x <= w[1].0)
+        .unwrap_or(0);
+    let (a, b) = (p[i], p[i + 1]);
+    if b.0 == a.0 {
+        return b.1;
+    }
+    a.1 + (b.1 - a.1) * (x - a.0) / (b.0 - a.0)
+}
+
+/// G(θ) = ∫₀¹ (1 − u) e^{−iθu} du = (1 − iθ − e^{−iθ}) / θ²: the weight of a segment's left end
+/// in the exact transform of a linear piece (its series below |θ| = 1e-2, where the closed form
+/// cancels).
+pub fn hat_weight(theta: f64) -> c64 {
+    if theta.abs() < 1e-2 {
+        let t2 = theta * theta;
+        // 1/2 − iθ/6 − θ²/24 + iθ³/120 + θ⁴/720 (next term θ⁵/5040 < 2e-14)
+        c64::new(
+            0.5 - t2 / 24.0 + t2 * t2 / 720.0,
+            -theta / 6.0 + theta * t2 / 120.0,
+        )
+    } else {
+        let e = c64::new(theta.cos(), -theta.sin());
+        (c64::new(1.0, -theta) - e) / (theta * theta)
+    }
+}
+
+/// ∫ T(t) e^{−iωt} dt of a piecewise-linear table, zero outside its range: exact per segment,
+///   h [T_a e^{−iωt_a} G(ωh) + T_b e^{−iωt_b} conj G(ωh)].
+pub fn table_transform(t: &Table, omega: f64) -> c64 {
+    let mut sum = c64::new(0.0, 0.0);
+    for w in t.points.windows(2) {
+        let ((xa, ya), (xb, yb)) = (w[0], w[1]);
+        let h = xb - xa;
+        if h <= 0.0 {
+            continue;
+        }
+        let g = hat_weight(omega * h);
+        let ea = c64::new((omega * xa).cos(), -(omega * xa).sin());
+        let eb = c64::new((omega * xb).cos(), -(omega * xb).sin());
+        sum += (ea * g * ya + eb * g.conj() * yb) * h;
+    }
+    sum
+}
+
+/// The component label of Nastran's printouts: T1–T3, R1–R3.
+fn component_label(c: u8) -> String {
+    if c <= 3 {
+        format!("T{c}")
+    } else {
+        format!("R{}", c - 3)
+    }
+}
+
+/// One output as a row over the modes: y(ω) = Σₘ (k_row[m] − ω² m_row[m]) ηₘ(ω).
+#[derive(Clone, Debug, PartialEq)]
+pub struct OutputRow {
+    /// Nastran's label: `9T3`, `ACCE 9T3`, `SPCF 11R3`, `MODE 2`.
+    pub label: String,
+    pub k_row: Vec<f64>,
+    pub m_row: Vec<f64>,
+}
+
+/// The modal response to the subcase's gust on its FREQ list.
+#[derive(Clone, Debug)]
+pub struct GustFrequencyResponse {
+    /// The FREQ list, sorted, without repeats (Hz).
+    pub frequencies_hz: Vec<f64>,
+    /// The gust angle α(f) at each frequency.
+    pub load: Vec<c64>,
+    /// η per unit gust angle at each frequency (None where α = 0: no response to solve).
+    pub eta: Vec<Option<Vec<c64>>>,
+    /// The modes kept (PARAM LMODES).
+    pub n_modes: usize,
+    /// What the reading noticed and let pass (one line each).
+    pub warnings: Vec<String>,
+}
+
+impl GustFrequencyResponse {
+    /// The output's complex response y(f) at every frequency (zero where there is no load).
+    pub fn output(&self, row: &OutputRow) -> Vec<c64> {
+        self.frequencies_hz
+            .iter()
+            .zip(&self.eta)
+            .zip(&self.load)
+            .map(|((&f, eta), &a)| match eta {
+                None => c64::new(0.0, 0.0),
+                Some(eta) => {
+                    let w2 = (2.0 * std::f64::consts::PI * f).powi(2);
+                    eta.iter()
+                        .zip(row.k_row.iter().zip(&row.m_row))
+                        .map(|(e, (k, m))| e * (k - w2 * m))
+                        .sum::<c64>()
+                        * a
+                }
+            })
+            .collect()
+    }
+}
+
+/// A real PARAM, or None where the model does not give it.
+fn real_param(b: &BulkData, name: &str) -> R<Option<f64>> {
+    b.params
+        .get(name)
+        .map(|v| {
+            super::field::parse_real(v).ok_or_else(|| {
+                NastranError::model(
+                    &format!("PARAM {name}"),
+                    format!("must be a real number (got '{v}')"),
+                )
+            })
+        })
+        .transpose()
+}
+
+/// Solves the subcase's gust response on its FREQ list: GUST → DLOAD (RLOAD1 for a frequency
+/// or random response, TLOAD1 for a transient one) → α(f); the GAFs of the model's CAERO1
+/// surfaces through its splines; η at every frequency with a load.
+pub fn gust_frequency_response(
+    b: &BulkData,
+    sub: &Subcase,
+    s: &Structure,
+    modes: &RealModes,
+    interpolation: &KInterpolation,
+) -> R<GustFrequencyResponse> {
+    let sel = |name: &str| -> R<u32> {
+        sub.selections.get(name).copied().ok_or_else(|| {
+            NastranError::model(
+                "case control",
+                format!("selects no {name}: a gust response needs GUST and FREQUENCY"),
+            )
+        })
+    };
+    let (gust_id, freq_id) = (sel("GUST")?, sel("FREQUENCY")?);
+    let n_modes = b
+        .params
+        .get("LMODES")
+        .and_then(|v| v.parse::<usize>().ok())
+        .unwrap_or(modes.lambda.len())
+        .min(modes.lambda.len());
+    let surf = lifting_surfaces(b, s)?;
+    let (rows, _unmoved) = spline_rows(b, s, &surf)?;
+    let ms = modal_surface(&surf, &rows, modes, n_modes);
+    let gust = b.gusts.get(&gust_id).ok_or_else(|| {
+        NastranError::model(
+            &format!("GUST = {gust_id}"),
+            "no GUST card has this id".into(),
+        )
+    })?;
+    let load = b.dynamic_loads.get(&gust.dload).ok_or_else(|| {
+        NastranError::model(
+            &format!("GUST {gust_id}"),
+            format!("its DLOAD {} is no RLOAD1 or TLOAD1", gust.dload),
+        )
+    })?;
+    let table = |id: u32, card: &str| -> R<&Table> {
+        b.tables.get(&id).ok_or_else(|| {
+            NastranError::model(
+                &format!("{card} {}", gust.dload),
+                format!("refers to table {id}, which the model does not define"),
+            )
+        })
+    };
+    let mut warnings = Vec::new();
+    let mut darea_note = |excite: u32, card: &str| {
+        if let Some(v) = b.darea.get(&excite) {
+            if v.iter().any(|e| e.2 != 1.0) {
+                warnings.push(format!(
+                    "{card} {}: the amplitude of its DAREA {excite} ({}) is not applied to the gust: a gust load's scale is the GUST card's WG (NASTRAN-95 sets the DAREA amplitude of a gust load to 1)",
+                    gust.dload, v[0].2
+                ));
+            }
+        }
+    };
+    // α(f) / WG
+    let shape: Box<dyn Fn(f64) -> c64> = match load {
+        DynamicLoad::Rload1 {
+            excite,
+            tc,
+            td,
+            delay,
+            dphase,
+            ..
+        } => {
+            if delay.is_some() || dphase.is_some() {
+                return Err(NastranError::model(
+                    &format!("RLOAD1 {}", gust.dload),
+                    "DELAY and DPHASE are not read (the gust's phase comes from X0 and the box positions)"
+                        .into(),
+                ));
+            }
+            darea_note(*excite, "RLOAD1");
+            let c_table = tc.map(|t| table(t, "RLOAD1")).transpose()?;
+            let d_table = td.map(|t| table(t, "RLOAD1")).transpose()?;
+            Box::new(move |f| {
+                let c = c_table.map_or(1.0, |t| table_value(t, f));
+                let phase = d_table.map_or(0.0, |t| table_value(t, f)).to_radians();
+                c64::new(phase.cos(), phase.sin()) * c
+            })
+        }
+        DynamicLoad::Tload1 {
+            excite,
+            delay,
+            kind,
+            tid,
+            ..
+        } => {
+            if *kind != 0 {
+                return Err(NastranError::model(
+                    &format!("TLOAD1 {}", gust.dload),
+                    format!("TYPE {kind} (an enforced motion) cannot drive a gust: leave TYPE blank or 0 (a load)"),
+                ));
+            }
+            if delay.is_some() {
+                return Err(NastranError::model(
+                    &format!("TLOAD1 {}", gust.dload),
+                    "DELAY is not read (the gust's timing comes from X0 and its table)".into(),
+                ));
+            }
+            darea_note(*excite, "TLOAD1");
+            let t = table(*tid, "TLOAD1")?;
+            if t.card != "TABLED1" || t.x_axis != "LINEAR" || t.y_axis != "LINEAR" {
+                return Err(NastranError::model(
+                    &format!("TLOAD1 {}", gust.dload),
+                    format!("its table {tid} must be a TABLED1 with linear axes (its transform is exact for linear segments)"),
+                ));
+            }
+            Box::new(move |f| table_transform(t, 2.0 * std::f64::consts::PI * f))
+        }
+    };
+    let freqs = b.freq.get(&freq_id).ok_or_else(|| {
+        NastranError::model(
+            &format!("FREQUENCY = {freq_id}"),
+            "no FREQ, FREQ1 or FREQ2 card has this id".into(),
+        )
+    })?;
+    let mut freqs = freqs.clone();
+    freqs.sort_by(f64::total_cmp);
+    freqs.dedup();
+    let aero = b.aero.as_ref().expect("lifting_surfaces checked AERO");
+    let velocity = gust.v;
+    let q = real_param(b, "Q")?.unwrap_or(0.5 * aero.rhoref * velocity * velocity);
+    let mach = real_param(b, "MACH")?.unwrap_or_else(|| b.mkaero.first().map_or(0.0, |m| m.0));
+    // modal damping ζ = g(f_n)/2 from the SDAMP table
+    let g_of = |f: f64| -> R<f64> {
+        match sub.selections.get("SDAMPING") {
+            None => Ok(0.0),
+            Some(id) => {
+                let t = b
+                    .tables
+                    .get(id)
+                    .filter(|t| t.card == "TABDMP1")
+                    .ok_or_else(|| {
+                        NastranError::model(
+                            &format!("SDAMP = {id}"),
+                            "no TABDMP1 has this id".into(),
+                        )
+                    })?;
+                let v = table_value(t, f);
+                Ok(match t.damping_type.as_str() {
+                    "CRIT" => 2.0 * v,
+                    "Q" => 1.0 / v,
+                    _ => v,
+                })
+            }
+        }
+    };
+    let freq_hz = modes.freq_hz();
+    let zetas: Vec<f64> = (0..n_modes)
+        .map(|m| g_of(freq_hz[m]).map(|g| 0.5 * g))
+        .collect::<R<_>>()?;
+    if zetas.windows(2).any(|w| (w[1] - w[0]).abs() > 1e-12) {
+        return Err(NastranError::model("SDAMP", "modal damping that differs between modes is not read yet: give one value over the modes' frequencies".into()));
+    }
+    let flight = FlightCondition {
+        mach,
+        velocity,
+        density: aero.rhoref,
+        b_ref: surf.b_ref,
+        x_ref: gust.x0,
+    };
+    let dlm_error = |e: gustkit_core::AeroError| NastranError::model("DLM", e.to_string());
+    let table_gaf = match interpolation {
+        KInterpolation::Dense(k) => surf.dlm.gafs(&flight, &ms, k).map_err(dlm_error)?,
+        KInterpolation::LinearOnMkaero(k) => {
+            let mut ks: Vec<f64> = b
+                .mkaero
+                .iter()
+                .filter(|m| (m.0 - mach).abs() < 1e-9)
+                .map(|m| m.1)
+                .collect();
+            ks.sort_by(f64::total_cmp);
+            ks.dedup();
+            if ks.is_empty() {
+                return Err(NastranError::model(
+                    "MKAERO1",
+                    format!("has no reduced frequency at Mach {mach}"),
+                ));
+            }
+            let coarse = surf.dlm.gafs(&flight, &ms, &ks).map_err(dlm_error)?;
+            let mut t = surf.dlm.gafs(&flight, &ms, k).map_err(dlm_error)?;
+            for (i, &kk) in k.iter().enumerate() {
+                let seg = ks.windows(2).position(|w| kk >= w[0] && kk <= w[1]);
+                let last = ks.len() - 1;
+                let (a, bb, u) = match seg {
+                    Some(j) => (j, j + 1, (kk - ks[j]) / (ks[j + 1] - ks[j])),
+                    // beyond the ends: the end segments' lines, extrapolated
+                    None if ks.len() == 1 => (0, 0, 0.0),
+                    None if kk < ks[0] => (0, 1, (kk - ks[0]) / (ks[1] - ks[0])),
+                    None => (
+                        last - 1,
+                        last,
+                        (kk - ks[last - 1]) / (ks[last] - ks[last - 1]),
+                    ),
+                };
+                let mix = |x: c64, y: c64| x * (1.0 - u) + y * u;
+                for r in 0..t.q_ss[i].len() {
+                    for c in 0..t.q_ss[i][r].len() {
+                        t.q_ss[i][r][c] = mix(coarse.q_ss[a][r][c], coarse.q_ss[bb][r][c]);
+                    }
+                    t.q_gs[i][r] = mix(coarse.q_gs[a][r], coarse.q_gs[bb][r]);
+                }
+            }
+            t
+        }
+    };
+    let omega_n: Vec<f64> = modes.lambda[..n_modes]
+        .iter()
+        .map(|l| l.max(0.0).sqrt())
+        .collect();
+    let alpha: Vec<c64> = freqs.iter().map(|&f| shape(f) * gust.wg).collect();
+    // the frequencies with a load (a zero α, as at f = 0 for a load without mean, needs no solve)
+    let live: Vec<usize> = (0..freqs.len())
+        .filter(|&i| alpha[i].norm() > 0.0)
+        .collect();
+    if let Some(&i) = live.iter().find(|&&i| freqs[i] == 0.0) {
+        if let Some(m) = omega_n
+            .iter()
+            .position(|&w| w < 1e-6 * omega_n[n_modes - 1].max(1.0))
+        {
+            return Err(NastranError::model(
+                &format!("FREQUENCY = {freq_id}"),
+                format!(
+                    "starts at 0 Hz, where the gust load is not zero (|α| = {:.4e}), and mode {} is a rigid-body mode: a free body's steady response to a load with a mean is unbounded; start the list above 0 Hz or give a load without mean",
+                    alpha[i].norm(),
+                    m + 1
+                ),
+            ));
+        }
+    }
+    let grid = crate::gust::FrequencyGrid {
+        omega: live
+            .iter()
+            .map(|&i| 2.0 * std::f64::consts::PI * freqs[i])
+            .collect(),
+        weights: vec![0.0; live.len()],
+    };
+    let problem = crate::gust::GustProblem {
+        grid,
+        max_tail: 1.0,
+        ..crate::gust::GustProblem::for_transient(
+            omega_n,
+            zetas.first().copied().unwrap_or(0.0),
+            &table_gaf,
+            q,
+            velocity,
+            vec![vec![0.0; n_modes]],
+        )
+    };
+    let response = crate::gust::response::frequency_response(&problem)
+        .map_err(|e| NastranError::model("frequency response", e.to_string()))?;
+    let mut eta = vec![None; freqs.len()];
+    for (e, &i) in response.eta.into_iter().zip(&live) {
+        eta[i] = Some(e);
+    }
+    Ok(GustFrequencyResponse {
+        frequencies_hz: freqs,
+        load: alpha,
+        eta,
+        n_modes,
+        warnings,
+    })
+}
+
+/// Per mode, the factor c that takes a mass-normalized modal coordinate to the one of the
+/// subcase's eigenvalue method (η = c η_mass): 1 for NORM MASS (EIGR's and EIGRL's default),
+/// φ_mass at the a-set's largest component for NORM MAX (that component becomes +1).
+fn modal_coordinate_scale(
+    b: &BulkData,
+    sub: &Subcase,
+    s: &Structure,
+    modes: &RealModes,
+    spc: &std::collections::BTreeSet<usize>,
+    n_modes: usize,
+) -> R<Vec<f64>> {
+    let norm = sub
+        .selections
+        .get("METHOD")
+        .and_then(|m| b.eigr.get(m))
+        .map_or("MASS", |e| e.norm.as_str());
+    match norm {
+        "" | "MASS" => Ok(vec![1.0; n_modes]),
+        "MAX" => {
+            // the a-set coordinates u_a of a mode: its independent rows through T (u_g = T u_a,
+            // T's independent rows one component each or orthonormal directions of a grid)
+            let (t, _) = s.reduction(spc)?;
+            let independent: Vec<usize> = (0..t.nrows())
+                .filter(|i| !s.dependent.contains_key(i))
+                .collect();
+            Ok((0..n_modes)
+                .map(|m| {
+                    (0..t.ncols())
+                        .map(|c| {
+                            independent
+                                .iter()
+                                .map(|&i| t[(i, c)] * modes.phi_g[(i, m)])
+                                .sum::<f64>()
+                        })
+                        .fold(0.0, |a: f64, v| if v.abs() > a.abs() { v } else { a })
+                })
+                .collect())
+        }
+        other => Err(NastranError::model(
+            "SDISPLACEMENT",
+            format!("modal coordinates are given in the MASS or MAX normalization of the eigenvalue method; NORM {other} is not"),
+        )),
+    }
+}
+
+/// The rows of `requests` ((grid or mode, component 1–6, quantity)), checked against the model:
+/// grids it defines, SPC forces only of constrained components, modes among the `n_modes` kept
+/// (modal coordinates in the normalization the eigenvalue method names).
+pub fn output_rows(
+    b: &BulkData,
+    sub: &Subcase,
+    s: &Structure,
+    modes: &RealModes,
+    n_modes: usize,
+    requests: &[(u32, u8, Quantity)],
+) -> R<Vec<OutputRow>> {
+    let spc: std::collections::BTreeSet<usize> =
+        constrained(s, b, sub.selections.get("SPC").copied())?;
+    let modal_scale = if requests.iter().any(|r| r.2 == Quantity::Mode) {
+        modal_coordinate_scale(b, sub, s, modes, &spc, n_modes)?
+    } else {
+        Vec::new()
+    };
+    let mut out = Vec::new();
+    for &(grid_id, comp, quantity) in requests {
+        if quantity == Quantity::Mode && !(1..=n_modes).contains(&(grid_id as usize)) {
+            return Err(NastranError::model(
+                "SDISPLACEMENT",
+                format!("asks for mode {grid_id}; the analysis keeps modes 1–{n_modes}"),
+            ));
+        }
+        let dof = match quantity {
+            Quantity::Mode => 0,
+            _ => s.dof(grid_id, comp).ok_or_else(|| {
+                NastranError::model(
+                    "output request",
+                    format!("names grid {grid_id}, which the model does not define"),
+                )
+            })?,
+        };
+        if quantity == Quantity::SpcForce && !spc.contains(&dof) {
+            return Err(NastranError::model(
+                "SPCFORCES",
+                format!("component {comp} of grid {grid_id} is not constrained"),
+            ));
+        }
+        // the output's row over the modes at ω: φ_dof, or (K − ω² M)[dof, :] Φ
+        let (k_row, m_row): (Vec<f64>, Vec<f64>) = (0..n_modes)
+            .map(|m| match quantity {
+                Quantity::Displacement => (modes.phi_g[(dof, m)], 0.0),
+                // ü = −ω² u
+                Quantity::Acceleration => (0.0, modes.phi_g[(dof, m)]),
+                Quantity::Mode if m + 1 == grid_id as usize => (modal_scale[m], 0.0),
+                Quantity::Mode => (0.0, 0.0),
+                Quantity::SpcForce => {
+                    let n = s.k_gg.nrows();
+                    let kp: f64 = (0..n).map(|j| s.k_gg[(dof, j)] * modes.phi_g[(j, m)]).sum();
+                    let mp: f64 = (0..n).map(|j| s.m_gg[(dof, j)] * modes.phi_g[(j, m)]).sum();
+                    (kp, mp)
+                }
+            })
+            .unzip();
+        let label = match quantity {
+            Quantity::Displacement => format!("{grid_id}{}", component_label(comp)),
+            Quantity::Acceleration => format!("ACCE {grid_id}{}", component_label(comp)),
+            Quantity::Mode => format!("MODE {grid_id}"),
+            Quantity::SpcForce => format!("SPCF {grid_id}{}", component_label(comp)),
+        };
+        out.push(OutputRow {
+            label,
+            k_row,
+            m_row,
+        });
+    }
+    Ok(out)
+}
