@@ -519,6 +519,24 @@ fn jet_transport_random_gust_matches_nastran95() {
                     w4 * pd
                 );
             }
+            // without RANDOM the subcase is a frequency response: |y(f)|² times the input PSD
+            // (RANDPS 1.0 × TABRND1) is the random response's PSD at every frequency (1e-12)
+            let mut plain = sub.clone();
+            plain.selections.remove("RANDOM");
+            let (freqs, frows, _) =
+                gustkit::nastran::response::frequency_rows(&b, &plain, &s, &modes, &requests, &how)
+                    .unwrap();
+            let tabrnd = b.tables.values().find(|t| t.card == "TABRND1").unwrap();
+            for (fr, r) in frows.iter().zip(&rows) {
+                assert_eq!(fr.label, r.label);
+                for ((y, p), &f) in fr.values.iter().zip(&r.psd).zip(&freqs) {
+                    let want = y.norm_sqr() * gustkit::nastran::response::table_value(tabrnd, f);
+                    assert!(
+                        (want - p).abs() <= 1e-12 * p.abs().max(1e-300),
+                        "{f}: {want} vs {p}"
+                    );
+                }
+            }
             // modal coordinates: mode 13 is refused (12 kept); the fuselage plunge 11T3 is
             // mostly the free body's plunge, mode 1 (its RMS times φ₁ at 11T3, φ₁ in EIGR's MAX
             // normalization: the rigid plunge's T3, equal at every grid, is the largest and 1)
@@ -638,6 +656,26 @@ fn gustkit_runs_nastran_decks() {
     );
     assert_eq!(csv.lines().count(), 42);
     assert!(r["warnings"].to_string().contains("DAREA 1001"));
+    // the random deck without RANDOM: a frequency response (real and imaginary parts, a CSV of
+    // magnitude and phase)
+    let plain = dir.join("plain.inp");
+    let text = std::fs::read_to_string(data.join("d11031a.inp")).unwrap();
+    assert!(text.contains("  RANDOM = 1031"));
+    std::fs::write(&plain, text.replace("  RANDOM = 1031", "$ RANDOM = 1031")).unwrap();
+    let out = run(&plain);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("plain/results.json")).unwrap())
+            .unwrap();
+    let f = &r["subcases"][0]["frequency_response"];
+    assert_eq!(f["frequencies_hz"].as_array().unwrap().len(), 40);
+    assert_eq!(f["rows"][0]["real"].as_array().unwrap().len(), 40);
+    let csv = std::fs::read_to_string(dir.join("plain/frequency_subcase1.csv")).unwrap();
+    assert!(csv.starts_with("frequency_hz,"), "{csv}");
     // the same deck asking for the cubic-spline inverse transform (IFTM 2), not implemented
     let iftm2 = dir.join("iftm2.inp");
     let text = std::fs::read_to_string(data.join("d11032a.inp")).unwrap();

@@ -556,3 +556,32 @@ pub fn output_rows(
     }
     Ok(out)
 }
+
+/// One output's complex frequency response on the FREQ list (the model's units per unit gust
+/// angle's scale as the GUST card gives it), for SOL 146 without RANDOM or TSTEP.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrequencyRow {
+    pub label: String,
+    pub values: Vec<c64>,
+}
+
+/// The frequency response of `requests` to the subcase's gust (GUST → RLOAD1), with the
+/// frequencies (Hz) and the warnings of the reading.
+pub fn frequency_rows(
+    b: &BulkData,
+    sub: &Subcase,
+    s: &Structure,
+    modes: &RealModes,
+    requests: &[(u32, u8, Quantity)],
+    interpolation: &KInterpolation,
+) -> R<(Vec<f64>, Vec<FrequencyRow>, Vec<String>)> {
+    let response = gust_frequency_response(b, sub, s, modes, interpolation)?;
+    let rows = output_rows(b, sub, s, modes, response.n_modes, requests)?
+        .iter()
+        .map(|row| FrequencyRow {
+            label: row.label.clone(),
+            values: response.output(row),
+        })
+        .collect();
+    Ok((response.frequencies_hz, rows, response.warnings))
+}

@@ -1,7 +1,8 @@
 //! `gustkit run MODEL.bdf` (or `.dat`, `.inp`, `.nas`): the analysis a Nastran input's executive
-//! and case control ask for — real modes (SOL 103), p-k flutter (SOL 145, APP AERO SOL 10),
-//! random gust response (SOL 146 with RANDOM, APP AERO SOL 11) — written to the usual run folder
-//! (results.json, summary.md). Values stay in the model's units.
+//! and case control ask for — real modes (SOL 103), p-k flutter (SOL 145, APP AERO SOL 10), gust
+//! response (SOL 146, APP AERO SOL 11: random with RANDOM, transient with TSTEP, else the
+//! frequency response) — written to the usual run folder (results.json, summary.md, CSVs of
+//! the histories and frequency responses). Values stay in the model's units.
 
 use crate::nastran::bulk::BulkData;
 use crate::nastran::case_control::{Selection, Solution};
@@ -72,6 +73,21 @@ struct TransientResults {
     rows: Vec<TransientResult>,
 }
 
+/// One output's complex frequency response (real and imaginary parts, as Nastran's REAL/IMAG).
+#[derive(Serialize, Deserialize)]
+struct FrequencyResult {
+    label: String,
+    unit: String,
+    real: Vec<f64>,
+    imag: Vec<f64>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct FrequencyResults {
+    frequencies_hz: Vec<f64>,
+    rows: Vec<FrequencyResult>,
+}
+
 #[derive(Serialize, Deserialize)]
 struct SubcaseResults {
     subcase: u32,
@@ -82,6 +98,8 @@ struct SubcaseResults {
     random_response: Vec<RandomResult>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     transient_response: Option<TransientResults>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    frequency_response: Option<FrequencyResults>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -136,6 +154,12 @@ pub fn run(file: &Path, reports: &Path) -> Result<crate::runner::Outcome> {
     };
     let dir = folder.path().to_path_buf();
     for sc in &results.subcases {
+        if let Some(f) = &sc.frequency_response {
+            crate::report::write_atomic(
+                &dir.join(format!("frequency_subcase{}.csv", sc.subcase)),
+                frequency_csv(f).as_bytes(),
+            )?;
+        }
         if let Some(t) = &sc.transient_response {
             crate::report::write_atomic(
                 &dir.join(format!("transient_subcase{}.csv", sc.subcase)),
@@ -192,6 +216,7 @@ fn run_subcase(
         flutter: Vec::new(),
         random_response: Vec::new(),
         transient_response: None,
+        frequency_response: None,
     };
     let mut warnings = Vec::new();
     match solution {
@@ -243,12 +268,55 @@ fn run_subcase(
                     times: t.times,
                 });
             } else {
-                bail!("the subcase selects neither RANDOM (a random gust response) nor TSTEP (a transient one): a plain frequency response of SOL 146 is not run yet");
+                let (frequencies_hz, rows, notes) = crate::nastran::response::frequency_rows(
+                    b,
+                    sub,
+                    &s,
+                    &modes,
+                    &requests,
+                    &interpolation,
+                )?;
+                warnings.extend(notes);
+                out.frequency_response = Some(FrequencyResults {
+                    frequencies_hz,
+                    rows: rows
+                        .into_iter()
+                        .map(|r| FrequencyResult {
+                            label: r.label,
+                            unit: "model".into(),
+                            real: r.values.iter().map(|v| v.re).collect(),
+                            imag: r.values.iter().map(|v| v.im).collect(),
+                        })
+                        .collect(),
+                });
             }
         }
         Solution::Other(sol) => bail!("SOL {sol} is not run by gustkit (it runs 103, 145 and 146)"),
     }
     Ok((out, warnings))
+}
+
+/// The frequency responses as CSV: a frequency column, then each output's magnitude and phase
+/// (degrees, of e^{iωt}).
+fn frequency_csv(f: &FrequencyResults) -> String {
+    let mut out = String::from("frequency_hz");
+    for r in &f.rows {
+        out.push_str(&format!(",{0} magnitude,{0} phase_deg", r.label));
+    }
+    out.push('\n');
+    for (i, hz) in f.frequencies_hz.iter().enumerate() {
+        out.push_str(&format!("{hz:.6e}"));
+        for r in &f.rows {
+            let (re, im) = (r.real[i], r.imag[i]);
+            out.push_str(&format!(
+                ",{:.9e},{:.4}",
+                re.hypot(im),
+                im.atan2(re).to_degrees()
+            ));
+        }
+        out.push('\n');
+    }
+    out
 }
 
 /// The time histories as CSV: a time column, then one column an output.
@@ -503,6 +571,28 @@ fn summary(r: &NastranResults) -> String {
                 out.push_str(&format!(
                     "| {} | {:.6e} | {:.5} |\n",
                     row.label, row.rms, row.n0_hz
+                ));
+            }
+        }
+        if let Some(f) = &sc.frequency_response {
+            out.push_str(&format!(
+                "\nFrequency response at {} frequencies from {} to {} Hz (magnitude and phase in frequency_subcase{}.csv); largest magnitude:\n\n| output | largest magnitude | at f (Hz) |\n|---|---:|---:|\n",
+                f.frequencies_hz.len(),
+                f.frequencies_hz.first().copied().unwrap_or(0.0),
+                f.frequencies_hz.last().copied().unwrap_or(0.0),
+                sc.subcase
+            ));
+            for row in &f.rows {
+                let (i, m) = row
+                    .real
+                    .iter()
+                    .zip(&row.imag)
+                    .map(|(a, b)| a.hypot(*b))
+                    .enumerate()
+                    .fold((0, 0.0), |acc, (i, m)| if m > acc.1 { (i, m) } else { acc });
+                out.push_str(&format!(
+                    "| {} | {:.6e} | {:.4} |\n",
+                    row.label, m, f.frequencies_hz[i]
                 ));
             }
         }
