@@ -498,11 +498,12 @@ impl Structure {
         Ok(())
     }
 
-    /// A CQUAD4: gustkit's flat-plate element in the element's plane (DKQ bending, bilinear
-    /// membrane; Kirchhoff theory, so PSHELL's transverse shear MID3 is not used), in the frame x
-    /// along G1→G2, z along the normal of the diagonals; the material's axis 1 from MCID or
-    /// THETA; lumped translational mass, or with COUPMASS the consistent mass. No drilling
-    /// stiffness: the in-plane rotation of a grid that nothing else holds is removed as
+    /// A CQUAD4 or CTRIA3: gustkit's flat-plate elements in the element's plane (CQUAD4: DKQ
+    /// bending, bilinear membrane; CTRIA3: DKT bending, constant-strain membrane; Kirchhoff
+    /// theory, so PSHELL's transverse shear MID3 is not used), in the frame x along G1→G2, z
+    /// along the normal of the diagonals (of G1G2 × G1G3 for a triangle); the material's axis 1
+    /// from MCID or THETA; lumped translational mass, or with COUPMASS the consistent mass. No
+    /// drilling stiffness: the in-plane rotation of a grid that nothing else holds is removed as
     /// unconnected.
     fn add_shell(&mut self, b: &BulkData, e: &super::bulk::Shell, coupled: bool) -> R<()> {
         use crate::structure::element;
@@ -515,12 +516,7 @@ impl Structure {
             },
             e.id
         );
-        if e.grids.len() != 4 {
-            return Err(NastranError::model(
-                &what,
-                "triangular shells are not assembled yet: mesh with CQUAD4".into(),
-            ));
-        }
+        let nodes = e.grids.len();
         if e.zoffs != 0.0 {
             return Err(NastranError::model(
                 &what,
@@ -563,11 +559,19 @@ impl Structure {
             .map(|&g| self.grid(g, &what))
             .collect::<R<_>>()?;
         let x: Vec<[f64; 3]> = idx.iter().map(|&i| self.position[i]).collect();
-        let n = cross(sub(x[2], x[0]), sub(x[3], x[1]));
+        let n = if nodes == 4 {
+            cross(sub(x[2], x[0]), sub(x[3], x[1]))
+        } else {
+            cross(sub(x[1], x[0]), sub(x[2], x[0]))
+        };
         if !(norm(n) > 0.0) {
             return Err(NastranError::model(
                 &what,
-                "its diagonals are parallel: a degenerate quadrilateral".into(),
+                if nodes == 4 {
+                    "its diagonals are parallel: a degenerate quadrilateral".into()
+                } else {
+                    "its grids lie on one line: a degenerate triangle".into()
+                },
             ));
         }
         let ez = scale(n, 1.0 / norm(n));
@@ -576,16 +580,20 @@ impl Structure {
         let ex = scale(ex, 1.0 / norm(ex));
         let ey = cross(ez, ex);
         let centre = scale(
-            [0, 1, 2, 3].iter().fold([0.0; 3], |a, &i| {
-                [a[0] + x[i][0], a[1] + x[i][1], a[2] + x[i][2]]
-            }),
-            0.25,
+            x.iter()
+                .fold([0.0; 3], |a, p| [a[0] + p[0], a[1] + p[1], a[2] + p[2]]),
+            1.0 / nodes as f64,
         );
-        let xy: element::Quad<f64> = std::array::from_fn(|i| {
-            let d = sub(x[i], centre);
-            [dot(d, ex), dot(d, ey)]
-        });
-        if !element::is_valid(&xy) {
+        let local: Vec<[f64; 2]> = x
+            .iter()
+            .map(|&p| {
+                let d = sub(p, centre);
+                [dot(d, ex), dot(d, ey)]
+            })
+            .collect();
+        let xy: element::Quad<f64> = std::array::from_fn(|i| local[i % nodes]);
+        let tri: crate::structure::triangle::Tri = std::array::from_fn(|i| local[i]);
+        if nodes == 4 && !element::is_valid(&xy) {
             return Err(NastranError::model(
                 &what,
                 "is not a convex quadrilateral ordered around its normal (G1–G4 in turn)".into(),
@@ -661,16 +669,28 @@ impl Structure {
                 )),
             }
         };
-        let mut k_loc = [[0.0; 20]; 20];
-        let mut m_loc = [[0.0; 20]; 20];
+        use crate::structure::triangle;
+        let nl = 5 * nodes;
+        let mut k_loc = vec![vec![0.0; nl]; nl];
+        let mut m_loc = vec![vec![0.0; nl]; nl];
         // local dofs per node: (w, w_x, w_y, u, v); bending block at 5i..5i+3, membrane 5i+3..
         let mut rho_t = p.nsm;
         if let Some(m1) = p.mid1 {
             let (mat, rho) = material(m1)?;
             rho_t += rho * t;
-            let km = element::membrane_stiffness(&xy, &mat.qbar());
-            for a in 0..8 {
-                for c in 0..8 {
+            let km: Vec<Vec<f64>> = if nodes == 4 {
+                element::membrane_stiffness(&xy, &mat.qbar())
+                    .iter()
+                    .map(|r| r.to_vec())
+                    .collect()
+            } else {
+                triangle::cst_stiffness(&tri, &mat.qbar())
+                    .iter()
+                    .map(|r| r.to_vec())
+                    .collect()
+            };
+            for a in 0..2 * nodes {
+                for c in 0..2 * nodes {
                     k_loc[5 * (a / 2) + 3 + a % 2][5 * (c / 2) + 3 + c % 2] += km[a][c] * t;
                 }
             }
@@ -678,14 +698,34 @@ impl Structure {
         if let Some(m2) = p.mid2 {
             let (mat, _) = material(m2)?;
             let d_unit = mat.qbar().map(|r| r.map(|v| v * p.bending_ratio / 12.0));
-            let kb = element::dkq_stiffness(&xy, &d_unit);
-            for a in 0..12 {
-                for c in 0..12 {
+            let kb: Vec<Vec<f64>> = if nodes == 4 {
+                element::dkq_stiffness(&xy, &d_unit)
+                    .iter()
+                    .map(|r| r.to_vec())
+                    .collect()
+            } else {
+                triangle::dkt_stiffness(&tri, &d_unit)
+                    .iter()
+                    .map(|r| r.to_vec())
+                    .collect()
+            };
+            for a in 0..3 * nodes {
+                for c in 0..3 * nodes {
                     k_loc[5 * (a / 3) + a % 3][5 * (c / 3) + c % 3] += kb[a][c] * t * t * t;
                 }
             }
         }
-        if coupled {
+        if coupled && nodes == 3 {
+            // linear w, u and v: the consistent mass on each translation
+            let ml = triangle::linear_mass(&tri);
+            for i in 0..3 {
+                for j in 0..3 {
+                    for d in [0, 3, 4] {
+                        m_loc[5 * i + d][5 * j + d] += ml[i][j] * rho_t;
+                    }
+                }
+            }
+        } else if coupled {
             let mb = element::bending_mass(&xy);
             let mm = element::membrane_mass(&xy);
             for a in 0..12 {
@@ -699,16 +739,21 @@ impl Structure {
                 }
             }
         } else {
-            let quarter = 0.25 * rho_t * element::area(&xy);
-            for i in 0..4 {
+            let area = if nodes == 4 {
+                element::area(&xy)
+            } else {
+                0.5 * triangle::twice_area(&tri)
+            };
+            let share = rho_t * area / nodes as f64;
+            for i in 0..nodes {
                 for d in [0, 3, 4] {
-                    m_loc[5 * i + d][5 * i + d] = quarter;
+                    m_loc[5 * i + d][5 * i + d] = share;
                 }
             }
         }
         // local (w, w_x, w_y, u, v) of node i from its six components (displacement frame):
         // w = n·u, w_x = −(e_y·θ), w_y = e_x·θ, u = e_x·u, v = e_y·u
-        let mut t_mat = vec![vec![0.0; 24]; 20];
+        let mut t_mat = vec![vec![0.0; 6 * nodes]; nl];
         for (i, &gi) in idx.iter().enumerate() {
             let r = self.cd[gi];
             for c in 0..3 {
@@ -724,18 +769,19 @@ impl Structure {
             .iter()
             .flat_map(|&gi| (0..6).map(move |c| 6 * gi + c))
             .collect();
-        let project = |loc: &[[f64; 20]; 20]| -> Vec<Vec<f64>> {
-            let lt: Vec<Vec<f64>> = (0..20)
+        let ng = 6 * nodes;
+        let project = |loc: &Vec<Vec<f64>>| -> Vec<Vec<f64>> {
+            let lt: Vec<Vec<f64>> = (0..nl)
                 .map(|a| {
-                    (0..24)
-                        .map(|j| (0..20).map(|q| loc[a][q] * t_mat[q][j]).sum())
+                    (0..ng)
+                        .map(|j| (0..nl).map(|q| loc[a][q] * t_mat[q][j]).sum())
                         .collect()
                 })
                 .collect();
-            (0..24)
+            (0..ng)
                 .map(|i| {
-                    (0..24)
-                        .map(|j| (0..20).map(|a| t_mat[a][i] * lt[a][j]).sum())
+                    (0..ng)
+                        .map(|j| (0..nl).map(|a| t_mat[a][i] * lt[a][j]).sum())
                         .collect()
                 })
                 .collect()
@@ -1468,6 +1514,27 @@ mod tests {
         let d =
             Deck::from_text(Path::new("m.bdf"), &format!("BEGIN BULK\n{text}ENDDATA\n")).unwrap();
         BulkData::from_cards(&d.bulk).unwrap()
+    }
+
+    /// Shells that cannot be built: a triangle on one line, a quadrilateral ordered across
+    /// itself, a missing PSHELL, a zero thickness: each an error naming the element.
+    #[test]
+    fn bad_shells_are_refused() {
+        let grids = "GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,2.,0.,0.\nGRID,4,,0.,1.,0.\nGRID,5,,1.,1.,0.\nMAT1,1,7.0e10,,0.3,2700.\nPSHELL,1,1,0.01,1,,1\nPSHELL,2,1,0.,1,,1\n";
+        for (card, needle) in [
+            ("CTRIA3,7,1,1,2,3\n", "CTRIA3 7"),
+            ("CQUAD4,8,1,1,2,4,5\n", "CQUAD4 8"),
+            ("CTRIA3,9,5,1,2,5\n", "property 5"),
+            ("CTRIA3,10,2,1,2,5\n", "thickness"),
+        ] {
+            let b = bulk(&format!("{grids}{card}"));
+            let e = Structure::assemble(&b, None).unwrap_err().to_string();
+            assert!(e.contains(needle), "{card}: {e}");
+        }
+        let e = Structure::assemble(&bulk(&format!("{grids}CTRIA3,7,1,1,2,3\n")), None)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("one line"), "{e}");
     }
 
     /// A cantilever of 20 bars against Euler–Bernoulli theory: the first bending frequencies

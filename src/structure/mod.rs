@@ -10,6 +10,7 @@ pub mod model;
 pub mod residual;
 pub mod sensitivity;
 pub mod shape_name;
+pub mod triangle;
 
 pub use material::{MaterialError, Orthotropic};
 pub use mesh::{Clamp, PlateMesh};
