@@ -367,6 +367,30 @@ pub struct Tstep {
     pub intervals: Vec<(u32, f64, u32)>,
 }
 
+/// A monitoring station (MONPNT1): the loads on a component's grids summed at a point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Monitor {
+    pub name: String,
+    pub label: String,
+    /// The components reported: 1–3 forces, 4–6 moments, along CD's axes.
+    pub axes: Vec<u8>,
+    /// The AECOMP that lists the grids.
+    pub comp: String,
+    pub cp: u32,
+    pub point: [f64; 3],
+    pub cd: u32,
+    pub source: super::Source,
+}
+
+/// AECOMP: a named list of SET1 grid sets (gustkit's monitoring stations sum structural
+/// grids; lists of aerodynamic boxes are refused).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Aecomp {
+    pub name: String,
+    pub sets: Vec<u32>,
+    pub source: super::Source,
+}
+
 /// Every card a bulk data section held that gustkit uses, by kind and id.
 #[derive(Clone, Debug, Default)]
 pub struct BulkData {
@@ -413,6 +437,9 @@ pub struct BulkData {
     /// FREQ, FREQ1, FREQ2 by set, expanded to their frequencies (Hz).
     pub freq: BTreeMap<u32, Vec<f64>>,
     pub tstep: BTreeMap<u32, Tstep>,
+    /// MONPNT1 by name, in the order of the names.
+    pub monitors: BTreeMap<String, Monitor>,
+    pub aecomps: BTreeMap<String, Aecomp>,
     /// One line naming the cards read but not used, if any.
     pub warnings: Vec<String>,
 }
@@ -1014,6 +1041,72 @@ impl BulkData {
                 let id = c.id_field(1, "SID")?;
                 let l = id_list(c, 2, "Ei")?;
                 insert(&mut self.aelist, id, l, c, "AELIST")
+            }
+            "MONPNT1" => {
+                let name = c.text(1).to_string();
+                if name.is_empty() {
+                    return Err(c.field_error(1, "NAME", "a monitor point needs a name"));
+                }
+                let label = (2..=8)
+                    .map(|i| c.text(i))
+                    .filter(|t| !t.is_empty())
+                    .collect::<Vec<_>>()
+                    .join(" ");
+                let comp = c.text(10).to_string();
+                if comp.is_empty() {
+                    return Err(c.field_error(10, "COMP", "names no AECOMP"));
+                }
+                let cp = c.int_or(11, "CP", 0)? as u32;
+                let m = Monitor {
+                    name: name.clone(),
+                    label,
+                    axes: c.components(9, "AXES")?,
+                    comp,
+                    cp,
+                    point: [
+                        c.real_or(12, "X", 0.0)?,
+                        c.real_or(13, "Y", 0.0)?,
+                        c.real_or(14, "Z", 0.0)?,
+                    ],
+                    cd: c.int_or(15, "CD", cp as i64)? as u32,
+                    source: c.source.clone(),
+                };
+                if self.monitors.insert(name.clone(), m).is_some() {
+                    return Err(NastranError::card(
+                        c,
+                        format!("duplicate monitor point name {name}"),
+                    ));
+                }
+                Ok(())
+            }
+            "AECOMP" => {
+                let name = c.text(1).to_string();
+                if name.is_empty() {
+                    return Err(c.field_error(1, "NAME", "a component needs a name"));
+                }
+                if c.text(2) != "SET1" {
+                    return Err(c.field_error(
+                        2,
+                        "LISTTYPE",
+                        "only SET1 lists (structural grids) are read: gustkit's monitor points sum the aerodynamic and inertial loads on grids",
+                    ));
+                }
+                let sets = id_list(c, 3, "LISTID")?;
+                if sets.is_empty() {
+                    return Err(NastranError::card(c, "lists no SET1"));
+                }
+                let a = Aecomp {
+                    name: name.clone(),
+                    sets,
+                    source: c.source.clone(),
+                };
+                if self.aecomps.insert(name.clone(), a).is_some() {
+                    return Err(NastranError::card(
+                        c,
+                        format!("duplicate AECOMP name {name}"),
+                    ));
+                }
+                Ok(())
             }
             "SET1" => {
                 let id = c.id_field(1, "SID")?;

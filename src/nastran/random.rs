@@ -89,7 +89,8 @@ pub fn random_response(
         })
         .transpose()?;
     let response = gust_frequency_response(b, sub, s, modes, interpolation)?;
-    let rows = output_rows(b, sub, s, modes, response.n_modes, requests)?;
+    let mut rows = output_rows(b, sub, s, modes, response.n_modes, requests)?;
+    rows.extend(response.monitor_rows.iter().cloned());
     let freqs = &response.frequencies_hz;
     let out = rows
         .iter()

@@ -110,13 +110,17 @@ fn component_label(c: u8) -> String {
     }
 }
 
-/// One output as a row over the modes: y(ω) = Σₘ (k_row[m] − ω² m_row[m]) ηₘ(ω).
+/// One output as a row over the modes and the boxes:
+///   y(ω) = Σₘ (k_row[m] − ω² m_row[m]) ηₘ(ω) + q Σⱼ aero[j] (Σₘ F_jm(k) ηₘ + F_jg(k)),
+/// F the boxes' normal forces per unit q (`Dlm::box_forces`); `aero` is empty but for monitor
+/// points.
 #[derive(Clone, Debug, PartialEq)]
 pub struct OutputRow {
-    /// Nastran's label: `9T3`, `ACCE 9T3`, `SPCF 11R3`, `MODE 2`.
+    /// Nastran's label: `9T3`, `ACCE 9T3`, `SPCF 11R3`, `MODE 2`, `ROOT CMX`.
     pub label: String,
     pub k_row: Vec<f64>,
     pub m_row: Vec<f64>,
+    pub aero: Vec<f64>,
 }
 
 /// The modal response to the subcase's gust on its FREQ list.
@@ -130,6 +134,13 @@ pub struct GustFrequencyResponse {
     pub eta: Vec<Option<Vec<c64>>>,
     /// The modes kept (PARAM LMODES).
     pub n_modes: usize,
+    /// The dynamic pressure.
+    pub q: f64,
+    /// The boxes' normal forces per unit q at each frequency with a load (`[box][column]`,
+    /// modes then the gust), where the model has monitor points.
+    pub box_forces: Vec<Option<Vec<Vec<c64>>>>,
+    /// One row a component of every MONPNT1 of the model.
+    pub monitor_rows: Vec<OutputRow>,
     /// What the reading noticed and let pass (one line each).
     pub warnings: Vec<String>,
 }
@@ -141,15 +152,30 @@ impl GustFrequencyResponse {
             .iter()
             .zip(&self.eta)
             .zip(&self.load)
-            .map(|((&f, eta), &a)| match eta {
+            .enumerate()
+            .map(|(i, ((&f, eta), &a))| match eta {
                 None => c64::new(0.0, 0.0),
                 Some(eta) => {
                     let w2 = (2.0 * std::f64::consts::PI * f).powi(2);
-                    eta.iter()
+                    let mut y = eta
+                        .iter()
                         .zip(row.k_row.iter().zip(&row.m_row))
                         .map(|(e, (k, m))| e * (k - w2 * m))
-                        .sum::<c64>()
-                        * a
+                        .sum::<c64>();
+                    if !row.aero.is_empty() {
+                        let forces = self.box_forces[i]
+                            .as_ref()
+                            .expect("box forces where the model has monitor points");
+                        for (wj, fj) in row.aero.iter().zip(forces) {
+                            if *wj != 0.0 {
+                                let (modal, gust) = fj.split_at(self.n_modes);
+                                let load = modal.iter().zip(eta).map(|(f, e)| f * e).sum::<c64>()
+                                    + gust[0];
+                                y += load * (self.q * wj);
+                            }
+                        }
+                    }
+                    y * a
                 }
             })
             .collect()
@@ -431,11 +457,28 @@ pub fn gust_frequency_response(
     for (e, &i) in response.eta.into_iter().zip(&live) {
         eta[i] = Some(e);
     }
+    // monitor points: the boxes' forces at each loaded frequency's k, the rows of the stations
+    let mut box_forces = vec![None; freqs.len()];
+    let mut monitors = Vec::new();
+    if !b.monitors.is_empty() {
+        let k: Vec<f64> = live
+            .iter()
+            .map(|&i| 2.0 * std::f64::consts::PI * freqs[i] * surf.b_ref / velocity)
+            .collect();
+        let forces = surf.dlm.box_forces(&flight, &ms, &k).map_err(dlm_error)?;
+        for (f, &i) in forces.into_iter().zip(&live) {
+            box_forces[i] = Some(f);
+        }
+        monitors = monitor_rows(b, s, modes, n_modes, &rows, surf.box_ids.len())?;
+    }
     Ok(GustFrequencyResponse {
         frequencies_hz: freqs,
         load: alpha,
         eta,
         n_modes,
+        q,
+        box_forces,
+        monitor_rows: monitors,
         warnings,
     })
 }
@@ -552,6 +595,7 @@ pub fn output_rows(
             label,
             k_row,
             m_row,
+            aero: Vec::new(),
         });
     }
     Ok(out)
@@ -576,7 +620,9 @@ pub fn frequency_rows(
     interpolation: &KInterpolation,
 ) -> R<(Vec<f64>, Vec<FrequencyRow>, Vec<String>)> {
     let response = gust_frequency_response(b, sub, s, modes, interpolation)?;
-    let rows = output_rows(b, sub, s, modes, response.n_modes, requests)?
+    let mut rows = output_rows(b, sub, s, modes, response.n_modes, requests)?;
+    rows.extend(response.monitor_rows.iter().cloned());
+    let rows = rows
         .iter()
         .map(|row| FrequencyRow {
             label: row.label.clone(),
@@ -584,4 +630,111 @@ pub fn frequency_rows(
         })
         .collect();
     Ok((response.frequencies_hz, rows, response.warnings))
+}
+
+/// The rows of every MONPNT1's components: the aerodynamic and inertial loads on its AECOMP's
+/// grids summed at its point (force summation),
+///   F = Σᵢ fᵢ,   M = Σᵢ (xᵢ − x₀) × fᵢ + mᵢ,   (fᵢ, mᵢ) = q Gᵢᵀ F_boxes + ω² (M Φ η)ᵢ,
+/// in basic and then along CD's axes; G the spline's rows at the doublet points. Labels are
+/// Nastran's: `NAME CX` … `NAME CMZ`.
+pub fn monitor_rows(
+    b: &BulkData,
+    s: &Structure,
+    modes: &RealModes,
+    n_modes: usize,
+    rows: &super::spline::SplineRows,
+    n_boxes: usize,
+) -> R<Vec<OutputRow>> {
+    let frame = |id: u32, what: &str| -> R<super::structure::Frame> {
+        if id == 0 {
+            return Ok(super::structure::Frame {
+                origin: [0.0; 3],
+                axes: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            });
+        }
+        s.frames.get(&id).copied().ok_or_else(|| {
+            NastranError::model(what, format!("coordinate system {id} is not defined"))
+        })
+    };
+    let ng = s.k_gg.nrows();
+    // M Φ, the inertial loads of the modes
+    let m_phi: Vec<Vec<f64>> = (0..n_modes)
+        .map(|m| {
+            (0..ng)
+                .map(|i| (0..ng).map(|j| s.m_gg[(i, j)] * modes.phi_g[(j, m)]).sum())
+                .collect()
+        })
+        .collect();
+    let names = ["CX", "CY", "CZ", "CMX", "CMY", "CMZ"];
+    let mut out = Vec::new();
+    for mon in b.monitors.values() {
+        let what = format!("MONPNT1 {}", mon.name);
+        let comp = b.aecomps.get(&mon.comp).ok_or_else(|| {
+            NastranError::model(&what, format!("its AECOMP {} is not defined", mon.comp))
+        })?;
+        let mut grids = std::collections::BTreeSet::new();
+        for sid in &comp.sets {
+            let set = b.set1.get(sid).ok_or_else(|| {
+                NastranError::model(
+                    &format!("AECOMP {}", comp.name),
+                    format!("its SET1 {sid} is not defined"),
+                )
+            })?;
+            for g in set {
+                let i = *s.index.get(g).ok_or_else(|| {
+                    NastranError::model(
+                        &format!("SET1 {sid}"),
+                        format!("names grid {g}, which the model does not define"),
+                    )
+                })?;
+                grids.insert(i);
+            }
+        }
+        let cp = frame(mon.cp, &what)?;
+        let cd = frame(mon.cd, &what)?;
+        let x0 = cp.to_basic(mon.point);
+        for &axis in &mon.axes {
+            let a = (axis - 1) as usize;
+            let e = cd.axes[a % 3];
+            // the functional over the g-set loads
+            let mut l = vec![0.0; ng];
+            for &i in &grids {
+                let r = s.cd[i];
+                let d = [
+                    s.position[i][0] - x0[0],
+                    s.position[i][1] - x0[1],
+                    s.position[i][2] - x0[2],
+                ];
+                for c in 0..3 {
+                    let ax = r.axes[c];
+                    let dot = |u: [f64; 3]| e[0] * u[0] + e[1] * u[1] + e[2] * u[2];
+                    if a < 3 {
+                        l[6 * i + c] = dot(ax);
+                    } else {
+                        let cross = [
+                            d[1] * ax[2] - d[2] * ax[1],
+                            d[2] * ax[0] - d[0] * ax[2],
+                            d[0] * ax[1] - d[1] * ax[0],
+                        ];
+                        l[6 * i + c] = dot(cross);
+                        l[6 * i + 3 + c] = dot(ax);
+                    }
+                }
+            }
+            let aero: Vec<f64> = (0..n_boxes)
+                .map(|j| (0..ng).map(|g| l[g] * rows.value[(n_boxes + j, g)]).sum())
+                .collect();
+            let m_row: Vec<f64> = m_phi
+                .iter()
+                .map(|mp| -(0..ng).map(|g| l[g] * mp[g]).sum::<f64>())
+                .collect();
+            out.push(OutputRow {
+                label: format!("{} {}", mon.name, names[a]),
+                k_row: vec![0.0; n_modes],
+                m_row,
+                aero,
+            });
+        }
+    }
+    Ok(out)
 }

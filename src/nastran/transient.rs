@@ -159,7 +159,9 @@ pub fn transient_response(
             "a transient response needs at least two frequencies to integrate over".into(),
         ));
     }
-    let rows = output_rows(b, sub, s, modes, response.n_modes, requests)?
+    let mut rows = output_rows(b, sub, s, modes, response.n_modes, requests)?;
+    rows.extend(response.monitor_rows.iter().cloned());
+    let rows = rows
         .iter()
         .map(|row| TransientRow {
             label: row.label.clone(),

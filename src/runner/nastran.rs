@@ -494,8 +494,8 @@ fn requests(
             }
         }
     }
-    if requests.is_empty() {
-        bail!("the case control requests no output: give DISPLACEMENT, ACCELERATION, SPCFORCES = set (grids) or SDISPLACEMENT = set (modes)");
+    if requests.is_empty() && b.monitors.is_empty() {
+        bail!("the case control requests no output and the model has no MONPNT1: give DISPLACEMENT, ACCELERATION, SPCFORCES = set (grids) or SDISPLACEMENT = set (modes)");
     }
     Ok(requests)
 }

@@ -450,6 +450,33 @@ impl Dlm {
         out
     }
 
+    /// The boxes' normal forces per unit dynamic pressure, A_j Δc_p,j along each box normal, at
+    /// each reduced frequency: `[k][box][column]`, one column a mode, then the gust (per unit
+    /// w_g/U). The generalized forces are these weighted by the modes' normal displacements at
+    /// the doublet points (`gafs`); a structural model takes them to its grids through the
+    /// transpose of its spline (force summation of aerodynamic loads).
+    pub fn box_forces(
+        &self,
+        flight: &FlightCondition,
+        modes: &ModalSurface,
+        k: &[f64],
+    ) -> Result<Vec<Vec<Vec<c64>>>, AeroError> {
+        self.check_inputs(flight, modes, k)?;
+        let mats = self.matrices(flight, k);
+        k.par_iter()
+            .enumerate()
+            .map(|(ik, &kk)| {
+                let (_, c) = self.solve_k(&mats[ik], flight, modes, kk)?;
+                Ok(self
+                    .boxes
+                    .iter()
+                    .enumerate()
+                    .map(|(j, b)| (0..c.ncols()).map(|col| c[(j, col)] * b.area).collect())
+                    .collect())
+            })
+            .collect()
+    }
+
     /// Forward mode with respect to the geometry parameters ([`Aerodynamics::geometry_names`]):
     /// dQ along `dq`, from the tangent equation dc = D⁻¹ (dW − dD c) with dD, dW and the force
     /// weights differentiated by dual numbers through the box geometry.

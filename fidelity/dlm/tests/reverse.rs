@@ -189,3 +189,43 @@ fn many_seeds_with_no_seed_is_empty() {
     let many = dlm.gafs_vjp_many(&flight(), &m, &K, &[]).unwrap();
     assert!(many.is_empty());
 }
+
+/// The box forces are what the GAFs weigh: Σ_j n_j·u_m(dp_j) F_j,col = Q[m][col] for every mode
+/// and the gust column at every k (1e-12 of the table's largest entry): the loads a structural
+/// model takes to its grids are the ones its equations of motion saw.
+#[test]
+fn box_forces_weighted_by_the_modes_are_the_gafs() {
+    let dlm = Dlm::new(vec![wing()], Symmetry::Symmetric).unwrap();
+    let m = modes(&dlm, 3, 7);
+    let t = dlm.gafs(&flight(), &m, &K).unwrap();
+    let f = dlm.box_forces(&flight(), &m, &K).unwrap();
+    let n = dlm.n_boxes();
+    let normals = &dlm.surface().normals;
+    for ik in 0..K.len() {
+        let scale = t.q_ss[ik]
+            .iter()
+            .flatten()
+            .chain(&t.q_gs[ik])
+            .fold(0.0f64, |a, v| a.max(v.norm()));
+        for mode in 0..3 {
+            for col in 0..4 {
+                let sum: C = (0..n)
+                    .map(|j| {
+                        let (u, nn) = (m.disp[mode][n + j], normals[n + j]);
+                        f[ik][j][col] * (u[0] * nn[0] + u[1] * nn[1] + u[2] * nn[2])
+                    })
+                    .sum();
+                let want = if col < 3 {
+                    t.q_ss[ik][mode][col]
+                } else {
+                    t.q_gs[ik][mode]
+                };
+                assert!(
+                    (sum - want).norm() < 1e-12 * scale,
+                    "k {} m {mode} c {col}",
+                    K[ik]
+                );
+            }
+        }
+    }
+}
