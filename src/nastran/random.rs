@@ -9,7 +9,7 @@
 //! over the FREQ list with the PSD linear between its frequencies ([`spectral_moments`]).
 
 use super::bulk::BulkData;
-use super::response::{gust_frequency_response, output_rows, table_value};
+use super::response::{gust_frequency_response, table_value};
 pub use super::response::{KInterpolation, Quantity};
 use super::structure::{RealModes, Structure};
 use super::{NastranError, Subcase};
@@ -89,8 +89,7 @@ pub fn random_response(
         })
         .transpose()?;
     let response = gust_frequency_response(b, sub, s, modes, interpolation)?;
-    let mut rows = output_rows(b, sub, s, modes, response.n_modes, requests)?;
-    rows.extend(response.monitor_rows.iter().cloned());
+    let rows = response.rows(b, sub, s, modes, requests)?;
     let freqs = &response.frequencies_hz;
     let out = rows
         .iter()

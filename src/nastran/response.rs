@@ -146,6 +146,20 @@ pub struct GustFrequencyResponse {
 }
 
 impl GustFrequencyResponse {
+    /// The rows of `requests` (`output_rows`) followed by the model's monitor points.
+    pub fn rows(
+        &self,
+        b: &BulkData,
+        sub: &Subcase,
+        s: &Structure,
+        modes: &RealModes,
+        requests: &[(u32, u8, Quantity)],
+    ) -> R<Vec<OutputRow>> {
+        let mut rows = output_rows(b, sub, s, modes, self.n_modes, requests)?;
+        rows.extend(self.monitor_rows.iter().cloned());
+        Ok(rows)
+    }
+
     /// The output's complex response y(f) at every frequency (zero where there is no load).
     pub fn output(&self, row: &OutputRow) -> Vec<c64> {
         self.frequencies_hz
@@ -620,9 +634,8 @@ pub fn frequency_rows(
     interpolation: &KInterpolation,
 ) -> R<(Vec<f64>, Vec<FrequencyRow>, Vec<String>)> {
     let response = gust_frequency_response(b, sub, s, modes, interpolation)?;
-    let mut rows = output_rows(b, sub, s, modes, response.n_modes, requests)?;
-    rows.extend(response.monitor_rows.iter().cloned());
-    let rows = rows
+    let rows = response
+        .rows(b, sub, s, modes, requests)?
         .iter()
         .map(|row| FrequencyRow {
             label: row.label.clone(),

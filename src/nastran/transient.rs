@@ -15,8 +15,7 @@
 
 use super::bulk::BulkData;
 use super::response::{
-    gust_frequency_response, hat_weight, output_rows, GustFrequencyResponse, KInterpolation,
-    Quantity,
+    gust_frequency_response, hat_weight, GustFrequencyResponse, KInterpolation, Quantity,
 };
 use super::structure::{RealModes, Structure};
 use super::{NastranError, Subcase};
@@ -159,9 +158,8 @@ pub fn transient_response(
             "a transient response needs at least two frequencies to integrate over".into(),
         ));
     }
-    let mut rows = output_rows(b, sub, s, modes, response.n_modes, requests)?;
-    rows.extend(response.monitor_rows.iter().cloned());
-    let rows = rows
+    let rows = response
+        .rows(b, sub, s, modes, requests)?
         .iter()
         .map(|row| TransientRow {
             label: row.label.clone(),

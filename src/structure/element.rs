@@ -140,24 +140,37 @@ fn dkq_nodal_slopes<S: Scalar>(xy: &Quad<S>) -> [[[S; 12]; 2]; 8] {
     }
     for e in 0..4 {
         let (i, j) = (e, (e + 1) % 4);
-        let dx = xy[j][0] - xy[i][0];
-        let dy = xy[j][1] - xy[i][1];
-        let l = (dx * dx + dy * dy).sqrt();
-        let s = [dx / l, dy / l];
-        let n = [s[1], -s[0]];
-        let m = 4 + e;
-        for c in 0..2 {
-            let a = s[c] * 1.5 / l;
-            t[m][c][3 * j] += a;
-            t[m][c][3 * i] -= a;
-            for dd in 0..2 {
-                let p = n[c] * n[dd] * 0.5 - s[c] * s[dd] * 0.25;
-                t[m][c][3 * i + 1 + dd] += p;
-                t[m][c][3 * j + 1 + dd] += p;
-            }
-        }
+        kirchhoff_midside(xy[i], xy[j], i, j, &mut t[4 + e]);
     }
     t
+}
+
+/// The discrete Kirchhoff constraints of one edge i–j (corners at `pi`, `pj`, DOFs (w, w_x,
+/// w_y) per corner): the mid-side slopes (β_x, β_y) over the element's DOFs, cubic w along the
+/// edge and linear normal slope, β = 3/(2 l) (w_j − w_i) s + (½ n nᵀ − ¼ s sᵀ)(β_i + β_j).
+/// Shared by the DKQ and the DKT (`triangle.rs`).
+pub(crate) fn kirchhoff_midside<S: Scalar, const D: usize>(
+    pi: [S; 2],
+    pj: [S; 2],
+    i: usize,
+    j: usize,
+    out: &mut [[S; D]; 2],
+) {
+    let dx = pj[0] - pi[0];
+    let dy = pj[1] - pi[1];
+    let l = (dx * dx + dy * dy).sqrt();
+    let s = [dx / l, dy / l];
+    let n = [s[1], -s[0]];
+    for c in 0..2 {
+        let a = s[c] * 1.5 / l;
+        out[c][3 * j] += a;
+        out[c][3 * i] -= a;
+        for dd in 0..2 {
+            let p = n[c] * n[dd] * 0.5 - s[c] * s[dd] * 0.25;
+            out[c][3 * i + 1 + dd] += p;
+            out[c][3 * j + 1 + dd] += p;
+        }
+    }
 }
 
 /// Symmetric bilinear accumulation K += w Bᵀ D B for a 3 × n strain matrix B.

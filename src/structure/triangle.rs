@@ -22,8 +22,8 @@ pub fn twice_area(xy: &Tri) -> f64 {
 }
 
 /// The DKT map from the 9 nodal DOFs to the slopes (β_x, β_y) at the 6 quadratic nodes (corners
-/// 0–2, mid-sides 3–5 of edges 0-1, 1-2, 2-0): `t[k][c][dof]`. Mid-side on edge i–j with unit
-/// tangent s and normal n: β = 3/(2 l) (w_j − w_i) s + (½ n nᵀ − ¼ s sᵀ)(β_i + β_j).
+/// 0–2, mid-sides 3–5 of edges 0-1, 1-2, 2-0): `t[k][c][dof]`, the mid-sides by the DKQ's
+/// edge constraints (`element::kirchhoff_midside`).
 fn nodal_slopes(xy: &Tri) -> [[[f64; 9]; 2]; 6] {
     let mut t = [[[0.0; 9]; 2]; 6];
     for k in 0..3 {
@@ -32,22 +32,7 @@ fn nodal_slopes(xy: &Tri) -> [[[f64; 9]; 2]; 6] {
     }
     for e in 0..3 {
         let (i, j) = (e, (e + 1) % 3);
-        let dx = xy[j][0] - xy[i][0];
-        let dy = xy[j][1] - xy[i][1];
-        let l = (dx * dx + dy * dy).sqrt();
-        let s = [dx / l, dy / l];
-        let n = [s[1], -s[0]];
-        let m = 3 + e;
-        for c in 0..2 {
-            let a = s[c] * 1.5 / l;
-            t[m][c][3 * j] += a;
-            t[m][c][3 * i] -= a;
-            for dd in 0..2 {
-                let p = n[c] * n[dd] * 0.5 - s[c] * s[dd] * 0.25;
-                t[m][c][3 * i + 1 + dd] += p;
-                t[m][c][3 * j + 1 + dd] += p;
-            }
-        }
+        super::element::kirchhoff_midside(xy[i], xy[j], i, j, &mut t[3 + e]);
     }
     t
 }
