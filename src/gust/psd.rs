@@ -62,20 +62,6 @@ impl Turbulence {
         }
     }
 
-    /// The same model with another intensity (the response is linear in σ_w).
-    pub fn with_sigma(&self, sigma: f64) -> Self {
-        match *self {
-            Turbulence::Dryden { scale_length_m, .. } => Turbulence::Dryden {
-                sigma_w_m_s: sigma,
-                scale_length_m,
-            },
-            Turbulence::VonKarman { scale_length_m, .. } => Turbulence::VonKarman {
-                sigma_w_m_s: sigma,
-                scale_length_m,
-            },
-        }
-    }
-
     /// Checks σ_w > 0 and L > 0; the message names the field.
     pub fn validate(&self) -> Result<(), String> {
         if !(self.sigma() > 0.0 && self.sigma().is_finite()) {

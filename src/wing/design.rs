@@ -53,35 +53,6 @@ impl DesignVector {
     }
 }
 
-/// Lower and upper bounds of the design vector (SI).
-#[derive(Clone, Debug, PartialEq)]
-pub struct DesignBounds {
-    pub lower: Vec<f64>,
-    pub upper: Vec<f64>,
-}
-
-impl DesignBounds {
-    /// Checks lower ≤ upper everywhere; returns the first offending index.
-    pub fn check(&self) -> Result<(), usize> {
-        match self
-            .lower
-            .iter()
-            .zip(&self.upper)
-            .position(|(l, u)| !(l <= u))
-        {
-            Some(i) => Err(i),
-            None => Ok(()),
-        }
-    }
-
-    /// Whether x lies within the bounds.
-    pub fn contains(&self, x: &[f64]) -> bool {
-        x.iter()
-            .zip(self.lower.iter().zip(&self.upper))
-            .all(|(x, (l, u))| *l <= *x && *x <= *u)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -97,16 +68,5 @@ mod tests {
         assert_eq!(DesignVector::from_slice(&v), d);
         assert_eq!(d.name(1), "t[1]");
         assert_eq!(d.name(4), "sweep_c4");
-        let b = DesignBounds {
-            lower: vec![0.0; 7],
-            upper: vec![10.0, 10.0, 1.0, 10.0, 10.0, 10.0, 10.0],
-        };
-        assert_eq!(b.check(), Ok(()));
-        assert!(!b.contains(&v));
-        let bad = DesignBounds {
-            lower: vec![1.0, 2.0],
-            upper: vec![1.0, 1.0],
-        };
-        assert_eq!(bad.check(), Err(1));
     }
 }

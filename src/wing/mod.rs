@@ -10,7 +10,7 @@ mod airfoil;
 mod design;
 
 pub use airfoil::Airfoil;
-pub use design::{DesignBounds, DesignVector, N_PLANFORM, PLANFORM_NAMES};
+pub use design::{DesignVector, N_PLANFORM, PLANFORM_NAMES};
 
 use gustkit_core::scalar::Scalar;
 use thiserror::Error;

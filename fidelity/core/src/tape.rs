@@ -69,11 +69,6 @@ impl Rev {
         Self { v, i }
     }
 
-    /// Whether the value depends on an input.
-    pub fn is_variable(self) -> bool {
-        self.i != NONE
-    }
-
     #[inline]
     fn unary(self, v: f64, d: f64) -> Self {
         if self.i == NONE {
