@@ -596,6 +596,7 @@ fn gustkit_runs_nastran_decks() {
     assert!((v / 6021.8 - 1.0).abs() < 0.02, "{v}");
     assert_eq!(p["flutter_mode"], 2);
     assert!(dir.join("d10023a/summary.md").is_file());
+    assert!(dir.join("d10023a/flutter_subcase1_1.png").is_file());
     let out = run(&data.join("d11031a.inp"));
     assert!(
         out.status.success(),
@@ -613,6 +614,8 @@ fn gustkit_runs_nastran_decks() {
     };
     assert!((row("9T3")["rms"].as_f64().unwrap() / 0.2961114 - 1.0).abs() < 5e-3);
     assert!((row("SPCF 11R3")["rms"].as_f64().unwrap() / 1.665699e4 - 1.0).abs() < 5e-3);
+    assert_eq!(row("9T3")["psd"].as_array().unwrap().len(), 40);
+    assert!(dir.join("d11031a/psd_subcase1.svg").is_file());
     // `gustkit report` writes the summary again from results.json alone
     let summary = dir.join("d11031a/summary.md");
     let before = std::fs::read_to_string(&summary).unwrap();
@@ -655,6 +658,7 @@ fn gustkit_runs_nastran_decks() {
         "{csv}"
     );
     assert_eq!(csv.lines().count(), 42);
+    assert!(dir.join("d11032a/transient_subcase1.png").is_file());
     assert!(r["warnings"].to_string().contains("DAREA 1001"));
     // the random deck without RANDOM: a frequency response (real and imaginary parts, a CSV of
     // magnitude and phase)
@@ -676,6 +680,7 @@ fn gustkit_runs_nastran_decks() {
     assert_eq!(f["rows"][0]["real"].as_array().unwrap().len(), 40);
     let csv = std::fs::read_to_string(dir.join("plain/frequency_subcase1.csv")).unwrap();
     assert!(csv.starts_with("frequency_hz,"), "{csv}");
+    assert!(dir.join("plain/frequency_subcase1.png").is_file());
     // the same deck asking for the cubic-spline inverse transform (IFTM 2), not implemented
     let iftm2 = dir.join("iftm2.inp");
     let text = std::fs::read_to_string(data.join("d11032a.inp")).unwrap();

@@ -52,6 +52,9 @@ struct RandomResult {
     rms: f64,
     n0_hz: f64,
     unit: String,
+    /// The PSD at the subcase's `random_frequencies_hz` (per Hz).
+    #[serde(default)]
+    psd: Vec<f64>,
 }
 
 /// One output's time history with its extremes (as Nastran's XY summary gives them).
@@ -96,6 +99,9 @@ struct SubcaseResults {
     flutter: Vec<FlutterPoint>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     random_response: Vec<RandomResult>,
+    /// The FREQ list of the random response (Hz).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    random_frequencies_hz: Vec<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     transient_response: Option<TransientResults>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -171,6 +177,7 @@ pub fn run(file: &Path, reports: &Path) -> Result<crate::runner::Outcome> {
         &dir.join("results.json"),
         serde_json::to_string_pretty(&results)?.as_bytes(),
     )?;
+    figures(&results, &dir)?;
     let summary = summary(&results);
     print!("{summary}");
     crate::report::write_atomic(&dir.join("summary.md"), summary.as_bytes())?;
@@ -215,6 +222,7 @@ fn run_subcase(
         modes: rows,
         flutter: Vec::new(),
         random_response: Vec::new(),
+        random_frequencies_hz: Vec::new(),
         transient_response: None,
         frequency_response: None,
     };
@@ -228,6 +236,10 @@ fn run_subcase(
             if sub.selections.contains_key("RANDOM") {
                 let (rows, notes) = random_response(b, sub, &s, &modes, &requests, &interpolation)?;
                 warnings.extend(notes);
+                out.random_frequencies_hz = rows
+                    .first()
+                    .map(|r| r.frequencies_hz.clone())
+                    .unwrap_or_default();
                 out.random_response = rows
                     .into_iter()
                     .map(|r: RandomRow| RandomResult {
@@ -235,6 +247,7 @@ fn run_subcase(
                         rms: r.rms,
                         n0_hz: r.n0_hz,
                         unit: "model".into(),
+                        psd: r.psd,
                     })
                     .collect();
             } else if sub.selections.contains_key("TSTEP") {
@@ -531,12 +544,144 @@ pub fn rerender(dir: &Path, value: serde_json::Value) -> Result<()> {
             dir.join("results.json").display()
         )
     })?;
+    figures(&results, dir)?;
     crate::report::write_atomic(&dir.join("summary.md"), summary(&results).as_bytes())?;
     println!(
-        "summary of {} re-rendered in {}",
+        "summary and figures of {} re-rendered in {}",
         results.input,
         dir.display()
     );
+    Ok(())
+}
+
+/// The run's figures from its results alone: V-g and V-f per flutter point, the PSDs of the
+/// random response, the magnitudes of the frequency response, the transient histories.
+fn figures(r: &NastranResults, dir: &Path) -> Result<()> {
+    use crate::report::figures::{line_plot, LinePlot, Panels};
+    use crate::report::save_figure;
+    for sc in &r.subcases {
+        let id = sc.subcase;
+        for (i, p) in sc.flutter.iter().enumerate() {
+            let curves = |values: &Vec<Vec<f64>>| -> Vec<(String, Vec<(f64, f64)>)> {
+                values
+                    .iter()
+                    .enumerate()
+                    .map(|(m, v)| {
+                        (
+                            format!("mode {}", m + 1),
+                            p.velocities
+                                .iter()
+                                .copied()
+                                .zip(v.iter().copied())
+                                .collect(),
+                        )
+                    })
+                    .collect()
+            };
+            let fig = Panels {
+                title: format!(
+                    "Subcase {id}: p-k flutter, Mach {}, density ratio {}",
+                    p.mach, p.density_ratio
+                ),
+                cols: 2,
+                plots: vec![
+                    line_plot(
+                        "damping".into(),
+                        "velocity (model units)",
+                        "g",
+                        curves(&p.damping_g),
+                    ),
+                    line_plot(
+                        "frequency".into(),
+                        "velocity (model units)",
+                        "f (Hz)",
+                        curves(&p.frequency_hz),
+                    ),
+                ],
+            };
+            save_figure(dir, &format!("flutter_subcase{id}_{}", i + 1), &fig)?;
+        }
+        if !sc.random_response.is_empty() && !sc.random_frequencies_hz.is_empty() {
+            let series = sc
+                .random_response
+                .iter()
+                .filter(|row| row.psd.len() == sc.random_frequencies_hz.len())
+                .map(|row| {
+                    (
+                        row.label.clone(),
+                        sc.random_frequencies_hz
+                            .iter()
+                            .copied()
+                            .zip(row.psd.iter().copied())
+                            .collect(),
+                    )
+                })
+                .collect();
+            let fig = LinePlot {
+                log_y: true,
+                ..line_plot(
+                    format!("Subcase {id}: PSDs of the random gust response"),
+                    "frequency (Hz)",
+                    "PSD (model units² / Hz)",
+                    series,
+                )
+            };
+            save_figure(dir, &format!("psd_subcase{id}"), &fig)?;
+        }
+        if let Some(f) = &sc.frequency_response {
+            let series = f
+                .rows
+                .iter()
+                .map(|row| {
+                    (
+                        row.label.clone(),
+                        f.frequencies_hz
+                            .iter()
+                            .zip(row.real.iter().zip(&row.imag))
+                            .map(|(&hz, (a, b))| (hz, a.hypot(*b)))
+                            .collect(),
+                    )
+                })
+                .collect();
+            let fig = LinePlot {
+                log_y: true,
+                ..line_plot(
+                    format!("Subcase {id}: frequency response magnitudes"),
+                    "frequency (Hz)",
+                    "|y| (model units per unit gust angle scale)",
+                    series,
+                )
+            };
+            save_figure(dir, &format!("frequency_subcase{id}"), &fig)?;
+        }
+        if let Some(t) = &sc.transient_response {
+            let plots = t
+                .rows
+                .iter()
+                .map(|row| {
+                    line_plot(
+                        row.label.clone(),
+                        "time",
+                        "model units",
+                        vec![(
+                            row.label.clone(),
+                            t.times
+                                .iter()
+                                .copied()
+                                .zip(row.values.iter().copied())
+                                .collect(),
+                        )],
+                    )
+                })
+                .collect();
+            let fig = Panels {
+                title: format!("Subcase {id}: transient gust response"),
+                cols: 3,
+                plots,
+            };
+            save_figure(dir, &format!("transient_subcase{id}"), &fig)?;
+        }
+    }
     Ok(())
 }
 
