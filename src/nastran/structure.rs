@@ -18,6 +18,14 @@ use std::collections::{BTreeMap, BTreeSet};
 /// The largest g-set the dense assembly takes (two matrices of 16 n² bytes: 1.2 GB at 6 000).
 pub const MAX_DENSE_DOFS: usize = 6000;
 
+/// What a shell contributes to an assembly: its matrices, or their derivatives in its PSHELL's
+/// thickness.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum ShellPart {
+    Value,
+    ThicknessDerivative,
+}
+
 type R<T> = Result<T, NastranError>;
 
 /// A rectangular frame: origin and axes (columns) in the basic system.
@@ -236,7 +244,7 @@ impl Structure {
             s.add_genel(g)?;
         }
         for e in b.shells.values() {
-            s.add_shell(b, e, coupled)?;
+            s.add_shell(b, e, coupled, ShellPart::Value)?;
         }
         if let Some(w) = b.params.get("WTMASS") {
             let w: f64 = super::field::parse_real(w)
@@ -505,7 +513,13 @@ impl Structure {
     /// from MCID or THETA; lumped translational mass, or with COUPMASS the consistent mass. No
     /// drilling stiffness: the in-plane rotation of a grid that nothing else holds is removed as
     /// unconnected.
-    fn add_shell(&mut self, b: &BulkData, e: &super::bulk::Shell, coupled: bool) -> R<()> {
+    fn add_shell(
+        &mut self,
+        b: &BulkData,
+        e: &super::bulk::Shell,
+        coupled: bool,
+        part: ShellPart,
+    ) -> R<()> {
         use crate::structure::element;
         let what = format!(
             "{} {}",
@@ -674,10 +688,18 @@ impl Structure {
         let mut k_loc = vec![vec![0.0; nl]; nl];
         let mut m_loc = vec![vec![0.0; nl]; nl];
         // local dofs per node: (w, w_x, w_y, u, v); bending block at 5i..5i+3, membrane 5i+3..
-        let mut rho_t = p.nsm;
+        // the matrices' factors in t: membrane t, bending t³, mass NSM + ρ t (or their
+        // derivatives in t)
+        let derivative = part == ShellPart::ThicknessDerivative;
+        let (f_membrane, f_bending) = if derivative {
+            (1.0, 3.0 * t * t)
+        } else {
+            (t, t * t * t)
+        };
+        let mut rho_t = if derivative { 0.0 } else { p.nsm };
         if let Some(m1) = p.mid1 {
             let (mat, rho) = material(m1)?;
-            rho_t += rho * t;
+            rho_t += if derivative { rho } else { rho * t };
             let km: Vec<Vec<f64>> = if nodes == 4 {
                 element::membrane_stiffness(&xy, &mat.qbar())
                     .iter()
@@ -691,7 +713,8 @@ impl Structure {
             };
             for a in 0..2 * nodes {
                 for c in 0..2 * nodes {
-                    k_loc[5 * (a / 2) + 3 + a % 2][5 * (c / 2) + 3 + c % 2] += km[a][c] * t;
+                    k_loc[5 * (a / 2) + 3 + a % 2][5 * (c / 2) + 3 + c % 2] +=
+                        km[a][c] * f_membrane;
                 }
             }
         }
@@ -711,7 +734,7 @@ impl Structure {
             };
             for a in 0..3 * nodes {
                 for c in 0..3 * nodes {
-                    k_loc[5 * (a / 3) + a % 3][5 * (c / 3) + c % 3] += kb[a][c] * t * t * t;
+                    k_loc[5 * (a / 3) + a % 3][5 * (c / 3) + c % 3] += kb[a][c] * f_bending;
                 }
             }
         }
@@ -789,6 +812,50 @@ impl Structure {
         Self::scatter(&mut self.k_gg, &dofs, &project(&k_loc));
         Self::scatter(&mut self.m_gg, &dofs, &project(&m_loc));
         Ok(())
+    }
+
+    /// ∂K/∂T and ∂M/∂T (g-set) of the shells whose PSHELL `pid` gives their thickness (shells
+    /// with corner thicknesses T1–T4 do not depend on it): exact, the element matrices being
+    /// t (membrane), t³ (bending) and NSM + ρt (mass) times fixed matrices; PARAM WTMASS
+    /// applied to ∂M. With mass-normalized modes, ∂λᵢ/∂T = φᵢᵀ (∂K − λᵢ ∂M) φᵢ.
+    pub fn shell_thickness_derivative(&self, b: &BulkData, pid: u32) -> R<(Mat<f64>, Mat<f64>)> {
+        let n = self.k_gg.nrows();
+        let mut d = Structure {
+            grid_ids: self.grid_ids.clone(),
+            index: self.index.clone(),
+            position: self.position.clone(),
+            cd: self.cd.clone(),
+            k_gg: Mat::zeros(n, n),
+            m_gg: Mat::zeros(n, n),
+            dependent: BTreeMap::new(),
+            frames: self.frames.clone(),
+        };
+        if !b.pshells.contains_key(&pid) {
+            return Err(NastranError::model(
+                &format!("PSHELL {pid}"),
+                "is not defined: no thickness to differentiate".into(),
+            ));
+        }
+        let coupled = b
+            .params
+            .get("COUPMASS")
+            .and_then(|v| v.parse::<i64>().ok())
+            .is_some_and(|v| v > 0);
+        for e in b.shells.values() {
+            if e.pid == pid && e.corner_t.iter().all(|c| c.is_none()) {
+                d.add_shell(b, e, coupled, ShellPart::ThicknessDerivative)?;
+            }
+        }
+        if let Some(w) = b.params.get("WTMASS").and_then(|w| {
+            super::field::parse_real(w).or_else(|| w.parse::<i64>().ok().map(|v| v as f64))
+        }) {
+            for j in 0..n {
+                for i in 0..n {
+                    d.m_gg[(i, j)] *= w;
+                }
+            }
+        }
+        Ok((d.k_gg, d.m_gg))
     }
 
     /// A scalar spring or mass between two grid components (or one and ground).
