@@ -681,6 +681,16 @@ fn gustkit_runs_nastran_decks() {
     let csv = std::fs::read_to_string(dir.join("plain/frequency_subcase1.csv")).unwrap();
     assert!(csv.starts_with("frequency_hz,"), "{csv}");
     assert!(dir.join("plain/frequency_subcase1.png").is_file());
+    // the random deck keeping no mode (PARAM LMODES 0)
+    let none = dir.join("nomodes.inp");
+    let text = std::fs::read_to_string(data.join("d11031a.inp")).unwrap();
+    assert!(text.contains("PARAM   LMODES  12"));
+    std::fs::write(&none, text.replace("PARAM   LMODES  12", "PARAM   LMODES  0 ")).unwrap();
+    let out = run(&none);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("LMODES") && err.contains("no mode"), "{err}");
+    assert!(!dir.join("nomodes").exists());
     // the same deck asking for the cubic-spline inverse transform (IFTM 2), not implemented
     let iftm2 = dir.join("iftm2.inp");
     let text = std::fs::read_to_string(data.join("d11032a.inp")).unwrap();

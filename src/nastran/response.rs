@@ -236,6 +236,13 @@ pub fn gust_frequency_response(
         .and_then(|v| v.parse::<usize>().ok())
         .unwrap_or(modes.lambda.len())
         .min(modes.lambda.len());
+    if n_modes == 0 {
+        return Err(NastranError::model(
+            "PARAM LMODES",
+            "keeps no mode (or the eigenvalue method found none): a gust response needs at least one"
+                .into(),
+        ));
+    }
     let surf = lifting_surfaces(b, s)?;
     let (rows, _unmoved) = spline_rows(b, s, &surf)?;
     let ms = modal_surface(&surf, &rows, modes, n_modes);
