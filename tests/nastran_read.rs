@@ -685,7 +685,11 @@ fn gustkit_runs_nastran_decks() {
     let none = dir.join("nomodes.inp");
     let text = std::fs::read_to_string(data.join("d11031a.inp")).unwrap();
     assert!(text.contains("PARAM   LMODES  12"));
-    std::fs::write(&none, text.replace("PARAM   LMODES  12", "PARAM   LMODES  0 ")).unwrap();
+    std::fs::write(
+        &none,
+        text.replace("PARAM   LMODES  12", "PARAM   LMODES  0 "),
+    )
+    .unwrap();
     let out = run(&none);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");
