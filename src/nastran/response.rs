@@ -510,9 +510,7 @@ pub fn gust_frequency_response(
 fn modal_coordinate_scale(
     b: &BulkData,
     sub: &Subcase,
-    s: &Structure,
     modes: &RealModes,
-    spc: &std::collections::BTreeSet<usize>,
     n_modes: usize,
 ) -> R<Vec<f64>> {
     let norm = sub
@@ -522,26 +520,15 @@ fn modal_coordinate_scale(
         .map_or("MASS", |e| e.norm.as_str());
     match norm {
         "" | "MASS" => Ok(vec![1.0; n_modes]),
-        "MAX" => {
-            // the a-set coordinates u_a of a mode: its independent rows through T (u_g = T u_a,
-            // T's independent rows one component each or orthonormal directions of a grid)
-            let (t, _) = s.reduction(spc)?;
-            let independent: Vec<usize> = (0..t.nrows())
-                .filter(|i| !s.dependent.contains_key(i))
-                .collect();
-            Ok((0..n_modes)
-                .map(|m| {
-                    (0..t.ncols())
-                        .map(|c| {
-                            independent
-                                .iter()
-                                .map(|&i| t[(i, c)] * modes.phi_g[(i, m)])
-                                .sum::<f64>()
-                        })
-                        .fold(0.0, |a: f64, v| if v.abs() > a.abs() { v } else { a })
-                })
-                .collect())
-        }
+        "MAX" => Ok((0..n_modes)
+            .map(|m| {
+                modes
+                    .phi_a
+                    .col(m)
+                    .iter()
+                    .fold(0.0, |a: f64, &v| if v.abs() > a.abs() { v } else { a })
+            })
+            .collect()),
         other => Err(NastranError::model(
             "SDISPLACEMENT",
             format!("modal coordinates are given in the MASS or MAX normalization of the eigenvalue method; NORM {other} is not"),
@@ -563,7 +550,7 @@ pub fn output_rows(
     let spc: std::collections::BTreeSet<usize> =
         constrained(s, b, sub.selections.get("SPC").copied())?;
     let modal_scale = if requests.iter().any(|r| r.2 == Quantity::Mode) {
-        modal_coordinate_scale(b, sub, s, modes, &spc, n_modes)?
+        modal_coordinate_scale(b, sub, modes, n_modes)?
     } else {
         Vec::new()
     };

@@ -1378,6 +1378,8 @@ pub struct RealModes {
     pub lambda: Vec<f64>,
     /// One column a mode, g-set (every grid's six components in its displacement frame).
     pub phi_g: Mat<f64>,
+    /// The same modes in the a-set coordinates (u_g = T u_a): what NORM MAX scales.
+    pub phi_a: Mat<f64>,
     /// The a-set size and the components removed as unconnected.
     pub n_a: usize,
     pub auto_spc: Vec<usize>,
@@ -1473,9 +1475,11 @@ pub fn real_modes(s: &Structure, spc: &BTreeSet<usize>, rigid_body: usize) -> R<
             phi_g[(i, c)] = (0..n).map(|q| t[(i, q)] * phi[q]).sum();
         }
     }
+    let phi_a = Mat::<f64>::from_fn(n, n_modes, |q, c| pairs[c].1[q]);
     Ok(RealModes {
         lambda: pairs.iter().map(|p| p.0).collect(),
         phi_g,
+        phi_a,
         n_a: t.ncols(),
         auto_spc,
     })
@@ -1567,6 +1571,9 @@ pub fn subcase_modes(b: &BulkData, sub: &super::Subcase) -> R<(Structure, RealMo
     modes.lambda = keep.iter().map(|&i| modes.lambda[i]).collect();
     modes.phi_g = Mat::from_fn(modes.phi_g.nrows(), keep.len(), |i, j| {
         modes.phi_g[(i, keep[j])]
+    });
+    modes.phi_a = Mat::from_fn(modes.phi_a.nrows(), keep.len(), |i, j| {
+        modes.phi_a[(i, keep[j])]
     });
     Ok((s, modes))
 }
