@@ -653,12 +653,6 @@ pub fn monitor_rows(
     n_boxes: usize,
 ) -> R<Vec<OutputRow>> {
     let frame = |id: u32, what: &str| -> R<super::structure::Frame> {
-        if id == 0 {
-            return Ok(super::structure::Frame {
-                origin: [0.0; 3],
-                axes: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-            });
-        }
         s.frames.get(&id).copied().ok_or_else(|| {
             NastranError::model(what, format!("coordinate system {id} is not defined"))
         })

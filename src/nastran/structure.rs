@@ -18,6 +18,32 @@ use std::collections::{BTreeMap, BTreeSet};
 /// The largest g-set the dense assembly takes (two matrices of 16 n² bytes: 1.2 GB at 6 000).
 pub const MAX_DENSE_DOFS: usize = 6000;
 
+/// Whether PARAM COUPMASS asks for consistent (coupled) element masses.
+fn coupled_mass(b: &BulkData) -> bool {
+    b.params
+        .get("COUPMASS")
+        .and_then(|v| v.parse::<i64>().ok())
+        .is_some_and(|v| v > 0)
+}
+
+/// PARAM WTMASS, the factor on every mass term, where the model gives one.
+fn wtmass(b: &BulkData) -> R<Option<f64>> {
+    b.params
+        .get("WTMASS")
+        .map(|w| {
+            super::field::parse_real(w)
+                .or_else(|| w.parse::<i64>().ok().map(|v| v as f64))
+                .filter(|v| *v > 0.0)
+                .ok_or_else(|| {
+                    NastranError::model(
+                        "PARAM WTMASS",
+                        format!("must be a positive real (got '{w}')"),
+                    )
+                })
+        })
+        .transpose()
+}
+
 /// What a shell contributes to an assembly: its matrices, or their derivatives in its PSHELL's
 /// thickness.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -223,11 +249,7 @@ impl Structure {
             dependent: BTreeMap::new(),
             frames,
         };
-        let coupled = b
-            .params
-            .get("COUPMASS")
-            .and_then(|v| v.parse::<i64>().ok())
-            .is_some_and(|v| v > 0);
+        let coupled = coupled_mass(b);
         for bar in b.bars.values() {
             s.add_bar(b, bar, coupled)?;
         }
@@ -246,16 +268,7 @@ impl Structure {
         for e in b.shells.values() {
             s.add_shell(b, e, coupled, ShellPart::Value)?;
         }
-        if let Some(w) = b.params.get("WTMASS") {
-            let w: f64 = super::field::parse_real(w)
-                .or_else(|| w.parse::<i64>().ok().map(|v| v as f64))
-                .filter(|v| *v > 0.0)
-                .ok_or_else(|| {
-                    NastranError::model(
-                        "PARAM WTMASS",
-                        format!("must be a positive real (got '{w}')"),
-                    )
-                })?;
+        if let Some(w) = wtmass(b)? {
             let n = s.m_gg.nrows();
             for j in 0..n {
                 for i in 0..n {
@@ -836,19 +849,13 @@ impl Structure {
                 "is not defined: no thickness to differentiate".into(),
             ));
         }
-        let coupled = b
-            .params
-            .get("COUPMASS")
-            .and_then(|v| v.parse::<i64>().ok())
-            .is_some_and(|v| v > 0);
+        let coupled = coupled_mass(b);
         for e in b.shells.values() {
             if e.pid == pid && e.corner_t.iter().all(|c| c.is_none()) {
                 d.add_shell(b, e, coupled, ShellPart::ThicknessDerivative)?;
             }
         }
-        if let Some(w) = b.params.get("WTMASS").and_then(|w| {
-            super::field::parse_real(w).or_else(|| w.parse::<i64>().ok().map(|v| v as f64))
-        }) {
+        if let Some(w) = wtmass(b)? {
             for j in 0..n {
                 for i in 0..n {
                     d.m_gg[(i, j)] *= w;
