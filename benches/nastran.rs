@@ -6,12 +6,24 @@ use gustkit::nastran::bulk::BulkData;
 use gustkit::nastran::random::{random_response, KInterpolation, Quantity};
 use gustkit::nastran::structure::subcase_modes;
 use gustkit::nastran::transient::transient_response;
-use gustkit::nastran::Input;
+use gustkit::nastran::{Input, Subcase};
 use gustkit::runner::bench::measure;
+use std::path::Path;
 use std::time::Instant;
 
+/// A deck's bulk data and its first subcase.
+fn load(deck: &Path) -> anyhow::Result<(BulkData, Subcase)> {
+    let input = Input::read(deck)?;
+    let b = BulkData::from_cards(&input.deck.bulk)?;
+    let sub = input
+        .case_control
+        .subcase(1)
+        .ok_or_else(|| anyhow::anyhow!("{}: no subcase 1", deck.display()))?;
+    Ok((b, sub))
+}
+
 fn main() -> anyhow::Result<()> {
-    let data = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/nastran");
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/nastran");
     let repeat = 20;
     println!(
         "nastran (NASTRAN-95 D11-03-1A/2A: 42 boxes, 12 modes, 40 frequencies; {} threads):",
@@ -19,17 +31,11 @@ fn main() -> anyhow::Result<()> {
     );
     let read = measure(repeat, || {
         let t0 = Instant::now();
-        let input = Input::read(&data.join("d11031a.inp"))?;
-        BulkData::from_cards(&input.deck.bulk)?;
+        load(&data.join("d11031a.inp"))?;
         Ok(t0.elapsed().as_secs_f64())
     })?;
     println!("{}", read.line("read the deck (cards, case control)"));
-    let input = Input::read(&data.join("d11031a.inp"))?;
-    let b = BulkData::from_cards(&input.deck.bulk)?;
-    let sub = input
-        .case_control
-        .subcase(1)
-        .ok_or_else(|| anyhow::anyhow!("no subcase 1"))?;
+    let (b, sub) = load(&data.join("d11031a.inp"))?;
     let modes = measure(repeat, || {
         let t0 = Instant::now();
         subcase_modes(&b, &sub)?;
@@ -59,12 +65,7 @@ fn main() -> anyhow::Result<()> {
         "{}",
         random.line("random response (DLM on 41 k, 3 outputs)")
     );
-    let input = Input::read(&data.join("d11032a.inp"))?;
-    let b = BulkData::from_cards(&input.deck.bulk)?;
-    let sub = input
-        .case_control
-        .subcase(1)
-        .ok_or_else(|| anyhow::anyhow!("no subcase 1"))?;
+    let (b, sub) = load(&data.join("d11032a.inp"))?;
     let (s, m) = subcase_modes(&b, &sub)?;
     let transient = measure(repeat, || {
         let t0 = Instant::now();
