@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::gustkit;
+use common::{assert_success, gustkit};
 
 fn scratch(name: &str) -> PathBuf {
     common::scratch("cli", name)
@@ -22,11 +22,7 @@ fn modes_json_and_report_files() {
         .arg(&dir)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let f = v["frequencies_hz"].as_array().unwrap();
     assert_eq!(f.len(), 6);
@@ -58,11 +54,7 @@ fn run_writes_results_and_summary() {
         .arg(&dir)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_success(&out);
     let r: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(dir.join("agard445_dlm_analysis/results.json")).unwrap(),
     )
@@ -162,7 +154,7 @@ fn gafs_and_aic_files() {
         .arg(&out)
         .output()
         .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&o);
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     assert_eq!(v["k"].as_array().unwrap().len(), 11);
@@ -196,7 +188,7 @@ fn gafs_and_aic_files() {
         .arg(&aic)
         .output()
         .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&o);
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&aic).unwrap()).unwrap();
     assert_eq!(v["boxes"].as_array().unwrap().len(), 6);
@@ -218,7 +210,7 @@ fn gafs_and_aic_files() {
         .arg(&aic)
         .output()
         .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&o);
 
     // bad input: supersonic Mach, negative or duplicate k, unknown surface field
     for (args, needle) in [
@@ -315,7 +307,7 @@ fn check_gradient_json_rows() {
         ])
         .output()
         .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&o);
     let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let rows = r["rows"].as_array().unwrap();
     assert_eq!(rows.len(), 2);
@@ -394,7 +386,7 @@ fn gust_and_flutter_inputs() {
         .arg(&dir)
         .output()
         .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&o);
     let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(r["flutter_speed_m_s"].is_null() && r["flutter_frequency_hz"].is_null());
     std::fs::remove_dir_all(&dir).unwrap();
@@ -489,7 +481,7 @@ fn run_optimization_and_resume() {
     }
     std::fs::remove_file(run_dir.join("summary.md")).unwrap();
     let o = gustkit().args(["report"]).arg(&run_dir).output().unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&o);
     for f in figures {
         for ext in ["png", "svg"] {
             assert!(run_dir.join(format!("{f}.{ext}")).is_file(), "{f}.{ext}");
@@ -624,7 +616,7 @@ fn sweep_grid_resume_report_and_errors() {
             .unwrap()
     };
     let o = sweep(&file, &[]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&o);
     let out = dir.join("sweep_small/sweep");
     let read = || -> serde_json::Value {
         serde_json::from_str(&std::fs::read_to_string(out.join("sweep_results.json")).unwrap())
@@ -674,7 +666,7 @@ fn sweep_grid_resume_report_and_errors() {
     // the report again from sweep_results.json alone
     std::fs::remove_file(out.join("sweep.png")).unwrap();
     let o = gustkit().args(["report"]).arg(&out).output().unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&o);
     assert!(out.join("sweep.png").is_file());
     // each Mach number with each of two fidelities (here two DLM lattices): twice the cases,
     // labelled by fidelity; the first fidelity is the study's own, so its cases repeat the grid's
@@ -687,7 +679,7 @@ fn sweep_grid_resume_report_and_errors() {
     let fid_file = dir.join("fidelities.json");
     std::fs::write(&fid_file, fid.to_string()).unwrap();
     let o = sweep(&fid_file, &[]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&o);
     let fid_out = dir.join("sweep_fidelities/sweep");
     let fr: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(fid_out.join("sweep_results.json")).unwrap())
@@ -788,7 +780,7 @@ fn cfd_verification_studies() {
     steady["cfd"]["mesh"] =
         serde_json::json!({"n_around": 32, "n_radial": 12, "first_spacing_chords": 0.02});
     let o = run(&steady, "steady.json");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&o);
     let out = dir.join("verify_naca64a010_steady_gust");
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
@@ -808,7 +800,7 @@ fn cfd_verification_studies() {
     }
     std::fs::remove_file(out.join("pressure.png")).unwrap();
     let o = gustkit().args(["report"]).arg(&out).output().unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&o);
     assert!(out.join("pressure.png").is_file());
 
     // the same mesh from an SU2 file gives the same forces
@@ -823,7 +815,7 @@ fn cfd_verification_studies() {
         "markers": {"wall": "wall", "farfield": "far_field"}
     });
     let o = run(&from_file, "from_file.json");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&o);
     let rf: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(dir.join("steady_from_file/results.json")).unwrap(),
     )
@@ -847,7 +839,7 @@ fn cfd_verification_studies() {
     time["cfd"]["time_gust"]["periods"] = 2.into();
     time["cfd"]["time_gust"]["steps_per_period"] = 12.into();
     let o = run(&time, "time.json");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&o);
     let r: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(dir.join("verify_naca64a010_time_gust/results.json")).unwrap(),
     )
@@ -922,7 +914,7 @@ fn lfd_gust_study() {
     g["fit_periods"] = 2.into();
     g["linear_periods"] = 30.into();
     let o = run_json(&dir, &v, "lfd.json");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&o);
     let out = dir.join("verify_naca64a010_lfd_gust");
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
@@ -936,7 +928,7 @@ fn lfd_gust_study() {
     assert!(db >= 6.0, "{db}");
     std::fs::remove_file(out.join("table2_lift.png")).unwrap();
     let o = gustkit().args(["report"]).arg(&out).output().unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&o);
     assert!(out.join("table2_lift.png").is_file());
     let mut bad = v.clone();
     bad["cfd"]["lfd_gust"]["amplitude_mach"] = 0.5.into();
@@ -960,7 +952,7 @@ fn typical_section_study() {
         serde_json::json!({"n_around": 32, "n_radial": 16, "first_spacing_chords": 0.02});
     v["typical_section"]["reduced_frequencies"] = serde_json::json!([0.0, 0.1, 0.3, 0.6, 1.0, 1.5]);
     let o = run_json(&dir, &v, "section.json");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&o);
     let out = dir.join("typical_section_lfd");
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
@@ -1014,7 +1006,7 @@ fn typical_section_study() {
     }
     std::fs::remove_file(out.join("psd.png")).unwrap();
     let o = gustkit().args(["report"]).arg(&out).output().unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&o);
     assert!(out.join("psd.png").is_file());
     let mut bad = v.clone();
     bad["typical_section"]["structure"]["r_alpha"] = 0.1.into();
@@ -1041,7 +1033,7 @@ fn pitch_motion_study() {
     v["cfd"]["time_motion"]["periods"] = 2.into();
     v["cfd"]["time_motion"]["steps_per_period"] = 16.into();
     let o = run_json(&dir, &v, "pitch.json");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&o);
     let out = dir.join("verify_naca64a010_pitch");
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
@@ -1353,7 +1345,7 @@ fn discrete_gust_tuned_search_is_reported() {
         .arg(&reports)
         .output()
         .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_success(&o);
     let run = reports.join("discrete");
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(run.join("results.json")).unwrap()).unwrap();
