@@ -6,6 +6,7 @@
 
 pub mod aero;
 pub mod atomic;
+pub mod case;
 pub mod cli;
 pub mod flutter;
 pub mod gust;
@@ -20,5 +21,6 @@ pub mod structure;
 pub mod study;
 pub mod transfer;
 pub mod typical_section;
+pub mod units;
 pub mod verification;
 pub mod wing;

@@ -10,6 +10,7 @@
 //! respect to a complex state z is conj(Q̄)ᵀ, not Q̄ᵀ.
 
 use crate::aero::AeroModel;
+use crate::case::{Case, StudyError};
 use crate::flutter::margin::{ks_max, ks_rho, zeros_like, DampingRoot, FlutterMargin, PK_STEPS};
 use crate::flutter::{check_stability, PkProblem};
 use crate::gust::{
@@ -21,7 +22,6 @@ use crate::structure::{
     mass_grad, modes_vjp, root_bending_moment, root_bending_moment_vjp, ModalSeed, Modes,
     PlateModel, Sampler,
 };
-use crate::study::{Study, StudyError};
 use crate::wing::{DesignVector, N_PLANFORM};
 use anyhow::{Context, Result};
 use gustkit_core::GafTable;
@@ -188,32 +188,32 @@ pub struct Aeroelastic {
     pub residual: Option<Residual>,
 }
 
-/// Evaluates a design of the study.
-pub fn evaluate(study: &Study, settings: &GustSettings, x: &[f64]) -> Result<Evaluation> {
-    respond(aeroelastic_for(study, x, Some(settings))?, settings)
+/// Evaluates a design of the case.
+pub fn evaluate(case: &Case, settings: &GustSettings, x: &[f64]) -> Result<Evaluation> {
+    respond(aeroelastic_for(case, x, Some(settings))?, settings)
 }
 
 /// The aeroelastic model of a design: plate, modes, aerodynamic model, GAFs.
-pub fn aeroelastic(study: &Study, x: &[f64]) -> Result<Aeroelastic> {
-    aeroelastic_for(study, x, None)
+pub fn aeroelastic(case: &Case, x: &[f64]) -> Result<Aeroelastic> {
+    aeroelastic_for(case, x, None)
 }
 
 /// [`aeroelastic`], with the residual rows of the outputs of `settings` where they ask for the
 /// mode-acceleration method.
 pub fn aeroelastic_for(
-    study: &Study,
+    case: &Case,
     x: &[f64],
     settings: Option<&GustSettings>,
 ) -> Result<Aeroelastic> {
-    let plate = study
+    let plate = case
         .model_at(DesignVector::from_slice(x))
         .map_err(|e: StudyError| anyhow::anyhow!("design: {}", e.reason))?;
     // the aerodynamic model and what of it does not need the modes (a DLM's influence matrices)
     // run beside the modal analysis
     let (modes, aero) = rayon::join(
-        || study.solve_modes(&plate).context("modal analysis"),
+        || case.solve_modes(&plate).context("modal analysis"),
         || {
-            let aero = study.aero_model(&plate)?;
+            let aero = case.aero_model(&plate)?;
             aero.fidelity.prepare(&aero.flight, &aero.k);
             anyhow::Ok(aero)
         },

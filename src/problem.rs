@@ -4,11 +4,12 @@
 //! Objective and constraints are normalized (mass/mass₀, RMS/limit − 1, (g_KS − g_max)/0.1,
 //! area/area₀ − 1) so the SQP sees quantities of order one.
 
+use crate::case::{Case, ModeSelection};
 use crate::flutter::margin::{FlutterMargin, DAMPING_SCALE};
 use crate::gust::GustSettings;
-use crate::optim::{Gradients, Problem, Values};
+use crate::optim::{EvalError, Gradients, Problem, Values};
 use crate::pipeline::{evaluate, gradients, DampingSeed, Evaluation, OutputSeeds};
-use crate::study::Study;
+use anyhow::Context;
 
 /// Bounds and constraint settings (SI).
 #[derive(Clone, Debug)]
@@ -38,7 +39,7 @@ pub struct DesignSpec {
 /// constraint jump).
 #[derive(Clone, Debug)]
 pub struct PeakLimit {
-    pub constraint: crate::study::discrete::PeakConstraint,
+    pub constraint: crate::case::PeakConstraint,
     pub grid: crate::gust::discrete::TimeGrid,
 }
 
@@ -47,7 +48,7 @@ pub struct PeakLimit {
 /// memory of the grid limited to 2 GB.
 pub fn peak_response(
     ev: &Evaluation,
-    pc: &crate::study::discrete::PeakConstraint,
+    pc: &crate::case::PeakConstraint,
     span: Option<f64>,
 ) -> Result<crate::gust::discrete::TransientResponse, crate::gust::GustError> {
     let p = ev.problem();
@@ -71,13 +72,13 @@ impl PeakLimit {
             crate::gust::discrete::TransientModel,
             crate::gust::discrete::PeakKs,
         ),
-        String,
+        anyhow::Error,
     > {
         let p = ev.problem();
         let derivative = self.constraint.derivatives(p.outputs.len());
         let mut model =
             crate::gust::discrete::TransientModel::new(&p, &derivative, self.grid.clone())
-                .map_err(|e| format!("discrete gust peak: {e}"))?;
+                .context("discrete gust peak")?;
         let ks = crate::gust::discrete::PeakKs::evaluate(
             &mut model,
             &self.constraint.gusts,
@@ -106,16 +107,12 @@ impl ModeFloor {
     /// The modes of `plate` up to the first one left out, and the constraint's value.
     pub fn evaluate(
         &self,
-        study: &Study,
+        selection: &ModeSelection,
         plate: &crate::structure::PlateModel,
-    ) -> Result<(crate::structure::Modes, f64), String> {
-        let modes = crate::structure::modal::solve(
-            plate,
-            self.retained + 1,
-            study.spec.structure.damping_ratio,
-            &study.mode_fields(),
-        )
-        .map_err(|e| format!("modal basis floor: {e}"))?;
+    ) -> anyhow::Result<(crate::structure::Modes, f64)> {
+        let modes = selection
+            .solve_count(plate, self.retained + 1)
+            .context("modal basis floor")?;
         let lambda = modes.modes[self.retained].lambda;
         Ok((modes, 1.0 - lambda / (self.omega_cut * self.omega_cut)))
     }
@@ -149,9 +146,9 @@ type LastEvaluation = (
     Option<PeakState>,
 );
 
-/// The study's design problem; caches the last evaluation for its gradient.
+/// The design problem of a case; caches the last evaluation for its gradient.
 pub struct DesignProblem<'a> {
-    pub study: &'a Study,
+    pub case: &'a Case,
     pub settings: GustSettings,
     pub spec: DesignSpec,
     last: Option<LastEvaluation>,
@@ -167,9 +164,9 @@ pub struct DesignProblem<'a> {
 }
 
 impl<'a> DesignProblem<'a> {
-    pub fn new(study: &'a Study, settings: GustSettings, spec: DesignSpec) -> Self {
+    pub fn new(case: &'a Case, settings: GustSettings, spec: DesignSpec) -> Self {
         Self {
-            study,
+            case,
             settings,
             spec,
             last: None,
@@ -207,12 +204,12 @@ impl Problem for DesignProblem<'_> {
         })
         .unwrap_or(serde_json::Value::Null)
     }
-    fn restore(&mut self, state: &serde_json::Value) -> Result<(), String> {
+    fn restore(&mut self, state: &serde_json::Value) -> Result<(), EvalError> {
         // a checkpoint of an older revision has no records: the report evaluates what it needs
         if state.is_null() {
             return Ok(());
         }
-        let r: Records = serde_json::from_value(state.clone()).map_err(|e| e.to_string())?;
+        let r: Records = serde_json::from_value(state.clone())?;
         // the records of the earlier sessions come first, in the order they were made
         self.damping_peaks.splice(0..0, r.damping_peaks);
         self.function_times.splice(0..0, r.function_times);
@@ -222,20 +219,20 @@ impl Problem for DesignProblem<'_> {
     fn upper(&self) -> Vec<f64> {
         self.spec.upper.clone()
     }
-    fn values(&mut self, x: &[f64]) -> Result<Values, String> {
+    fn values(&mut self, x: &[f64]) -> Result<Values, EvalError> {
         let t0 = std::time::Instant::now();
-        let ev = evaluate(self.study, &self.settings, x).map_err(|e| format!("{e:#}"))?;
+        let ev = evaluate(self.case, &self.settings, x)?;
         let mut ineq = vec![ev.rms_m[self.spec.output] / self.spec.rms_limit - 1.0];
         let mut flutter = None;
         if let Some(m) = &self.spec.flutter {
-            let (ks, weights, seed) = ev.flutter_damping(m).map_err(|e| format!("{e:#}"))?;
+            let (ks, weights, seed) = ev.flutter_damping(m)?;
             ineq.push((ks - m.damping_max) / DAMPING_SCALE);
             self.damping_peaks.push((x.to_vec(), seed.peak()));
             flutter = Some((weights, seed));
         }
         let mut floor_modes = None;
         if let Some(floor) = &self.spec.mode_floor {
-            let (modes, c) = floor.evaluate(self.study, &ev.plate)?;
+            let (modes, c) = floor.evaluate(&self.case.modes, &ev.plate)?;
             ineq.push(c);
             floor_modes = Some(modes);
         }
@@ -259,7 +256,7 @@ impl Problem for DesignProblem<'_> {
         self.function_times.push(t0.elapsed().as_secs_f64());
         Ok(v)
     }
-    fn gradients(&mut self, x: &[f64]) -> Result<Gradients, String> {
+    fn gradients(&mut self, x: &[f64]) -> Result<Gradients, EvalError> {
         if self.last.as_ref().is_none_or(|e| e.0.x != x) {
             self.values(x)?;
         }
@@ -271,7 +268,7 @@ impl Problem for DesignProblem<'_> {
                 let ev = &self.last.as_ref().expect("evaluated").0;
                 Some(
                     ks.vjp(model, &ev.problem(), &pl.constraint.gusts, 1.0)
-                        .map_err(|e| format!("discrete gust peak reverse mode: {e}"))?,
+                        .context("discrete gust peak reverse mode")?,
                 )
             }
             _ => None,
@@ -309,9 +306,7 @@ impl Problem for DesignProblem<'_> {
             all.push(s);
         }
         let t0 = std::time::Instant::now();
-        let mut g = gradients(ev, &all)
-            .map_err(|e| format!("{e:#}"))?
-            .into_iter();
+        let mut g = gradients(ev, &all)?.into_iter();
         self.gradient_times.push(t0.elapsed().as_secs_f64());
         let (f, h) = (g.next().expect("mass"), g.next().expect("area"));
         let mut ineq: Vec<Vec<f64>> = g.collect();

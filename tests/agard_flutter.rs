@@ -125,7 +125,8 @@ fn flagship_optimum_branches_stay_apart() {
         .map(|v| v.as_f64().unwrap())
         .collect();
     let settings = study.gust_settings().unwrap();
-    let ev = gustkit::pipeline::evaluate(&study, &settings, &x).unwrap();
+    let case = study.resolve().unwrap();
+    let ev = gustkit::pipeline::evaluate(&case, &settings, &x).unwrap();
     let pk = gustkit::flutter::PkProblem::new(&ev.modes, &ev.table, ev.aero.flight.density);
     let v_flight = ev.aero.flight.velocity;
     let speeds: Vec<f64> = (1..=60).map(|i| v_flight * 2.0 * i as f64 / 60.0).collect();

@@ -31,8 +31,8 @@ fn held_back_frequencies_and_rms() {
     let s11 = study(&K11, 1500);
     let s21 = study(&k21, 1500);
     let x = s11.initial_design().unwrap().to_vec();
-    let e11 = evaluate(&s11, &s11.gust_settings().unwrap(), &x).unwrap();
-    let e21 = evaluate(&s21, &s21.gust_settings().unwrap(), &x).unwrap();
+    let e11 = evaluate(&s11.resolve().unwrap(), &s11.gust_settings().unwrap(), &x).unwrap();
+    let e21 = evaluate(&s21.resolve().unwrap(), &s21.gust_settings().unwrap(), &x).unwrap();
     let w = gustkit::gust::interp::SplineWeights::new(&K11, &mids).unwrap();
     let nm = e11.table.n_modes();
     let scale = e21
@@ -78,7 +78,9 @@ fn rms_converges_with_the_grid() {
         .map(|&n| {
             let s = study(&K11, n);
             let x = s.initial_design().unwrap().to_vec();
-            evaluate(&s, &s.gust_settings().unwrap(), &x).unwrap().rms_m[0]
+            evaluate(&s.resolve().unwrap(), &s.gust_settings().unwrap(), &x)
+                .unwrap()
+                .rms_m[0]
         })
         .collect();
     println!("RMS on 500/1000/2000/4000 points: {rms:?}");

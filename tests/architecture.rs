@@ -213,3 +213,41 @@ fn cycle_checker_finds_a_cycle() {
         vec![("report".to_string(), Some("figures".to_string()))]
     );
 }
+
+/// The evaluation layer (the pipeline, the design problem, the optimizer and everything they
+/// call) works on the resolved case (`gustkit::case::Case`) and never on a study file: no
+/// reference to `crate::study` or `crate::runner` in its code, so that a new structure source
+/// (a Nastran model) or study schema cannot leak rules into it.
+#[test]
+fn evaluation_layer_reads_no_study() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    for m in ["pipeline.rs", "problem.rs", "case.rs", "units.rs"] {
+        files.push(src.join(m));
+    }
+    for d in [
+        "optim",
+        "gust",
+        "flutter",
+        "structure",
+        "transfer",
+        "wing",
+        "aero",
+    ] {
+        files.extend(sources(&src.join(d)));
+    }
+    assert!(files.len() > 20, "too few files found: {}", files.len());
+    let mut found = Vec::new();
+    for f in files.iter().filter(|f| !f.ends_with("tests.rs")) {
+        let text = code(&std::fs::read_to_string(f).unwrap());
+        for layer in ["study", "runner"] {
+            if !paths_after(&text, "crate::")
+                .iter()
+                .all(|(first, _)| first != layer)
+            {
+                found.push(format!("{} uses crate::{layer}", f.display()));
+            }
+        }
+    }
+    assert!(found.is_empty(), "{found:#?}");
+}

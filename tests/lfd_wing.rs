@@ -69,8 +69,9 @@ fn small_lfd_study(name: &str) -> (Study, std::path::PathBuf) {
 fn lfd_gradients_match_differences() {
     let (study, dir) = small_lfd_study("gradient");
     let settings = study.gust_settings().unwrap();
+    let case = study.resolve().unwrap();
     let x0 = study.initial_design().unwrap().to_vec();
-    let ev = gustkit::pipeline::evaluate(&study, &settings, &x0).unwrap();
+    let ev = gustkit::pipeline::evaluate(&case, &settings, &x0).unwrap();
     assert!(ev.aero.has_reverse());
     let g = gustkit::pipeline::gradient(
         &ev,
@@ -92,7 +93,7 @@ fn lfd_gradients_match_differences() {
             let f = |s: f64| {
                 let mut x = x0.clone();
                 x[dv] += s * h;
-                gustkit::pipeline::evaluate(&study, &settings, &x)
+                gustkit::pipeline::evaluate(&case, &settings, &x)
                     .unwrap()
                     .rms_m[0]
             };
@@ -435,12 +436,13 @@ fn lfd_flutter_margin_gradient_matches_differences() {
     use gustkit::flutter::margin::FlutterMargin;
     let (study, dir) = small_lfd_study("margin");
     let settings = study.gust_settings().unwrap();
+    let case = study.resolve().unwrap();
     let x0 = study.initial_design().unwrap().to_vec();
     let margin = FlutterMargin {
         speed_factor: 1.15,
         damping_max: 0.0,
     };
-    let ev = gustkit::pipeline::evaluate(&study, &settings, &x0).unwrap();
+    let ev = gustkit::pipeline::evaluate(&case, &settings, &x0).unwrap();
     let (ks, weights, mut seed) = ev.flutter_damping(&margin).unwrap();
     seed.g_bar = weights;
     let g = gustkit::pipeline::gradient(
@@ -453,7 +455,7 @@ fn lfd_flutter_margin_gradient_matches_differences() {
     )
     .unwrap();
     fourth_order_check(&x0, &g, &format!("g_KS {ks:.6}"), |x| {
-        gustkit::pipeline::evaluate(&study, &settings, x)
+        gustkit::pipeline::evaluate(&case, &settings, x)
             .unwrap()
             .flutter_damping(&margin)
             .unwrap()
@@ -988,8 +990,9 @@ fn lfd_discrete_gust_peak_gradient_matches_differences() {
     use gustkit::gust::discrete::{transient, GustProfile, TimeGrid, TransientSettings};
     let (study, dir) = small_lfd_study("peak");
     let settings = study.gust_settings().unwrap();
+    let case = study.resolve().unwrap();
     let x0 = study.initial_design().unwrap().to_vec();
-    let ev0 = gustkit::pipeline::evaluate(&study, &settings, &x0).unwrap();
+    let ev0 = gustkit::pipeline::evaluate(&case, &settings, &x0).unwrap();
     let velocity = ev0.aero.flight.velocity;
     let gusts: Vec<GustProfile> = [60.0, 250.0]
         .iter()
@@ -1034,7 +1037,7 @@ fn lfd_discrete_gust_peak_gradient_matches_differences() {
     .unwrap();
     let label = format!("KS {:.6} (sampled peak {:.6})", ks.ks, ks.peak);
     fourth_order_check(&x0, &g, &label, |x| {
-        let ev = gustkit::pipeline::evaluate(&study, &settings, x).unwrap();
+        let ev = gustkit::pipeline::evaluate(&case, &settings, x).unwrap();
         pl.evaluate(&ev).unwrap().1.ks
     });
     let _ = std::fs::remove_dir_all(&dir);

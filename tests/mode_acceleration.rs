@@ -116,12 +116,13 @@ fn mode_acceleration_rms_gradient_matches_finite_differences() {
         v.as_object_mut().unwrap().remove("optimization");
     });
     let settings = study.gust_settings().unwrap();
+    let case = study.resolve().unwrap();
     assert!(settings.mode_acceleration);
     let x0 = study.initial_design().unwrap().to_vec();
-    let ev = evaluate(&study, &settings, &x0).unwrap();
+    let ev = evaluate(&case, &settings, &x0).unwrap();
     let mut plain_settings = settings.clone();
     plain_settings.mode_acceleration = false;
-    let plain = evaluate(&study, &plain_settings, &x0).unwrap();
+    let plain = evaluate(&case, &plain_settings, &x0).unwrap();
     println!(
         "RMS with the residual {:.6e} m, {:.6e} N m; without {:.6e} m, {:.6e} N m",
         ev.rms_m[0], ev.rms_m[1], plain.rms_m[0], plain.rms_m[1]
@@ -138,7 +139,7 @@ fn mode_acceleration_rms_gradient_matches_finite_differences() {
             },
         )
         .unwrap();
-        let f = |x: &[f64]| evaluate(&study, &settings, x).unwrap().rms_m[y];
+        let f = |x: &[f64]| evaluate(&case, &settings, x).unwrap().rms_m[y];
         let gnorm = g.iter().map(|v| v * v).sum::<f64>().sqrt();
         for k in [9, 50, 95, n, n + 1, n + 2, n + 3] {
             let rep = fd_check(&f, &x0, k, g[k], g[k].abs().max(1e-3 * gnorm));

@@ -22,8 +22,9 @@ fn small_mass_minimization() {
     v["gust"]["outputs"] = serde_json::json!([{"name": "tip_te_w", "point": [1.0, 1.0]}]);
     let study = Study::from_str(Path::new("small.json"), &v.to_string()).unwrap();
     let settings = study.gust_settings().unwrap();
+    let case = study.resolve().unwrap();
     let x0 = study.initial_design().unwrap().to_vec();
-    let ev0 = gustkit::pipeline::evaluate(&study, &settings, &x0).unwrap();
+    let ev0 = gustkit::pipeline::evaluate(&case, &settings, &x0).unwrap();
     let n = x0.len() - 4;
     // thickness between 0.7 and 1.5 times the initial, planform ±10 % (sweep ±5°): a region that
     // stays clear of flutter at the flight condition of this coarse model
@@ -51,7 +52,7 @@ fn small_mass_minimization() {
         mode_floor: None,
         peak: None,
     };
-    let mut problem = DesignProblem::new(&study, settings, spec.clone());
+    let mut problem = DesignProblem::new(&case, settings, spec.clone());
     let params = SqpParams {
         max_iterations: 60,
         ..Default::default()

@@ -33,8 +33,9 @@ fn study() -> Study {
 fn rms_gradient_matches_finite_differences() {
     let study = study();
     let settings = study.gust_settings().unwrap();
+    let case = study.resolve().unwrap();
     let x0 = study.initial_design().unwrap().to_vec();
-    let ev = evaluate(&study, &settings, &x0).unwrap();
+    let ev = evaluate(&case, &settings, &x0).unwrap();
     println!(
         "rms {:.6e} m, mass {:.4} kg, f {:.3?}",
         ev.rms_m[0], ev.mass_kg, ev.freq_hz
@@ -51,7 +52,7 @@ fn rms_gradient_matches_finite_differences() {
     )
     .unwrap();
     let n = x0.len() - 4;
-    let f = |x: &[f64]| evaluate(&study, &settings, x).unwrap().rms_m[0];
+    let f = |x: &[f64]| evaluate(&case, &settings, x).unwrap().rms_m[0];
     six_digits_on_every_class(&f, &x0, &g);
     // mass and area through the same entry point
     let gm = gradient(
@@ -66,7 +67,7 @@ fn rms_gradient_matches_finite_differences() {
     )
     .unwrap();
     let fm = |x: &[f64]| {
-        let e = evaluate(&study, &settings, x).unwrap();
+        let e = evaluate(&case, &settings, x).unwrap();
         e.mass_kg + 2.0 * e.area_m2
     };
     for k in [3, n + 1, n + 2] {
@@ -89,8 +90,9 @@ fn unstable_flight_condition_is_an_error() {
     v["flight"]["density_kg_m3"] = 0.8.into();
     let study = Study::from_str(Path::new("dense.json"), &v.to_string()).unwrap();
     let settings = study.gust_settings().unwrap();
+    let case = study.resolve().unwrap();
     let x0 = study.initial_design().unwrap().to_vec();
-    let e = evaluate(&study, &settings, &x0)
+    let e = evaluate(&case, &settings, &x0)
         .err()
         .expect("must fail")
         .to_string();
@@ -102,8 +104,9 @@ fn unstable_flight_condition_is_an_error() {
 fn root_bending_moment_rms_gradient() {
     let study = study();
     let settings = study.gust_settings().unwrap();
+    let case = study.resolve().unwrap();
     let x0 = study.initial_design().unwrap().to_vec();
-    let ev = evaluate(&study, &settings, &x0).unwrap();
+    let ev = evaluate(&case, &settings, &x0).unwrap();
     println!("RMS root bending moment {:.6e} N m", ev.rms_m[1]);
     assert!(ev.rms_m[1] > 0.0);
     let g = gradient(
@@ -119,7 +122,7 @@ fn root_bending_moment_rms_gradient() {
     .unwrap();
     let n = x0.len() - 4;
     let gnorm = g.iter().map(|v| v * v).sum::<f64>().sqrt();
-    let f = |x: &[f64]| evaluate(&study, &settings, x).unwrap().rms_m[1];
+    let f = |x: &[f64]| evaluate(&case, &settings, x).unwrap().rms_m[1];
     for k in [0, 44, n, n + 1, n + 2, n + 3] {
         let rep = fd_check(&f, &x0, k, g[k], g[k].abs().max(1e-3 * gnorm));
         println!(
@@ -159,12 +162,13 @@ fn flutter_margin_gradient_with_twenty_modes() {
 fn check_flutter_margin_gradient(study: &Study) {
     use gustkit::flutter::margin::{ks_max, ks_rho, FlutterMargin, PK_STEPS};
     let settings = study.gust_settings().unwrap();
+    let case = study.resolve().unwrap();
     let x0 = study.initial_design().unwrap().to_vec();
     let margin = FlutterMargin {
         speed_factor: 1.15,
         damping_max: 0.0,
     };
-    let ev = evaluate(study, &settings, &x0).unwrap();
+    let ev = evaluate(&case, &settings, &x0).unwrap();
     let (ks, weights, mut seed) = ev.flutter_damping(&margin).unwrap();
     let beyond = seed
         .roots
@@ -194,7 +198,7 @@ fn check_flutter_margin_gradient(study: &Study) {
     // the margin needs no gust response: a step that crosses the flight condition's stability
     // boundary (the 20-mode model has a root beyond the table near it) is still differentiated
     let f = |x: &[f64]| {
-        let a = gustkit::pipeline::aeroelastic(study, x).unwrap();
+        let a = gustkit::pipeline::aeroelastic(&case, x).unwrap();
         let roots = gustkit::flutter::PkProblem::new(&a.modes, &a.table, a.aero.flight.density)
             .roots_up_to(margin.speed_factor * a.aero.flight.velocity, PK_STEPS)
             .unwrap();
@@ -225,6 +229,7 @@ fn mode_floor_gradient_against_finite_differences() {
     let study =
         Study::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json"))
             .unwrap();
+    let case = study.resolve().unwrap();
     let x0 = study.initial_design().unwrap().to_vec();
     // the flagship's basis (11 modes), and bases of 20 and 39 modes (the floor on modes 21, 40):
     // the eigenvalue derivative holds as far up the spectrum as a basis reaches
@@ -235,7 +240,7 @@ fn mode_floor_gradient_against_finite_differences() {
         };
         let value = |x: &[f64]| {
             let plate = study.model_at(DesignVector::from_slice(x)).unwrap();
-            floor.evaluate(&study, &plate).unwrap()
+            floor.evaluate(&case.modes, &plate).unwrap()
         };
         let (modes, c0) = value(&x0);
         let plate = study.model_at(DesignVector::from_slice(&x0)).unwrap();
@@ -280,8 +285,9 @@ fn discrete_gust_peak_gradient_matches_finite_differences() {
     use gustkit::gust::discrete::{transient, GustProfile, TimeGrid, TransientSettings};
     let study = study();
     let settings = study.gust_settings().unwrap();
+    let case = study.resolve().unwrap();
     let x0 = study.initial_design().unwrap().to_vec();
-    let ev0 = evaluate(&study, &settings, &x0).unwrap();
+    let ev0 = evaluate(&case, &settings, &x0).unwrap();
     let velocity = ev0.aero.flight.velocity;
     let gusts: Vec<GustProfile> = [30.0, 120.0, 350.0]
         .iter()
@@ -317,7 +323,7 @@ fn discrete_gust_peak_gradient_matches_finite_differences() {
             grid: TimeGrid::new(2.0 * r.grid.span, omega_max).unwrap(),
         };
         let f = |x: &[f64]| {
-            let ev = evaluate(&study, &settings, x).unwrap();
+            let ev = evaluate(&case, &settings, x).unwrap();
             pl.evaluate(&ev).unwrap().1.ks
         };
         let (mut model, ks) = pl.evaluate(&ev0).unwrap();

@@ -158,5 +158,25 @@ fn warm_start_hessian_is_carried_to_this_studys_scaling() {
         let want = ratio(i) * ratio(j) * h[i][j];
         assert!((scaled[i][j] - want).abs() <= 1e-15 * want.abs(), "{i},{j}");
     }
+    // a variable fixed by equal bounds (the span at 30 in, that run's final span set to it): the
+    // optimizer scales it by max(|x|, 1) = 1 m, so its entries scale by 1 / (that run's range)
+    let mut r2 = r.clone();
+    r2["final"]["design_variables"][100] = serde_json::json!(30.0 * 0.0254);
+    std::fs::write(&results, r2.to_string()).unwrap();
+    v["optimization"]["thickness_relative"] = serde_json::json!([0.5, 2.0]);
+    v["optimization"]["span"] = serde_json::json!([30.0, 30.0]);
+    let fixed = load(&v).unwrap().warm_start_hessian().unwrap().unwrap();
+    let old_range = r["upper"][100].as_f64().unwrap() - r["lower"][100].as_f64().unwrap();
+    for (i, j, want) in [
+        (100, 100, h[100][100] / (old_range * old_range)),
+        (99, 100, h[99][100] / old_range),
+        (0, 0, h[0][0]),
+    ] {
+        assert!(
+            (fixed[i][j] - want).abs() <= 1e-14 * want.abs(),
+            "{i},{j}: {} against {want}",
+            fixed[i][j]
+        );
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

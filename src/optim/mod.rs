@@ -27,21 +27,26 @@ pub struct Gradients {
     pub ineq: Vec<Vec<f64>>,
 }
 
+/// Why a problem could not be evaluated at a point: the evaluator's own error, kept whole to the
+/// edge (its cause chain, and a fidelity's solver failure with its residual history, reach the
+/// runner, which words it for the user; the SQP records it in words only in its history).
+pub type EvalError = anyhow::Error;
+
 /// An optimization problem. Evaluations may fail (e.g. an unstable design): the line search then
 /// backtracks.
 pub trait Problem {
     fn lower(&self) -> Vec<f64>;
     fn upper(&self) -> Vec<f64>;
-    fn values(&mut self, x: &[f64]) -> Result<Values, String>;
+    fn values(&mut self, x: &[f64]) -> Result<Values, EvalError>;
     /// Gradients at the point of the last successful `values` call with the same x.
-    fn gradients(&mut self, x: &[f64]) -> Result<Gradients, String>;
+    fn gradients(&mut self, x: &[f64]) -> Result<Gradients, EvalError>;
     /// What the problem keeps with every checkpoint (its own records, e.g. evaluation times),
     /// handed back by [`Problem::restore`] when a run resumes; nothing by default.
     fn state(&self) -> serde_json::Value {
         serde_json::Value::Null
     }
     /// Takes back the [`Problem::state`] of a checkpoint when a run resumes.
-    fn restore(&mut self, _state: &serde_json::Value) -> Result<(), String> {
+    fn restore(&mut self, _state: &serde_json::Value) -> Result<(), EvalError> {
         Ok(())
     }
 }
@@ -138,7 +143,7 @@ pub struct SqpInfo {
 }
 
 /// Why the SQP could not run.
-#[derive(Debug, thiserror::Error, PartialEq)]
+#[derive(Debug, thiserror::Error)]
 pub enum SqpError {
     #[error("bounds: lower bound {lower} exceeds upper bound {upper} for variable {index}")]
     InfeasibleBounds {
@@ -146,8 +151,8 @@ pub enum SqpError {
         lower: f64,
         upper: f64,
     },
-    #[error("the starting point cannot be evaluated: {0}")]
-    Start(String),
+    #[error("the starting point cannot be evaluated: {0:#}")]
+    Start(#[source] EvalError),
     #[error("checkpoint: {0}")]
     Checkpoint(String),
     #[error("bounds: {lower} lower and {upper} upper bounds for {n} design variables")]
@@ -162,8 +167,12 @@ pub enum SqpError {
     InitialHessian(String),
     #[error("an observer failed: {0}")]
     Observer(String),
-    #[error("gradients failed at iteration {iteration}: {reason}")]
-    Gradient { iteration: usize, reason: String },
+    #[error("gradients failed at iteration {iteration}: {source:#}")]
+    Gradient {
+        iteration: usize,
+        #[source]
+        source: EvalError,
+    },
 }
 
 /// Everything needed to continue a run: written after every iteration.
@@ -192,7 +201,9 @@ pub struct Checkpoint {
 }
 
 mod sqp;
-pub use sqp::{minimize, Checkpointing, Clarabel, Control, Executor, Observer, SubproblemSolver};
+pub use sqp::{
+    minimize, Checkpointing, Clarabel, Control, Executor, Observer, Scaling, SubproblemSolver,
+};
 
 #[cfg(test)]
 mod tests;

@@ -155,25 +155,58 @@ pub fn minimize(
         .run(problem, x0)
 }
 
-/// Affine scaling x = offset + scale ∘ z: z ∈ [0, 1] for finite bounds.
-struct Scaling {
+/// The optimizer's affine variable scaling x = offset + scale ∘ z: z ∈ [0, 1] between finite
+/// bounds; a fixed variable (lb = ub) scaled by max(|lb|, 1), an unbounded one by max(|x0|, 1).
+/// The one scaling of the design variables: a BFGS matrix carried from one run to another is
+/// rescaled by it ([`Scaling::rescale_hessian`]).
+#[derive(Clone, Debug)]
+pub struct Scaling {
     offset: Vec<f64>,
     scale: Vec<f64>,
 }
 
 impl Scaling {
-    fn new(lb: &[f64], ub: &[f64], x0: &[f64]) -> Self {
+    /// The scaling of a problem with bounds `lb`, `ub` started at `x0`.
+    pub fn new(lb: &[f64], ub: &[f64], x0: &[f64]) -> Self {
         let (mut offset, mut scale) = (Vec::new(), Vec::new());
         for i in 0..x0.len() {
             if lb[i].is_finite() && ub[i].is_finite() && ub[i] > lb[i] {
                 offset.push(lb[i]);
                 scale.push(ub[i] - lb[i]);
+            } else if lb[i].is_finite() && lb[i] == ub[i] {
+                offset.push(0.0);
+                scale.push(lb[i].abs().max(1.0));
             } else {
                 offset.push(0.0);
                 scale.push(x0[i].abs().max(1.0));
             }
         }
         Self { offset, scale }
+    }
+
+    /// The scale of each variable (x units per z unit).
+    pub fn scale(&self) -> &[f64] {
+        &self.scale
+    }
+
+    /// A Hessian in the scaled variables of `from` expressed in those of `self`: with
+    /// x = o + s ∘ z, H_z = S H_x S, so H_self = D H_from D with D = s_self / s_from.
+    pub fn rescale_hessian(&self, h: &[Vec<f64>], from: &Scaling) -> Vec<Vec<f64>> {
+        let d: Vec<f64> = self
+            .scale
+            .iter()
+            .zip(&from.scale)
+            .map(|(a, b)| a / b)
+            .collect();
+        h.iter()
+            .enumerate()
+            .map(|(i, row)| {
+                row.iter()
+                    .enumerate()
+                    .map(|(j, v)| d[i] * d[j] * v)
+                    .collect()
+            })
+            .collect()
     }
     fn x(&self, z: &[f64]) -> Vec<f64> {
         z.iter()
@@ -284,7 +317,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
             }
             problem
                 .restore(&c.problem_state)
-                .map_err(|e| SqpError::Checkpoint(format!("the problem's records: {e}")))?;
+                .map_err(|e| SqpError::Checkpoint(format!("the problem's records: {e:#}")))?;
             elapsed_before = c.elapsed_s;
             (
                 c.z,
@@ -359,7 +392,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
     evaluations += 1;
     let mut grads = problem
         .gradients(&scaling.x(&z))
-        .map_err(|reason| SqpError::Gradient { iteration, reason })?;
+        .map_err(|source| SqpError::Gradient { iteration, source })?;
     loop {
         let x = scaling.x(&z);
         let g = scaling.grad(&grads.f);
@@ -558,7 +591,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                                 Ok(_) => {}
                                 Err(reason) => {
                                     failed += 1;
-                                    last_failure = Some(reason);
+                                    last_failure = Some(format!("{reason:#}"));
                                 }
                             }
                         }
@@ -566,7 +599,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                 }
                 Err(reason) => {
                     failed += 1;
-                    last_failure = Some(reason);
+                    last_failure = Some(format!("{reason:#}"));
                 }
             }
             alpha *= 0.5;

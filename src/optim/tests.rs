@@ -21,11 +21,66 @@ where
     fn upper(&self) -> Vec<f64> {
         self.ub.clone()
     }
-    fn values(&mut self, x: &[f64]) -> Result<Values, String> {
-        (self.values)(x)
+    fn values(&mut self, x: &[f64]) -> Result<Values, crate::optim::EvalError> {
+        (self.values)(x).map_err(anyhow::Error::msg)
     }
-    fn gradients(&mut self, x: &[f64]) -> Result<Gradients, String> {
+    fn gradients(&mut self, x: &[f64]) -> Result<Gradients, crate::optim::EvalError> {
         Ok((self.grads)(x))
+    }
+}
+
+/// A problem whose evaluation fails with a fidelity's solver failure under a context, as the
+/// design problem's would.
+struct SolverFails;
+
+impl Problem for SolverFails {
+    fn lower(&self) -> Vec<f64> {
+        vec![0.0]
+    }
+    fn upper(&self) -> Vec<f64> {
+        vec![1.0]
+    }
+    fn values(&mut self, _: &[f64]) -> Result<Values, crate::optim::EvalError> {
+        let failure = gustkit_core::AeroError::Solver {
+            k: 0.5,
+            rhs: "gust".into(),
+            source: gustkit_core::SolverFailure {
+                reason: "GMRES stalled".into(),
+                history: vec![1.0, 0.1, 0.09],
+            },
+        };
+        Err(anyhow::Error::new(failure).context("GAF table"))
+    }
+    fn gradients(&mut self, _: &[f64]) -> Result<Gradients, crate::optim::EvalError> {
+        unreachable!("values fail first")
+    }
+}
+
+/// An evaluation error reaches the caller typed (the solver failure with its whole residual
+/// history can be taken out of the SQP's error) and worded whole (context, reason, digest).
+#[test]
+fn evaluation_errors_stay_typed_to_the_edge() {
+    let e = minimize(
+        &mut SolverFails,
+        &[0.5],
+        &SqpParams::default(),
+        "x",
+        None,
+        &mut (),
+    )
+    .unwrap_err();
+    let SqpError::Start(source) = &e else {
+        panic!("not a start error: {e}")
+    };
+    match source.downcast_ref::<gustkit_core::AeroError>() {
+        Some(gustkit_core::AeroError::Solver { source, .. }) => {
+            assert_eq!(source.history, vec![1.0, 0.1, 0.09])
+        }
+        other => panic!("the solver failure is lost: {other:?}"),
+    }
+    let words = e.to_string();
+    for part in ["GAF table", "k = 0.5 (gust)", "GMRES stalled", "3 values"] {
+        assert!(words.contains(part), "{part} missing from: {words}");
     }
 }
 

@@ -2,7 +2,7 @@
 //! the critical gust of every output and sign, the time histories at the critical gradients, and
 //! their table, figures and CSV files (lengths in the study's unit, everything else in SI).
 
-use crate::study::LengthUnit;
+use crate::units::LengthUnit;
 use serde::{Deserialize, Serialize};
 
 /// Samples of a history kept in results.json for the figures (the CSV files hold them all).

@@ -4,7 +4,7 @@
 use super::discrete::{shown, DiscreteGustResults};
 use super::figures::{line_plot, Panels, Series};
 use super::FigureSink;
-use crate::study::LengthUnit;
+use crate::units::LengthUnit;
 use anyhow::Result;
 
 /// The figures: the histories at each output's critical gusts, and (1-cos) the peaks against H.

@@ -6,7 +6,7 @@ use crate::gust::Turbulence;
 use crate::kind::StudyKind;
 use crate::structure::model::{Field, NODAL};
 use crate::structure::{Modes, PlateModel};
-use crate::study::LengthUnit;
+use crate::units::LengthUnit;
 use serde::{Deserialize, Serialize};
 
 /// One mode in the modal summary.

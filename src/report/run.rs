@@ -82,7 +82,7 @@ pub fn flutter_point(r: &FlutterResult, flight_speed_m_s: Option<f64>) -> String
 }
 
 /// The DLM lattice rule in one sentence, lengths in the study's unit; in bold when it is not met.
-pub fn lattice_words(r: &crate::aero::dlm::LatticeRule, unit: crate::study::LengthUnit) -> String {
+pub fn lattice_words(r: &crate::aero::dlm::LatticeRule, unit: crate::units::LengthUnit) -> String {
     let (b, u) = unit.display(r.box_length_m, "m", 1);
     let (l, _) = unit.display(r.limit_m, "m", 1);
     let head = format!(
@@ -276,7 +276,7 @@ pub fn comparison_text(
     c: &FidelityComparison,
     gust: Option<&GustResults>,
     flutter: Option<&FlutterSummary>,
-    length_unit: crate::study::LengthUnit,
+    length_unit: crate::units::LengthUnit,
 ) -> String {
     let (a, b) = (&c.fidelity, &c.other);
     let mut md = format!("\n## The {a} beside the {b} (aero.compare_with)\n\nThe initial design analysed with both fidelities.\n");
@@ -329,8 +329,8 @@ pub fn comparison_text(
 }
 
 /// A PSD series as a person reads it: a displacement's PSD in the study's length unit squared
-/// ([`crate::study::LengthUnit::display`]); results.json keeps SI.
-pub(crate) fn shown(s: &PsdSeries, unit: crate::study::LengthUnit) -> PsdSeries {
+/// ([`crate::units::LengthUnit::display`]); results.json keeps SI.
+pub(crate) fn shown(s: &PsdSeries, unit: crate::units::LengthUnit) -> PsdSeries {
     let (scale, shown_unit) = unit.display(1.0, &s.unit, 2);
     PsdSeries {
         label: s.label.clone(),
@@ -632,7 +632,7 @@ mod tests {
             symmetry: gustkit_dlm::Symmetry::Symmetric,
         };
         let r = crate::aero::dlm::lattice_rule(&spec, &planform, 233.0, 58.0, "the mode cutoff");
-        let w = lattice_words(&r, crate::study::LengthUnit::M);
+        let w = lattice_words(&r, crate::units::LengthUnit::M);
         assert!(
             w.starts_with("**DLM lattice: the longest box is 0.6250 m"),
             "{w}"
@@ -641,7 +641,7 @@ mod tests {
             w.contains("raise aero.fidelity.dlm.n_chord to 16 or more**"),
             "{w}"
         );
-        let inch = lattice_words(&r, crate::study::LengthUnit::In);
+        let inch = lattice_words(&r, crate::units::LengthUnit::In);
         assert!(inch.contains("24.6063 in"), "{inch}");
     }
 }

@@ -415,8 +415,9 @@ pub struct PipelineTimings {
 /// pipeline, and the design problem's function and gradient.
 pub fn bench_pipeline(study: &Study, repeat: usize) -> Result<PipelineTimings> {
     use crate::optim::Problem;
+    let case = study.resolve()?;
     let settings = study.gust_settings()?;
-    let x = study.initial_design()?.to_vec();
+    let x = case.initial.to_vec();
     let margin = study
         .spec
         .optimization
@@ -433,23 +434,23 @@ pub fn bench_pipeline(study: &Study, repeat: usize) -> Result<PipelineTimings> {
     };
     let function = measure(repeat, || {
         timed(&mut || {
-            std::hint::black_box(crate::pipeline::evaluate(study, &settings, &x)?);
+            std::hint::black_box(crate::pipeline::evaluate(&case, &settings, &x)?);
             Ok(())
         })
     })?;
     let aeroelastic = measure(repeat, || {
         timed(&mut || {
-            std::hint::black_box(crate::pipeline::aeroelastic(study, &x)?);
+            std::hint::black_box(crate::pipeline::aeroelastic(&case, &x)?);
             Ok(())
         })
     })?;
-    let ev = crate::pipeline::evaluate(study, &settings, &x)?;
+    let ev = crate::pipeline::evaluate(&case, &settings, &x)?;
     let stability = measure(repeat, || {
         timed(&mut || crate::flutter::check_stability(&ev.modes, &ev.table, &ev.aero.flight))
     })?;
     let mut response = Vec::new();
     for rep in 0..WARMUP + repeat.max(1) {
-        let a = crate::pipeline::aeroelastic(study, &x)?;
+        let a = crate::pipeline::aeroelastic(&case, &x)?;
         let t = Instant::now();
         std::hint::black_box(crate::pipeline::respond(a, &settings)?);
         let t = t.elapsed().as_secs_f64();
@@ -485,7 +486,7 @@ pub fn bench_pipeline(study: &Study, repeat: usize) -> Result<PipelineTimings> {
         let mut spec =
             crate::runner::wing::optimize::design_spec(study, &settings, &ev, lower, upper);
         spec.peak = crate::runner::wing::optimize::peak_limit(study, &ev)?;
-        let mut problem = crate::problem::DesignProblem::new(study, settings.clone(), spec);
+        let mut problem = crate::problem::DesignProblem::new(&case, settings.clone(), spec);
         design_function = Some(measure(repeat, || {
             timed(&mut || {
                 problem.values(&x).map_err(anyhow::Error::msg)?;

@@ -258,28 +258,7 @@ impl Study {
     }
 }
 
-/// The peak constraint of an optimization, resolved: the gust output it bounds, the order of
-/// the time derivative (2 for `<name>_acceleration`), its limit in SI and the gusts it spans
-/// (the tuned search's grid of gradients, or the table).
-#[derive(Clone, Debug, PartialEq)]
-pub struct PeakConstraint {
-    pub name: String,
-    pub output: usize,
-    pub derivative: u32,
-    pub limit: f64,
-    pub unit: String,
-    pub gusts: Vec<GustProfile>,
-}
-
-impl PeakConstraint {
-    /// The time-derivative order of each of `n_outputs` outputs: this constraint's on its
-    /// output, 0 on the others.
-    pub fn derivatives(&self, n_outputs: usize) -> Vec<u32> {
-        let mut d = vec![0; n_outputs];
-        d[self.output] = self.derivative;
-        d
-    }
-}
+pub use crate::case::PeakConstraint;
 
 impl Study {
     /// The optimization's peak constraint (none without one); errors name the field.

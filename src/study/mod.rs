@@ -19,35 +19,15 @@ pub use schema::{
 };
 
 use crate::aero::AeroModel;
+use crate::case::{without_field, AeroCase, Case, ModeSelection, PlateSource};
+pub use crate::case::{ModeRule, StudyError};
 use crate::gust::{GustSettings, Output, Quantity, QuantityName};
 use crate::structure::{airfoil_thickness, Clamp, Orthotropic, PlateMesh, PlateModel};
 use crate::wing::{Airfoil, DesignVector, Planform};
 use std::path::{Path, PathBuf};
 
-/// How the modes of a design are chosen (SI): a fixed count, or every mode with ω ≤ `omega_cut`,
-/// at least `min` and at most `max`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum ModeRule {
-    Count(usize),
-    Cutoff {
-        omega_cut: f64,
-        min: usize,
-        max: usize,
-    },
-}
-
 /// The schema version this build reads.
 pub const SCHEMA_VERSION: u32 = 1;
-
-/// A study input error: which file, which field, why.
-#[derive(Debug, thiserror::Error)]
-#[error("{file}: {path}: {reason}")]
-pub struct StudyError {
-    pub file: PathBuf,
-    /// JSON path of the offending field (`.` for the whole document).
-    pub path: String,
-    pub reason: String,
-}
 
 /// The checks every study kind shares: the schema version this build reads, and a name that is
 /// safe as the run folder's name (it becomes `reports/<name>/`).
@@ -98,15 +78,6 @@ pub fn explain_json_error(path: &str, reason: &str) -> String {
         }
         Some(at) => format!("text after the end of the JSON document{at}"),
         None => reason.to_string(),
-    }
-}
-
-/// An error message without its leading field name (`clamp: …` → `…`), where the JSON path
-/// already names the field.
-fn without_field(msg: &str) -> String {
-    match msg.split_once(": ") {
-        Some((head, rest)) if !head.contains(' ') => rest.to_string(),
-        _ => msg.to_string(),
     }
 }
 
@@ -359,21 +330,7 @@ impl Study {
 
     /// The study's aerodynamic model on a plate (its current planform), bound to it.
     pub fn aero_model(&self, plate: &PlateModel) -> Result<AeroModel, StudyError> {
-        let aero = self.spec.aero.as_ref().ok_or_else(|| {
-            self.err(
-                "aero",
-                "the study has no aerodynamic model (add an \"aero\" section)",
-            )
-        })?;
-        AeroModel::new(
-            &aero.fidelity,
-            self.flight_condition()?,
-            aero.reduced_frequencies.clone(),
-            plate,
-            &self.airfoil()?,
-            self.cache_dir.as_deref(),
-        )
-        .map_err(|e| self.fidelity_err(&e))
+        self.resolve()?.aero_model(plate)
     }
 
     /// The reduced frequency at which the run writes the LFD amplitude fields, if any.
@@ -521,9 +478,9 @@ impl Study {
 
     /// The BFGS approximation to start from with `optimization.warm_start.hessian`: the final
     /// one of the run that wrote `from` (its `checkpoint.json` beside it), carried from that
-    /// run's variable scaling, z = (x − lower) / (upper − lower), to this study's:
-    /// H'ᵢⱼ = rᵢ rⱼ Hᵢⱼ with rᵢ the ratio of this study's bound range to that run's. None
-    /// without it.
+    /// run's variable scaling to this study's by the optimizer's own rule
+    /// ([`crate::optim::Scaling::rescale_hessian`]: H'ᵢⱼ = rᵢ rⱼ Hᵢⱼ with rᵢ the ratio of the
+    /// scales, the bound ranges where both are ranges). None without it.
     pub fn warm_start_hessian(&self) -> Result<Option<Vec<Vec<f64>>>, StudyError> {
         let Some(w) = self
             .spec
@@ -586,24 +543,27 @@ impl Study {
                 ),
             ));
         };
+        // the optimizer's own scaling of both runs, at the design this run starts from
         let (lower, upper) = self.design_bounds()?;
-        let ratio: Vec<f64> = (0..n)
-            .map(|i| (upper[i] - lower[i]) / (hi[i] - lo[i]))
-            .collect();
-        if let Some(i) = ratio.iter().position(|r| !(r.is_finite() && *r > 0.0)) {
+        let start = self.warm_start_design()?.unwrap_or_else(|| {
+            self.initial_design()
+                .map(|d| d.to_vec())
+                .unwrap_or_default()
+        });
+        if start.len() != n {
             return Err(self.err(
                 path,
                 format!(
-                    "variable {i} has an empty or unbounded range in {} or in this study",
+                    "{} records no final design of {n} variables",
                     w.from.display()
                 ),
             ));
         }
-        Ok(Some(
-            (0..n)
-                .map(|i| (0..n).map(|j| ratio[i] * ratio[j] * h[i][j]).collect())
-                .collect(),
-        ))
+        let (from, to) = (
+            crate::optim::Scaling::new(&lo, &hi, &start),
+            crate::optim::Scaling::new(&lower, &upper, &start),
+        );
+        Ok(Some(to.rescale_hessian(&h, &from)))
     }
 
     /// Bounds of the design vector from the `optimization` section (SI), checked; the initial
@@ -1032,29 +992,56 @@ impl Study {
 
     /// The plate model of a given design.
     pub fn model_at(&self, design: DesignVector) -> Result<PlateModel, StudyError> {
-        PlateModel::new(self.mesh()?, self.material()?, design).map_err(|e| {
-            let path = match &e {
-                crate::structure::model::ModelError::Thickness { index, .. } => {
-                    format!("structure.thickness[{index}]")
-                }
-                crate::structure::model::ModelError::ThicknessCount { .. } => {
-                    "structure.thickness".into()
-                }
-                crate::structure::model::ModelError::Material(_) => "material".into(),
-                _ => "wing".into(),
-            };
-            let reason = match &e {
-                crate::structure::model::ModelError::Thickness { value, .. } => {
-                    let unit = self.spec.length_unit;
-                    format!(
-                        "must be positive and finite (got {} {})",
-                        ranges::show(value / unit.to_m()),
-                        unit.name()
-                    )
-                }
-                _ => without_field(&e.to_string()),
-            };
-            self.err(&path, reason)
+        crate::case::plate_model(
+            &self.file,
+            self.spec.length_unit,
+            &self.plate_source()?,
+            design,
+        )
+    }
+
+    /// The parametric plate wing's mesh, material and airfoil.
+    pub fn plate_source(&self) -> Result<PlateSource, StudyError> {
+        Ok(PlateSource {
+            mesh: self.mesh()?,
+            material: self.material()?,
+            airfoil: self.airfoil()?,
+        })
+    }
+
+    /// How the study chooses and damps the modes of a design.
+    pub fn mode_selection(&self) -> Result<ModeSelection, StudyError> {
+        Ok(ModeSelection {
+            rule: self.mode_rule()?,
+            damping_ratio: self.spec.structure.damping_ratio,
+            fields: self.mode_fields(),
+        })
+    }
+
+    /// The study resolved (SI, every default applied) for the pipeline: see [`Case`]. The study
+    /// is validated at load, so this fails only for a study edited since.
+    pub fn resolve(&self) -> Result<Case, StudyError> {
+        let aero = match &self.spec.aero {
+            Some(a) if self.spec.flight.is_some() => Some(AeroCase {
+                fidelity: a.fidelity.clone(),
+                flight: self.flight_condition()?,
+                reduced_frequencies: a.reduced_frequencies.clone(),
+            }),
+            _ => None,
+        };
+        let gust = match &self.spec.gust {
+            Some(_) => Some(self.gust_settings()?),
+            None => None,
+        };
+        Ok(Case {
+            file: self.file.clone(),
+            length_unit: self.spec.length_unit,
+            structure: self.plate_source()?,
+            modes: self.mode_selection()?,
+            initial: self.initial_design()?,
+            aero,
+            gust,
+            cache_dir: self.cache_dir.clone(),
         })
     }
 
@@ -1120,26 +1107,7 @@ impl Study {
 
     /// The modal analysis of a plate of the study by its [`ModeRule`].
     pub fn solve_modes(&self, plate: &PlateModel) -> anyhow::Result<crate::structure::Modes> {
-        let st = &self.spec.structure;
-        let fields = self.mode_fields();
-        let modes = match self.mode_rule()? {
-            ModeRule::Count(n) => {
-                crate::structure::modal::solve(plate, n, st.damping_ratio, &fields)?
-            }
-            ModeRule::Cutoff {
-                omega_cut,
-                min,
-                max,
-            } => crate::structure::modal::solve_below(
-                plate,
-                omega_cut,
-                min,
-                max,
-                st.damping_ratio,
-                &fields,
-            )?,
-        };
-        Ok(modes)
+        self.mode_selection()?.solve(plate)
     }
 
     /// Plate fields whose modes are retained.

@@ -37,14 +37,7 @@ pub const DENSITY_RANGE_KG_M3: (f64, f64) = (1.0, 1e5);
 /// Largest air density, kg/m³ (sea level is 1.225).
 pub const MAX_AIR_DENSITY: f64 = 10.0;
 
-/// A number as a message shows it: short, and never 309 digits long.
-pub fn show(v: f64) -> String {
-    if v != 0.0 && (v.abs() >= 1e6 || v.abs() < 1e-3) {
-        format!("{v:.4e}")
-    } else {
-        format!("{}", (v * 1e6).round() / 1e6)
-    }
-}
+pub use crate::units::show;
 
 /// Why `v` (in `unit`) is outside [lo, hi] with lo > 0: not positive, or out of range.
 fn out_of_range(v: f64, lo: f64, hi: f64, unit: &str) -> Option<String> {

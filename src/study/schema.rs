@@ -1,5 +1,6 @@
 //! Serde types of the study file (schema version 1).
 
+pub use crate::units::LengthUnit;
 use serde::{Deserialize, Serialize};
 
 /// Top level of a study file.
@@ -412,47 +413,6 @@ pub struct FlightSpec {
     pub mach: f64,
     pub velocity_m_s: f64,
     pub density_kg_m3: f64,
-}
-
-/// Length unit of a study file.
-#[derive(Clone, Copy, Debug, Default, Deserialize, Serialize, PartialEq)]
-#[serde(rename_all = "lowercase")]
-pub enum LengthUnit {
-    #[default]
-    M,
-    In,
-    Ft,
-}
-
-impl LengthUnit {
-    /// The unit's name as written in study files and reports.
-    pub fn name(self) -> &'static str {
-        match self {
-            LengthUnit::M => "m",
-            LengthUnit::In => "in",
-            LengthUnit::Ft => "ft",
-        }
-    }
-
-    /// Metres per unit.
-    pub fn to_m(self) -> f64 {
-        match self {
-            LengthUnit::M => 1.0,
-            LengthUnit::In => 0.0254,
-            LengthUnit::Ft => 0.3048,
-        }
-    }
-
-    /// The unit rule of everything a person reads (summary, console, figures, CSV): a length in
-    /// the study's unit, every other quantity in SI. `value` in `si_unit` ("m" is converted, any
-    /// other unit kept) raised to `power` (2 for a PSD of the quantity); the value and unit to show.
-    pub fn display(self, value: f64, si_unit: &str, power: i32) -> (f64, &str) {
-        if si_unit == "m" {
-            (value / self.to_m().powi(power), self.name())
-        } else {
-            (value, si_unit)
-        }
-    }
 }
 
 /// Planform and section.

@@ -14,17 +14,18 @@ pub(crate) fn compare_fidelities(
     other: &Study,
     own: Option<&Evaluation>,
 ) -> Result<FidelityComparison> {
-    let x = study.initial_design()?.to_vec();
+    let (case, case_other) = (study.resolve()?, other.resolve()?);
+    let x = case.initial.to_vec();
     let context = |what: &str| format!("{}: aero.compare_with: {what}", study.file.display());
     let own_model;
     let (fidelity, gafs) = match own {
         Some(ev) => (ev.aero.name, ev.table.clone()),
         None => {
-            own_model = aeroelastic(study, &x).with_context(|| context("own fidelity"))?;
+            own_model = aeroelastic(&case, &x).with_context(|| context("own fidelity"))?;
             (own_model.aero.name, own_model.table.clone())
         }
     };
-    let model = aeroelastic(other, &x).with_context(|| context("the second fidelity"))?;
+    let model = aeroelastic(&case_other, &x).with_context(|| context("the second fidelity"))?;
     let other_name = model.aero.name;
     let gafs_other = model.table.clone();
     let flutter_other = match study.spec.flutter {

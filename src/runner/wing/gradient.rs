@@ -45,8 +45,9 @@ pub fn check_gradient(study: &Study, dvs: &[String], json: bool) -> Result<()> {
         }
     };
     let settings = study.gust_settings()?;
-    let x0 = study.initial_design()?.to_vec();
-    let design = study.initial_design()?;
+    let case = study.resolve()?;
+    let x0 = case.initial.to_vec();
+    let design = &case.initial;
     let names: Vec<String> = (0..x0.len()).map(|i| design.name(i)).collect();
     let index: Vec<usize> = dvs
         .iter()
@@ -57,7 +58,7 @@ pub fn check_gradient(study: &Study, dvs: &[String], json: bool) -> Result<()> {
                 .ok_or_else(|| anyhow::anyhow!("--dv {d}: unknown design variable (use t[i] or one of span, sweep_c4, root_chord, tip_chord)"))
         })
         .collect::<Result<_>>()?;
-    let ev = crate::pipeline::evaluate(&study, &settings, &x0)?;
+    let ev = crate::pipeline::evaluate(&case, &settings, &x0)?;
     let t0 = Instant::now();
     let g = crate::pipeline::gradient(
         &ev,
@@ -70,9 +71,8 @@ pub fn check_gradient(study: &Study, dvs: &[String], json: bool) -> Result<()> {
         },
     )?;
     let t_grad = t0.elapsed().as_secs_f64();
-    let f = |x: &[f64]| -> Result<f64> {
-        Ok(crate::pipeline::evaluate(&study, &settings, x)?.rms_m[0])
-    };
+    let f =
+        |x: &[f64]| -> Result<f64> { Ok(crate::pipeline::evaluate(&case, &settings, x)?.rms_m[0]) };
     let mut rows = Vec::new();
     for (&k, name) in index.iter().zip(dvs) {
         let mut fd = Vec::new();

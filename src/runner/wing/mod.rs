@@ -159,8 +159,8 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
         let fields = match &gust_evaluation {
             Some(ev) => ev.aero.fidelity.amplitude_fields(k, &title),
             None => {
-                let x = study.initial_design()?.to_vec();
-                crate::pipeline::aeroelastic(&study, &x)?
+                let case = study.resolve()?;
+                crate::pipeline::aeroelastic(&case, &case.initial.to_vec())?
                     .aero
                     .fidelity
                     .amplitude_fields(k, &title)

@@ -386,7 +386,8 @@ pub fn optimize_pass(
     let o = study.spec.optimization.as_ref().expect("caller checked");
     let settings = study.gust_settings()?;
     let (lower, upper) = study.design_bounds()?;
-    let x0 = study.initial_design()?.to_vec();
+    let case = study.resolve()?;
+    let x0 = case.initial.to_vec();
     // a warm start begins at another run's final design (a correction pass at the previous
     // pass's); mass and area stay relative to x0
     let (x_start, hessian) = match &pass.start {
@@ -394,11 +395,12 @@ pub fn optimize_pass(
         None => (study.warm_start_design()?, study.warm_start_hessian()?),
     };
     let t_ev0 = Instant::now();
-    let ev0 = crate::pipeline::evaluate(study, &settings, &x0).context("initial design")?;
+    let ev0 = crate::pipeline::evaluate(&case, &settings, &x0).context("initial design")?;
     let t_ev0 = t_ev0.elapsed().as_secs_f64();
     let mut spec = design_spec(study, &settings, &ev0, lower, upper);
     spec.rms_limit *= pass.rms_factor;
     let (fixed_basis, floor) = design_basis(study)?;
+    let fixed_basis = fixed_basis.resolve()?;
     spec.mode_floor = floor;
     spec.peak = peak_limit(study, &ev0)?;
     if let Some(pl) = spec.peak.as_mut() {
@@ -757,7 +759,7 @@ fn cross_evaluate(
     let analyse = |s: &Study, x: &[f64], what: &str| -> Result<FidelityEvaluation> {
         let context = || format!("cross-evaluation of the {what} design");
         let t = Instant::now();
-        let model = crate::pipeline::aeroelastic(s, x).with_context(context)?;
+        let model = crate::pipeline::aeroelastic(&s.resolve()?, x).with_context(context)?;
         let pieces = (&model.aero, &model.modes, &model.table);
         let mut e =
             match crate::flutter::check_stability(&model.modes, &model.table, &model.aero.flight) {

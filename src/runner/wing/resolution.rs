@@ -246,7 +246,7 @@ pub fn check(
             refined_peak: None,
         });
     }
-    let base = crate::pipeline::aeroelastic(study, x).context("resolution check")?;
+    let base = crate::pipeline::aeroelastic(&study.resolve()?, x).context("resolution check")?;
     let modes = base.modes.len();
     let dofs = study.retained_dofs(&base.plate);
     let (verdict, flight_speed) = flutter_of(&base)?;
@@ -288,7 +288,8 @@ pub fn check(
             return Ok(out);
         }
     };
-    let fine = crate::pipeline::aeroelastic(&refined, x).context("resolution check, refined")?;
+    let fine = crate::pipeline::aeroelastic(&refined.resolve()?, x)
+        .context("resolution check, refined")?;
     let (fine_verdict, _) = flutter_of(&fine)?;
     let fine_rms = rms_of(fine, settings, peak.as_ref())?;
     out.refined_model = Some(words);
@@ -338,8 +339,8 @@ pub fn flutter_sweep(
     match refined_study(study, &x, modes, dofs) {
         Err(why) => doc["not_run"] = why.into(),
         Ok((refined, words)) => {
-            let fine =
-                crate::pipeline::aeroelastic(&refined, &x).context("resolution check, refined")?;
+            let fine = crate::pipeline::aeroelastic(&refined.resolve()?, &x)
+                .context("resolution check, refined")?;
             let r = PkProblem::new(&fine.modes, &fine.table, fine.aero.flight.density)
                 .sweep(velocities)
                 .map_err(|e| anyhow::anyhow!("resolution check, refined: flutter: {e}"))?;
