@@ -298,6 +298,48 @@ pub fn respond(a: Aeroelastic, settings: &GustSettings) -> Result<Evaluation> {
     Ok(ev)
 }
 
+/// A design analysed for a report or a comparison: its gust response, or, where its model is
+/// unstable at the flight condition (no stationary response exists), the model and the verdict's
+/// words. The one analysis of a design with any fidelity: the analysis run's second fidelity, the
+/// optimization's cross-evaluation and the resolution check all take it.
+pub enum Analysis {
+    Response(Box<Evaluation>),
+    Unstable {
+        model: Box<Aeroelastic>,
+        reason: String,
+    },
+}
+
+impl Analysis {
+    /// The aerodynamic model, modes and GAF table of the design (either way).
+    pub fn parts(&self) -> (&AeroModel, &Modes, &GafTable) {
+        match self {
+            Analysis::Response(ev) => (&ev.aero, &ev.modes, &ev.table),
+            Analysis::Unstable { model, .. } => (&model.aero, &model.modes, &model.table),
+        }
+    }
+
+    /// The gust response, or why there is none.
+    pub fn response(&self) -> std::result::Result<&Evaluation, &str> {
+        match self {
+            Analysis::Response(ev) => Ok(ev),
+            Analysis::Unstable { reason, .. } => Err(reason),
+        }
+    }
+}
+
+/// The stability verdict of a model at the flight condition and, where it is stable, its gust
+/// response ([`Analysis`]).
+pub fn analyse(a: Aeroelastic, settings: &GustSettings) -> Result<Analysis> {
+    if let Err(e) = check_stability(&a.modes, &a.table, &a.aero.flight) {
+        return Ok(Analysis::Unstable {
+            model: Box::new(a),
+            reason: format!("{e:#}"),
+        });
+    }
+    Ok(Analysis::Response(Box::new(respond(a, settings)?)))
+}
+
 /// Gradient of Σ seeds · outputs with respect to the design vector, in one reverse sweep.
 pub fn gradient(ev: &Evaluation, seeds: &OutputSeeds) -> Result<Vec<f64>> {
     let mut g = gradients(ev, std::slice::from_ref(seeds))?;

@@ -2,7 +2,7 @@
 //! second fidelity (GAF table, gust response, p-k sweep), beside the study's own results.
 
 use super::gust::psd_series;
-use crate::pipeline::{aeroelastic, respond, Evaluation};
+use crate::pipeline::{aeroelastic, analyse, Evaluation};
 use crate::report::results::FidelityComparison;
 use crate::study::Study;
 use anyhow::{Context, Result};
@@ -39,11 +39,11 @@ pub(crate) fn compare_fidelities(
     let (mut rms_other, mut psd_other, mut unstable_other) = (None, Vec::new(), None);
     if study.spec.gust.is_some() {
         let settings = study.gust_settings()?;
-        match crate::flutter::check_stability(&model.modes, &model.table, &model.aero.flight) {
-            Err(e) => unstable_other = Some(format!("{e:#}")),
-            Ok(()) => {
-                let ev = respond(model, &settings).with_context(|| context("gust response"))?;
-                psd_other = (0..ev.rms_m.len()).map(|i| psd_series(&ev, i)).collect();
+        let analysis = analyse(model, &settings).with_context(|| context("gust response"))?;
+        match analysis.response() {
+            Err(reason) => unstable_other = Some(reason.to_string()),
+            Ok(ev) => {
+                psd_other = (0..ev.rms_m.len()).map(|i| psd_series(ev, i)).collect();
                 rms_other = Some(ev.rms_m.clone());
             }
         }

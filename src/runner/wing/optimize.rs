@@ -760,28 +760,15 @@ fn cross_evaluate(
         let context = || format!("cross-evaluation of the {what} design");
         let t = Instant::now();
         let model = crate::pipeline::aeroelastic(&s.resolve()?, x).with_context(context)?;
-        let pieces = (&model.aero, &model.modes, &model.table);
-        let mut e =
-            match crate::flutter::check_stability(&model.modes, &model.table, &model.aero.flight) {
-                // an unstable model has no gust response: its flutter point and GAFs, and the reason
-                Err(reason) => fidelity_evaluation(
-                    pieces,
-                    Err(format!("{reason:#}")),
-                    output,
-                    unit_scale,
-                    v_max,
-                )?,
-                Ok(()) => {
-                    let ev = crate::pipeline::respond(model, settings).with_context(context)?;
-                    fidelity_evaluation(
-                        (&ev.aero, &ev.modes, &ev.table),
-                        Ok(&ev),
-                        output,
-                        unit_scale,
-                        v_max,
-                    )?
-                }
-            };
+        // an unstable model has no gust response: its flutter point and GAFs, and the reason
+        let analysis = crate::pipeline::analyse(model, settings).with_context(context)?;
+        let mut e = fidelity_evaluation(
+            analysis.parts(),
+            analysis.response().map_err(str::to_string),
+            output,
+            unit_scale,
+            v_max,
+        )?;
         e.time_s = t.elapsed().as_secs_f64();
         Ok(e)
     };

@@ -184,15 +184,16 @@ fn rms_of(
     let Some(settings) = settings else {
         return Ok(Ok((Vec::new(), None)));
     };
-    if let Err(e) = crate::flutter::check_stability(&a.modes, &a.table, &a.aero.flight) {
-        return Ok(Err(format!("{e:#}")));
-    }
-    let ev = crate::pipeline::respond(a, settings)?;
+    let analysis = crate::pipeline::analyse(a, settings)?;
+    let ev = match analysis.response() {
+        Ok(ev) => ev,
+        Err(reason) => return Ok(Err(reason.to_string())),
+    };
     let peak = match peak {
-        Some(pc) => Some(peak_of(&ev, pc)?),
+        Some(pc) => Some(peak_of(ev, pc)?),
         None => None,
     };
-    Ok(Ok((ev.rms_m, peak)))
+    Ok(Ok((ev.rms_m.clone(), peak)))
 }
 
 /// The largest sampled |y| of a peak limit's output over its gusts, over the limit, on the grid
