@@ -56,6 +56,26 @@ pub struct SurfaceBinding {
     pub geometry_jacobian: Vec<[f64; N_PLANFORM]>,
 }
 
+/// One large allocation of a model, estimated from its spec: what it is, the field of the spec
+/// that sizes it (a path inside the spec, as [`BuildError::path`]) and its bytes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModelFootprint {
+    pub what: String,
+    pub path: String,
+    pub bytes: f64,
+}
+
+/// What a model's memory depends on besides its spec.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sizing {
+    /// Reduced frequencies of the GAF table.
+    pub n_k: usize,
+    /// Whether the reverse mode will run (its derivatives and tapes).
+    pub gradients: bool,
+    /// The threads the model will run on (each frequency in flight holds its own solver state).
+    pub threads: usize,
+}
+
 /// A wing model and its binding to the plate.
 pub struct WingFidelity {
     pub model: Box<dyn Aerodynamics>,
@@ -99,6 +119,19 @@ pub trait WingBuilder {
     /// The fidelity's name as the study file spells it.
     fn name(&self) -> &'static str;
     fn capabilities(&self) -> Capabilities;
+    /// The Mach numbers this fidelity's theory holds for: why `mach` lies outside them (the
+    /// caller names the field, `flight.mach`); any subsonic Mach number by default.
+    fn check_mach(&self, _mach: f64) -> Result<(), String> {
+        Ok(())
+    }
+    /// The model's largest allocation for these sizes, estimated from the spec before anything
+    /// is built (the study adds it to its memory check); none by default. A model that checks
+    /// its memory against a limit of its own spec (the LFD's `memory_limit_gb`, in `validate`)
+    /// returns none; one whose size is known only once it is built (an external mesh) checks it
+    /// in `build`.
+    fn footprint(&self, _sizing: &Sizing) -> Option<ModelFootprint> {
+        None
+    }
     /// Cheap checks of the settings for a wing (sizes, memory estimates); builds nothing
     /// expensive.
     fn validate(&self, wing: &WingContext) -> Result<(), BuildError>;

@@ -4,7 +4,8 @@
 //! planform map).
 
 use super::contract::{
-    BuildError, Capabilities, SurfaceBinding, WingBuilder, WingContext, WingFidelity,
+    BuildError, Capabilities, ModelFootprint, Sizing, SurfaceBinding, WingBuilder, WingContext,
+    WingFidelity,
 };
 use crate::wing::{planform_point, Planform, N_PLANFORM};
 use gustkit_core::scalar::Dual;
@@ -77,9 +78,50 @@ impl DlmSpec {
     }
 }
 
+/// Largest Mach number of the doublet-lattice method: linear subsonic theory, whose kernel
+/// (and compressibility factor β = √(1 − M²)) loses meaning as M → 1; transonic flow needs the
+/// LFD.
+pub const DLM_MAX_MACH: f64 = 0.97;
+
+/// Bytes of the DLM influence matrices of `boxes` boxes at `n_k` reduced frequencies: 32 bytes
+/// per (box pair) per reduced frequency for an analysis (the complex AIC and its LU), 100 with
+/// gradients (the geometry derivatives; measured 0.79 GB at 864 boxes × 11 k). The matrices of
+/// every reduced frequency are alive at once whatever the thread count.
+pub fn dlm_bytes(boxes: usize, n_k: usize, gradients: bool) -> f64 {
+    let per = if gradients { 100.0 } else { 32.0 };
+    per * n_k.max(1) as f64 * (boxes as f64).powi(2)
+}
+
 impl WingBuilder for DlmSpec {
     fn name(&self) -> &'static str {
         "dlm"
+    }
+
+    fn check_mach(&self, mach: f64) -> Result<(), String> {
+        if mach > DLM_MAX_MACH && mach < 1.0 {
+            return Err(format!(
+                "the doublet-lattice method is linear subsonic theory, valid up to M = {DLM_MAX_MACH} here (got {}); transonic flow needs the lfd fidelity",
+                crate::units::show(mach)
+            ));
+        }
+        Ok(())
+    }
+
+    fn footprint(&self, sizing: &Sizing) -> Option<ModelFootprint> {
+        let boxes = self.n_chord.saturating_mul(self.n_span);
+        Some(ModelFootprint {
+            what: format!(
+                "the DLM's influence matrices of {boxes} boxes ({} × {}) at {} reduced frequencies",
+                self.n_chord, self.n_span, sizing.n_k
+            ),
+            path: if self.n_chord >= self.n_span {
+                "n_chord"
+            } else {
+                "n_span"
+            }
+            .into(),
+            bytes: dlm_bytes(boxes, sizing.n_k, sizing.gradients),
+        })
     }
 
     fn capabilities(&self) -> Capabilities {

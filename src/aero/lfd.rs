@@ -580,7 +580,8 @@ fn default_memory_limit() -> f64 {
     12.0
 }
 
-/// Bytes per cell of the LFD wing model with two threads, from its parts: the mesh, geometry,
+/// Bytes per cell of the LFD wing model on `threads` threads (each holds a frequency's solver
+/// state), from its parts: the mesh, geometry,
 /// states and deformation (≈ 8 kB), the exact second-order Jacobian (≈ 12 kB), per concurrent
 /// frequency its complex block ILU(0) (≈ 24 kB) and the fill blocks of ILU(k), and per
 /// concurrent right-hand side the GMRES
@@ -588,8 +589,8 @@ fn default_memory_limit() -> f64 {
 /// kept for the reverse sweep (≈ 7 kB: 11 k × 7 columns × 80 B). 88 kB a cell at restart 80;
 /// measured on the medium wing mesh: 3.94 GB peak for 57 344 cells (69 kB a cell, before the
 /// solutions were kept).
-fn bytes_per_cell(restart: usize, ilu_fill: usize) -> f64 {
-    let threads = 2.0;
+fn bytes_per_cell(restart: usize, ilu_fill: usize, threads: usize) -> f64 {
+    let threads = threads.max(1) as f64;
     // the fill blocks beyond ILU(0)'s, per cell (measured on the medium wing mesh: 6.9, 12.7,
     // 22.1 and 33.2 blocks a row for ILU(0) to ILU(3)), 400 B a complex block and its column
     let fill_blocks = [0.0, 5.8, 15.2, 26.3][ilu_fill.min(3)];
@@ -643,8 +644,15 @@ impl LfdWingSpec {
     }
 
     /// The memory the model would take, GB.
+    /// (on the threads of the pool it will run on: rayon's current pool).
     pub fn memory_estimate_gb(&self) -> f64 {
-        self.mesh_spec().n_cells() as f64 * bytes_per_cell(self.gmres_restart, self.ilu_fill) / 1e9
+        self.mesh_spec().n_cells() as f64
+            * bytes_per_cell(
+                self.gmres_restart,
+                self.ilu_fill,
+                rayon::current_num_threads(),
+            )
+            / 1e9
     }
 
     fn params(&self) -> LfdParams {
@@ -814,6 +822,16 @@ impl WingBuilder for LfdWingSpec {
         "lfd"
     }
 
+    fn check_mach(&self, mach: f64) -> Result<(), String> {
+        if !(mach > 0.0 && mach < 1.0) {
+            return Err(format!(
+                "the LFD needs a subsonic free stream, 0 < M < 1 (got {})",
+                crate::units::show(mach)
+            ));
+        }
+        Ok(())
+    }
+
     fn capabilities(&self) -> Capabilities {
         // the mode shapes by adjoint LFD solves, the planform through the mesh tangents
         // (not for an external mesh: its nodes do not move with the planform)
@@ -870,15 +888,8 @@ impl WingBuilder for LfdWingSpec {
                 format!("must be positive (got {})", self.deform_radius_chords),
             ));
         }
-        if !(wing.flight.mach > 0.0 && wing.flight.mach < 1.0) {
-            return Err(fail(
-                "",
-                format!(
-                    "the LFD needs a subsonic free stream, 0 < M < 1 (flight.mach is {})",
-                    wing.flight.mach
-                ),
-            ));
-        }
+        self.check_mach(wing.flight.mach)
+            .map_err(|reason| fail("", format!("flight.mach: {reason}")))?;
         let gb = self.memory_estimate_gb();
         // (an external mesh's size is known once it is read: checked by `build`)
         if self.mesh_file.is_none() && !(gb <= self.memory_limit_gb) {
@@ -940,7 +951,13 @@ impl WingBuilder for LfdWingSpec {
                 let m = file.read().map_err(file_fail)?;
                 m.check()
                     .map_err(|e| file_fail(format!("{}: invalid mesh: {e}", file.path)))?;
-                let gb = m.n_cells as f64 * bytes_per_cell(self.gmres_restart, self.ilu_fill) / 1e9;
+                let gb = m.n_cells as f64
+                    * bytes_per_cell(
+                        self.gmres_restart,
+                        self.ilu_fill,
+                        rayon::current_num_threads(),
+                    )
+                    / 1e9;
                 if !(gb <= self.memory_limit_gb) {
                     return Err(file_fail(format!(
                         "{} ({} cells) needs about {gb:.1} GB, above memory_limit_gb = {}: choose a coarser mesh or raise the limit",

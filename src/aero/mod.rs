@@ -12,7 +12,8 @@ pub mod registry;
 pub mod strip;
 
 pub use contract::{
-    BuildError, Capabilities, SurfaceBinding, WingBuilder, WingContext, WingFidelity,
+    BuildError, Capabilities, ModelFootprint, Sizing, SurfaceBinding, WingBuilder, WingContext,
+    WingFidelity,
 };
 pub use registry::{FidelitySpec, SectionFidelitySpec};
 

@@ -151,3 +151,47 @@ fn capabilities_are_known_before_building() {
     let strip = SectionFidelitySpec::Strip(crate::aero::strip::StripSpec::default());
     assert!(strip.capabilities().require_reverse("strip", "x").is_ok());
 }
+
+/// Each builder owns its flight range and memory estimate: the DLM refuses M > 0.97 and sizes
+/// its influence matrices (32 B per box pair per k, 100 with gradients) at the field that sizes
+/// them; the LFD refuses a free stream at rest or sonic, and its estimate grows with the threads
+/// it runs on (each frequency in flight holds a preconditioner and a Krylov basis).
+#[test]
+fn builders_own_their_flight_range_and_memory() {
+    let dlm: DlmSpec =
+        serde_json::from_value(serde_json::json!({"n_chord": 8, "n_span": 12})).unwrap();
+    assert!(dlm.check_mach(0.9).is_ok());
+    assert!(dlm.check_mach(0.98).unwrap_err().contains("0.97"));
+    for gradients in [false, true] {
+        let f = dlm
+            .footprint(&Sizing {
+                n_k: 11,
+                gradients,
+                threads: 2,
+            })
+            .unwrap();
+        let per = if gradients { 100.0 } else { 32.0 };
+        assert_eq!(f.bytes, per * 11.0 * 96.0 * 96.0);
+        assert_eq!(f.path, "n_span");
+    }
+    let lfd: crate::aero::lfd::LfdWingSpec =
+        serde_json::from_value(serde_json::json!({"mesh": "coarse"})).unwrap();
+    assert!(lfd.check_mach(0.5).is_ok());
+    for m in [0.0, 1.0] {
+        assert!(lfd.check_mach(m).unwrap_err().contains("0 < M < 1"), "{m}");
+    }
+    let on = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| lfd.memory_estimate_gb())
+    };
+    assert!(
+        on(4) > on(2) && on(2) > on(1),
+        "{} {} {}",
+        on(1),
+        on(2),
+        on(4)
+    );
+}

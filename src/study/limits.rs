@@ -7,8 +7,8 @@
 //! - plate: about 700 bytes per (node pair) for the dense K, M, the eigensolver's workspace and
 //!   the sensitivities (1.86 GB at 1 681 nodes with the complete eigen-decomposition; the partial
 //!   one of today takes 0.77 GB there, so the bound is now conservative by about 2.4×);
-//! - DLM: 32 bytes per (box pair) per reduced frequency for an analysis (the complex AIC and its
-//!   LU), 100 with gradients (the geometry derivatives; 0.79 GB at 864 boxes × 11 k);
+//! - the aerodynamic model: its builder's own estimate ([`crate::aero::WingBuilder::footprint`];
+//!   the DLM's influence matrices, `crate::aero::dlm::dlm_bytes`);
 //! - gust grid: 600 bytes per frequency point per mode for an analysis, 1 200 with gradients
 //!   (0.64 GB at 100 000 points, 6 modes, gradients).
 
@@ -73,11 +73,7 @@ pub fn plate_bytes(nodes: usize) -> f64 {
     700.0 * (nodes as f64).powi(2)
 }
 
-/// Bytes of the DLM influence matrices of `boxes` boxes at `n_k` reduced frequencies.
-pub fn dlm_bytes(boxes: usize, n_k: usize, gradients: bool) -> f64 {
-    let per = if gradients { 100.0 } else { 32.0 };
-    per * n_k.max(1) as f64 * (boxes as f64).powi(2)
-}
+pub use crate::aero::dlm::dlm_bytes;
 
 /// Bytes of the gust response on `points` frequencies with `modes` modes.
 pub fn gust_bytes(points: usize, modes: usize, gradients: bool) -> f64 {
@@ -153,20 +149,18 @@ impl Study {
         }];
         if let Some(aero) = &self.spec.aero {
             let n_k = aero.reduced_frequencies.len();
-            if let crate::aero::FidelitySpec::Dlm(d) = &aero.fidelity {
-                let boxes = d.n_chord.saturating_mul(d.n_span);
-                let path = if d.n_chord >= d.n_span {
-                    "aero.fidelity.dlm.n_chord"
-                } else {
-                    "aero.fidelity.dlm.n_span"
-                };
+            // the fidelity's own estimate, for the threads it will run on
+            let builder = aero.fidelity.builder();
+            let sizing = crate::aero::Sizing {
+                n_k,
+                gradients,
+                threads: rayon::current_num_threads(),
+            };
+            if let Some(f) = builder.footprint(&sizing) {
                 out.push(Footprint {
-                    what: format!(
-                        "the DLM's influence matrices of {boxes} boxes ({} × {}) at {n_k} reduced frequencies",
-                        d.n_chord, d.n_span
-                    ),
-                    path: path.into(),
-                    bytes: dlm_bytes(boxes, n_k, gradients),
+                    what: f.what,
+                    path: format!("aero.fidelity.{}.{}", builder.name(), f.path),
+                    bytes: f.bytes,
                 });
             }
         }

@@ -23,9 +23,7 @@ pub const MAX_SWEEP_DEG: f64 = 80.0;
 /// Largest plate thickness as a fraction of the longer of root and tip chord.
 pub const MAX_THICKNESS_TO_CHORD: f64 = 0.5;
 
-/// Largest Mach number of the doublet-lattice method: linear subsonic theory, whose kernel
-/// degenerates as β = √(1 − M²) → 0; transonic flow is the LFD fidelity's.
-pub const DLM_MAX_MACH: f64 = 0.97;
+pub use crate::aero::dlm::DLM_MAX_MACH;
 
 /// Largest flight or p-k speed, m/s (far beyond any subsonic flight; keeps tables readable).
 pub const MAX_SPEED_M_S: f64 = 1e4;
@@ -156,18 +154,13 @@ impl Study {
                     ),
                 ));
             }
-            let dlm = matches!(
-                s.aero.as_ref().map(|a| &a.fidelity),
-                Some(crate::aero::FidelitySpec::Dlm(_))
-            );
-            if dlm && f.mach > DLM_MAX_MACH && f.mach < 1.0 {
-                return Err(self.err(
-                    "flight.mach",
-                    format!(
-                        "the doublet-lattice method is linear subsonic theory, valid up to M = {DLM_MAX_MACH} here (got {}); transonic flow needs the lfd fidelity",
-                        show(f.mach)
-                    ),
-                ));
+            // the fidelity's own range (M ≥ 1 is refused for every fidelity with the flight
+            // condition)
+            if let Some(aero) = s.aero.as_ref().filter(|_| f.mach < 1.0) {
+                aero.fidelity
+                    .builder()
+                    .check_mach(f.mach)
+                    .map_err(|reason| self.err("flight.mach", reason))?;
             }
         }
         if let Some(aero) = &s.aero {
