@@ -9,9 +9,9 @@ use super::contract::{
 use crate::wing::{N_PLANFORM, PLANFORM_NAMES};
 use anyhow::{Context, Result};
 use gustkit_cfd::airfoil::AirfoilShape;
-use gustkit_cfd::gafs::Lfd;
 use gustkit_cfd::ilu::{IluOrdering, IluParams};
 use gustkit_cfd::lfd::{LfdOperator, LfdParams, Preconditioner};
+use gustkit_cfd::lfd_model::Lfd;
 use gustkit_cfd::mesh::{Boundary, Mesh};
 use gustkit_cfd::mesh_sensitivity::MeshTangent;
 use gustkit_cfd::residual::{free_stream, Euler, Limiter, Order};

@@ -9,9 +9,9 @@
 //! printed. `cargo bench -p gustkit-cfd --bench wing` runs the coarse level;
 //! `WING_LEVELS=coarse,medium` adds the medium one (about 10 minutes, 3.5 GB).
 
-use gustkit_cfd::gafs::Lfd;
 use gustkit_cfd::ilu::{IluOrdering, IluParams};
 use gustkit_cfd::lfd::{HarmonicGust, LfdOperator, Preconditioner, Symbol};
+use gustkit_cfd::lfd_model::Lfd;
 use gustkit_cfd::residual::{free_stream, Euler};
 use gustkit_cfd::steady::{NewtonLinearSolver, SteadyParams};
 use gustkit_cfd::wing_mesh::{WingMesh, WingMeshSpec};

@@ -10,19 +10,19 @@
 //! Jacobian by colouring ([`jacobian`]), GMRES over real and complex fields ([`krylov`]), the
 //! steady Newton solver ([`steady`]), the BDF2 time domain on moving meshes ([`unsteady`]), the
 //! LFD equations for gusts and mode motion ([`lfd`]), mesh deformation for mode shapes
-//! ([`deform`]), the `Aerodynamics` implementation ([`gafs`]) and the transposed linearizations of
+//! ([`deform`]), the `Aerodynamics` implementation ([`lfd_model`]) and the transposed linearizations of
 //! its reverse mode, recorded on an operation tape ([`adjoint`]).
 
 pub mod adjoint;
 pub mod airfoil;
 pub mod deform;
 pub mod flux;
-pub mod gafs;
 pub mod gas;
 pub mod ilu;
 pub mod jacobian;
 pub mod krylov;
 pub mod lfd;
+pub mod lfd_model;
 pub mod mesh;
 pub mod mesh_sensitivity;
 pub mod readers;
