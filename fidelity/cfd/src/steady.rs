@@ -638,3 +638,67 @@ mod refinement {
         }
     }
 }
+
+/// Steady continuation: how a steady solve starts nearer its answer than the free stream.
+impl Euler {
+    /// The steady state from the guess `q` (another design's state, or a coarser mesh's
+    /// prolonged), the pseudo-time step started where switched evolution relaxation would have
+    /// taken it by the time the residual fell from the free stream's to the guess's (a warm start
+    /// at the free stream's CFL would throw the guess away); `None` if it does not converge.
+    pub fn solve_steady_from_guess(
+        &self,
+        q: Vec<State<f64>>,
+        params: &SteadyParams,
+    ) -> Option<(Vec<State<f64>>, SteadyInfo)> {
+        let norm = |q: &[State<f64>]| -> f64 {
+            self.residual(q)
+                .iter()
+                .flatten()
+                .map(|v| v * v)
+                .sum::<f64>()
+                .sqrt()
+        };
+        let ratio = norm(&vec![self.q_inf; self.mesh.n_cells]) / norm(&q);
+        let warm = SteadyParams {
+            cfl0: (params.cfl0 * ratio).clamp(params.cfl0, params.cfl_max),
+            ..params.clone()
+        };
+        self.solve_steady(q, &warm).ok()
+    }
+}
+
+/// The flow a built-in wing mesh is solved for: the planform (semispan, quarter-chord sweep,
+/// root chord, tip chord; m, rad), the section's half-thickness over chord, the Mach number and
+/// the scheme.
+pub struct WingFlow<'a> {
+    pub planform: [f64; crate::wing_mesh::N_PLANFORM],
+    pub half_thickness: &'a dyn Fn(f64) -> f64,
+    pub mach: f64,
+    pub order: Order,
+    pub limiter: crate::residual::Limiter,
+}
+
+/// Mesh sequencing: the converged steady state of `flow` on the built-in wing mesh `spec`,
+/// started from the state of the mesh with half its cells in each direction where there is one
+/// (itself started the same way), else from the free stream; `None` if it does not converge.
+/// Transonic cases on the finer levels then converge in a few Newton iterations where the
+/// free-stream start needs hundreds.
+pub fn sequenced_wing_state(
+    flow: &WingFlow<'_>,
+    spec: &crate::wing_mesh::WingMeshSpec,
+    params: &SteadyParams,
+) -> Option<Vec<State<f64>>> {
+    let wm = crate::wing_mesh::WingMesh::new(flow.planform, flow.half_thickness, spec);
+    let mut e = Euler::new(wm.mesh, crate::residual::free_stream(flow.mach, 0.0));
+    e.order = flow.order;
+    e.limiter = flow.limiter;
+    let free_stream = vec![e.q_inf; e.mesh.n_cells];
+    let guess = spec.halved().and_then(|coarse| {
+        let q = sequenced_wing_state(flow, &coarse, params)?;
+        Some(spec.prolong(&coarse, &q))
+    });
+    guess
+        .and_then(|q| e.solve_steady_from_guess(q, params))
+        .or_else(|| e.solve_steady(free_stream, params).ok())
+        .map(|(q, _)| q)
+}

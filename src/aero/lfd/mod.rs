@@ -1,0 +1,485 @@
+//! The CFD fidelity's settings and builders: the scheme (order, limiter), the built-in airfoil
+//! O-mesh and mesh files with their boundary markers, and the LFD model of a 2-D section (steady
+//! Euler flow converged on the built-in mesh about a scaled NACA 64A0xx). Every closed set of
+//! strings in a CFD spec is a serde enum, so a typo is refused with its JSON path at load.
+
+mod artifacts;
+mod mesh_source;
+mod section;
+mod settings;
+mod steady_cache;
+
+pub use artifacts::*;
+pub use mesh_source::*;
+pub use section::*;
+pub use settings::*;
+pub use steady_cache::*;
+
+use super::contract::{
+    BuildError, Capabilities, SurfaceBinding, WingBuilder, WingContext, WingFidelity,
+};
+use crate::wing::{N_PLANFORM, PLANFORM_NAMES};
+use anyhow::{Context, Result};
+use gustkit_cfd::airfoil::AirfoilShape;
+use gustkit_cfd::ilu::{IluOrdering, IluParams};
+use gustkit_cfd::lfd::{LfdOperator, LfdParams, Preconditioner};
+use gustkit_cfd::lfd_model::Lfd;
+use gustkit_cfd::mesh::{Boundary, Mesh};
+use gustkit_cfd::mesh_sensitivity::MeshTangent;
+use gustkit_cfd::residual::{free_stream, Euler, Limiter, Order};
+use gustkit_cfd::steady::NewtonLinearSolver;
+use gustkit_cfd::steady::SteadyParams;
+use gustkit_cfd::wing_mesh::{SectionCell, WingMesh, WingMeshSpec};
+use gustkit_core::scalar::Dual;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// The LFD fidelity of a wing study: `aero.fidelity: {"lfd": {...}}`. Every field has a default,
+/// so `{"lfd": {}}` is the coarse built-in mesh at second order with block ILU(1) of the
+/// first-order Jacobian in reverse Cuthill–McKee order.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct LfdWingSpec {
+    /// The built-in mesh level: "coarse" (default), "medium" or "fine".
+    #[serde(default)]
+    pub mesh: WingMeshLevel,
+    /// Explicit mesh sizes instead of the level.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mesh_sizes: Option<WingMeshSizes>,
+    /// An external 3-D mesh (SU2 or Gmsh) instead of the built-in one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mesh_file: Option<WingMeshFile>,
+    #[serde(default)]
+    pub order: OrderSpec,
+    #[serde(default)]
+    pub limiter: LimiterSpec,
+    #[serde(default)]
+    pub preconditioner: LfdPreconditionerSpec,
+    /// Fill level k of the block ILU(k) preconditioners (0 to 3; ignored by the LU ones).
+    #[serde(default = "default_ilu_fill")]
+    pub ilu_fill: usize,
+    /// The ILU's elimination order: "rcm" (reverse Cuthill–McKee) or "natural" (the mesh's).
+    #[serde(default)]
+    pub ilu_ordering: IluOrderingSpec,
+    /// GMRES stops at ‖A q̂ + b‖ ≤ tolerance ‖b‖.
+    #[serde(default = "default_gmres_tolerance")]
+    pub gmres_tolerance: f64,
+    #[serde(default = "default_gmres_restart")]
+    pub gmres_restart: usize,
+    #[serde(default = "default_gmres_max")]
+    pub gmres_max_iterations: usize,
+    /// Mode shapes reach the volume mesh by inverse-distance weighting blended to zero at this
+    /// many root chords from the wall.
+    #[serde(default = "default_deform_radius")]
+    pub deform_radius_chords: f64,
+    /// The most memory the model may take, GB (refused before anything is allocated).
+    #[serde(default = "default_memory_limit")]
+    pub memory_limit_gb: f64,
+    /// The most Newton iterations of the steady solve (transonic cases on finer meshes need
+    /// more than the default 60).
+    #[serde(default = "default_steady_iterations")]
+    pub steady_max_iterations: usize,
+    /// `gustkit run` writes the LFD amplitudes at this reduced frequency (one of
+    /// `aero.reduced_frequencies`) of every mode and the gust at the initial design for
+    /// ParaView: `lfd_mode<i>_k<k>.vtk`, `lfd_gust_k<k>.vtk` (pressure, C_p and velocity, real
+    /// and imaginary parts).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub amplitude_fields_k: Option<f64>,
+}
+
+fn default_gmres_tolerance() -> f64 {
+    1e-8
+}
+
+fn default_gmres_restart() -> usize {
+    80
+}
+
+fn default_gmres_max() -> usize {
+    800
+}
+
+fn default_deform_radius() -> f64 {
+    5.0
+}
+
+/// The build error of a steady solve that failed: one that ran out of Newton iterations points
+/// at the key that raises them, with how far the residual fell (the whole history follows).
+fn steady_failure(err: gustkit_cfd::steady::SteadyError, limit: usize) -> BuildError {
+    match &err {
+        gustkit_cfd::steady::SteadyError::NoConvergence { history, .. } => {
+            let first = history.first().copied().unwrap_or(f64::NAN);
+            let last = history.last().copied().unwrap_or(f64::NAN);
+            BuildError {
+                path: "steady_max_iterations".into(),
+                reason: format!(
+                    "the steady state did not converge in {limit} Newton iterations (the residual fell from {first:.3e} to {last:.3e}, {:.1} decades): raise steady_max_iterations (transonic cases on the medium mesh need about 250); {err}",
+                    (first / last).log10()
+                ),
+            }
+        }
+        _ => BuildError {
+            path: String::new(),
+            reason: format!("steady state did not converge: {err}"),
+        },
+    }
+}
+
+fn default_steady_iterations() -> usize {
+    60
+}
+
+fn default_memory_limit() -> f64 {
+    12.0
+}
+
+/// Bytes per cell of the LFD wing model on `threads` threads (each holds a frequency's solver
+/// state), from its parts: the mesh, geometry,
+/// states and deformation (≈ 8 kB), the exact second-order Jacobian (≈ 12 kB), per concurrent
+/// frequency its complex block ILU(0) (≈ 24 kB) and the fill blocks of ILU(k), and per
+/// concurrent right-hand side the GMRES
+/// basis (restart + 1 complex vectors of 5 unknowns), and the forward solutions of one GAF table
+/// kept for the reverse sweep (≈ 7 kB: 11 k × 7 columns × 80 B). 88 kB a cell at restart 80;
+/// measured on the medium wing mesh: 3.94 GB peak for 57 344 cells (69 kB a cell, before the
+/// solutions were kept).
+fn bytes_per_cell(restart: usize, ilu_fill: usize, threads: usize) -> f64 {
+    let threads = threads.max(1) as f64;
+    // the fill blocks beyond ILU(0)'s, per cell (measured on the medium wing mesh: 6.9, 12.7,
+    // 22.1 and 33.2 blocks a row for ILU(0) to ILU(3)), 400 B a complex block and its column
+    let fill_blocks = [0.0, 5.8, 15.2, 26.3][ilu_fill.min(3)];
+    8e3 + 12e3 + 7e3 + threads * (24e3 + fill_blocks * 408.0 + (restart as f64 + 1.0) * 5.0 * 16.0)
+}
+
+impl LfdWingSpec {
+    /// The wing mesh sizes of the spec.
+    pub fn mesh_spec(&self) -> WingMeshSpec {
+        match &self.mesh_sizes {
+            Some(m) => WingMeshSpec {
+                n_around: m.n_around,
+                n_radial: m.n_radial,
+                n_span: m.n_span,
+                n_outboard: m.n_outboard,
+                far_field_chords: m.far_field_chords,
+                first_spacing_chords: m.first_spacing_chords,
+                tip_closure: m.tip_closure,
+            },
+            None => WingMeshSpec::level(self.mesh.name()).expect("built-in level"),
+        }
+    }
+
+    /// The memory the model would take, GB.
+    /// (on the threads of the pool it will run on: rayon's current pool).
+    pub fn memory_estimate_gb(&self) -> f64 {
+        self.mesh_spec().n_cells() as f64
+            * bytes_per_cell(
+                self.gmres_restart,
+                self.ilu_fill,
+                rayon::current_num_threads(),
+            )
+            / 1e9
+    }
+
+    fn params(&self) -> LfdParams {
+        LfdParams {
+            tolerance: self.gmres_tolerance,
+            restart: self.gmres_restart,
+            max_iterations: self.gmres_max_iterations,
+            ilu: IluParams {
+                fill: self.ilu_fill,
+                ordering: match self.ilu_ordering {
+                    IluOrderingSpec::Rcm => IluOrdering::ReverseCuthillMckee,
+                    IluOrderingSpec::Natural => IluOrdering::Natural,
+                },
+            },
+        }
+    }
+}
+
+impl WingBuilder for LfdWingSpec {
+    fn name(&self) -> &'static str {
+        "lfd"
+    }
+
+    fn check_mach(&self, mach: f64) -> Result<(), String> {
+        if !(mach > 0.0 && mach < 1.0) {
+            return Err(format!(
+                "the LFD needs a subsonic free stream, 0 < M < 1 (got {})",
+                crate::units::show(mach)
+            ));
+        }
+        Ok(())
+    }
+
+    fn capabilities(&self) -> Capabilities {
+        // the mode shapes by adjoint LFD solves, the planform through the mesh tangents
+        // (not for an external mesh: its nodes do not move with the planform)
+        Capabilities {
+            reverse: true,
+            reverse_planform: self.mesh_file.is_none(),
+        }
+    }
+
+    fn validate(&self, wing: &WingContext) -> Result<(), BuildError> {
+        let fail = |path: &str, reason: String| BuildError {
+            path: path.into(),
+            reason,
+        };
+        let mesh = self.mesh_spec();
+        mesh.validate().map_err(|(field, reason)| {
+            let path = if self.mesh_sizes.is_some() {
+                format!("mesh_sizes.{field}")
+            } else {
+                "mesh".into()
+            };
+            fail(&path, reason)
+        })?;
+        if let Some(file) = &self.mesh_file {
+            if self.mesh_sizes.is_some() {
+                return Err(fail(
+                    "mesh_file",
+                    "give mesh_file or mesh_sizes, not both".into(),
+                ));
+            }
+            if let Err(e) = std::fs::metadata(&file.path) {
+                return Err(fail(
+                    "mesh_file.path",
+                    format!("cannot read {}: {e}", file.path),
+                ));
+            }
+        }
+        self.params()
+            .ilu
+            .validate()
+            .map_err(|r| fail("ilu_fill", r))?;
+        self.params()
+            .validate()
+            .map_err(|r| fail("gmres_tolerance", r))?;
+        if self.steady_max_iterations == 0 {
+            return Err(fail(
+                "steady_max_iterations",
+                "must be at least 1 (got 0)".into(),
+            ));
+        }
+        if !(self.deform_radius_chords > 0.0 && self.deform_radius_chords.is_finite()) {
+            return Err(fail(
+                "deform_radius_chords",
+                format!("must be positive (got {})", self.deform_radius_chords),
+            ));
+        }
+        self.check_mach(wing.flight.mach)
+            .map_err(|reason| fail("", format!("flight.mach: {reason}")))?;
+        let gb = self.memory_estimate_gb();
+        // (an external mesh's size is known once it is read: checked by `build`)
+        if self.mesh_file.is_none() && !(gb <= self.memory_limit_gb) {
+            return Err(fail(
+                if self.mesh_sizes.is_some() {
+                    "mesh_sizes"
+                } else {
+                    "mesh"
+                },
+                format!(
+                    "the {} mesh ({} cells) needs about {gb:.1} GB, above memory_limit_gb = {} (this machine has 24 GB shared with other jobs): choose a coarser mesh or raise the limit",
+                    if self.mesh_sizes.is_some() { "given" } else { self.mesh.name() },
+                    mesh.n_cells(),
+                    self.memory_limit_gb
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    fn validate_gradients(&self, wing: &WingContext) -> Result<(), BuildError> {
+        self.validate(wing)?;
+        let cells = self.mesh_spec().n_cells();
+        let gb = self.memory_estimate_gb()
+            + gustkit_cfd::adjoint::LfdReverse::estimate_bytes(cells) as f64 / 1e9;
+        if self.mesh_file.is_none() && !(gb <= self.memory_limit_gb) {
+            return Err(BuildError {
+                path: if self.mesh_sizes.is_some() {
+                    "mesh_sizes".into()
+                } else {
+                    "mesh".into()
+                },
+                reason: format!(
+                    "gradients on the {} mesh ({cells} cells) need about {gb:.1} GB with the reverse mode's tapes, above memory_limit_gb = {}: choose a coarser mesh or raise the limit",
+                    if self.mesh_sizes.is_some() { "given" } else { self.mesh.name() },
+                    self.memory_limit_gb
+                ),
+            });
+        }
+        Ok(())
+    }
+
+    fn build(&self, wing: &WingContext) -> Result<WingFidelity, BuildError> {
+        self.validate(wing)?;
+        // the steady state is reused from `wing.cache_dir` when the mesh, the section, the
+        // planform, the Mach number and the discretization are those it was solved for
+        let fail = |reason: String| BuildError {
+            path: String::new(),
+            reason,
+        };
+        let p = wing.planform.to_array();
+        let file_fail = |reason: String| BuildError {
+            path: "mesh_file.path".into(),
+            reason,
+        };
+        // the built-in mesh, or the external one (no planform tangents, no C_p sections)
+        let (volume, built_in) = match &self.mesh_file {
+            Some(file) => {
+                let m = file.read().map_err(file_fail)?;
+                m.check()
+                    .map_err(|e| file_fail(format!("{}: invalid mesh: {e}", file.path)))?;
+                let gb = m.n_cells as f64
+                    * bytes_per_cell(
+                        self.gmres_restart,
+                        self.ilu_fill,
+                        rayon::current_num_threads(),
+                    )
+                    / 1e9;
+                if !(gb <= self.memory_limit_gb) {
+                    return Err(file_fail(format!(
+                        "{} ({} cells) needs about {gb:.1} GB, above memory_limit_gb = {}: choose a coarser mesh or raise the limit",
+                        file.path, m.n_cells, self.memory_limit_gb
+                    )));
+                }
+                (m, None)
+            }
+            None => {
+                let wm = WingMesh::new(p, &|x| wing.airfoil.half_thickness(x), &self.mesh_spec());
+                wm.mesh
+                    .check()
+                    .map_err(|e| fail(format!("the built-in wing mesh is invalid: {e}")))?;
+                (wm.mesh.clone(), Some(wm))
+            }
+        };
+        let mut e = Euler::new(volume.clone(), free_stream(wing.flight.mach, 0.0));
+        e.order = self.order.order();
+        e.limiter = self.limiter.limiter();
+        // the LFD's ILU settings serve the Newton steps too (medium mesh: 65 s with ILU(0) in
+        // the mesh's order, 30 s with ILU(1) in RCM order, 12 Newton iterations either way)
+        let params = SteadyParams {
+            linear_solver: NewtonLinearSolver::BlockIlu,
+            ilu: self.params().ilu,
+            max_iterations: self.steady_max_iterations,
+            ..SteadyParams::default()
+        };
+        let cache = wing.cache_dir.map(|d| self.steady_file(wing, d));
+        let q0 = match cache.as_deref().and_then(|f| converged_state(&e, f)) {
+            Some(q) => q,
+            None => {
+                let free_stream = || vec![e.q_inf; e.mesh.n_cells];
+                let from_guess = |q| e.solve_steady_from_guess(q, &params);
+                // from the previous design's state; else, on the built-in mesh, from the steady
+                // state of the mesh with half the cells in each direction (itself started the
+                // same way): mesh sequencing, which converges transonic cases on the finer levels
+                // in a few Newton iterations where the free-stream start needs hundreds; from the
+                // free stream should those fail
+                let warm = previous_state(&e, cache.as_deref())
+                    .and_then(from_guess)
+                    .or_else(|| {
+                        let spec = self.mesh_spec();
+                        let coarse = spec.halved().filter(|_| built_in.is_some())?;
+                        let flow = gustkit_cfd::steady::WingFlow {
+                            planform: wing.planform.to_array(),
+                            half_thickness: &|x| wing.airfoil.half_thickness(x),
+                            mach: wing.flight.mach,
+                            order: self.order.order(),
+                            limiter: self.limiter.limiter(),
+                        };
+                        let q = gustkit_cfd::steady::sequenced_wing_state(&flow, &coarse, &params)?;
+                        from_guess(spec.prolong(&coarse, &q))
+                    });
+                let (q, _) = match warm {
+                    Some(solved) => solved,
+                    None => e
+                        .solve_steady(free_stream(), &params)
+                        .map_err(|err| steady_failure(err, self.steady_max_iterations))?,
+                };
+                if let Some(f) = &cache {
+                    // a cache that cannot be written costs the next run a steady solve, no more
+                    let _ = save_state(f, &q);
+                    // and the field for ParaView beside it (ρ, p, C_p, Mach, velocity per cell)
+                    let vtk = gustkit_cfd::vtk::flow_vtk(
+                        &volume,
+                        &q,
+                        wing.flight.mach,
+                        &format!(
+                            "gustkit: steady Euler about the wing at M = {}",
+                            wing.flight.mach
+                        ),
+                    );
+                    let _ = crate::atomic::write(&f.with_file_name(STEADY_VTK), vtk.as_bytes());
+                    // and C_p at the root, mid-span and tip sections (the report draws them)
+                    if let (Some(dir), Some(mesh)) = (f.parent(), &built_in) {
+                        let _ = write_cp_sections(mesh, &q, wing.flight.mach, dir);
+                    }
+                }
+                q
+            }
+        };
+        let mut op = LfdOperator::with_preconditioner(e, q0, self.preconditioner.preconditioner());
+        op.params = self.params();
+        let model = Lfd::new(
+            op,
+            1.0,
+            1.0,
+            self.deform_radius_chords * wing.planform.root_chord,
+        );
+        let Some(mesh) = built_in else {
+            // an external mesh: its wall nodes placed on the planform, or why they do not fit
+            let unit = self
+                .mesh_file
+                .as_ref()
+                .map_or(MeshUnit::M, |f| f.length_unit);
+            let wall: Vec<[f64; 3]> = model
+                .wall_nodes()
+                .iter()
+                .map(|&n| volume.nodes[n])
+                .collect();
+            let points = planform_coordinates(wing.planform, &wall, unit).map_err(|r| {
+                file_fail(format!(
+                    "{}: {r}",
+                    self.mesh_file.as_ref().map_or("", |f| f.path.as_str())
+                ))
+            })?;
+            return Ok(WingFidelity {
+                model: Box::new(model),
+                binding: SurfaceBinding {
+                    points,
+                    geometry_jacobian: Vec::new(),
+                },
+            });
+        };
+        let points = model
+            .wall_nodes()
+            .iter()
+            .map(|&n| mesh.parametric(n))
+            .collect();
+        // the planform variables move the mesh (and the deformation radius, a multiple of the
+        // root chord): their tangents, for the reverse mode's geometry gradient
+        let mut model = model;
+        let pd: [Dual<N_PLANFORM>; N_PLANFORM] = std::array::from_fn(|k| Dual::var(p[k], k));
+        let xd = mesh.nodes_at(pd);
+        model.tangents = (0..N_PLANFORM)
+            .map(|k| MeshTangent {
+                name: PLANFORM_NAMES[k].to_string(),
+                nodes: xd.iter().map(|x| x.map(|v| v.d[k])).collect(),
+                radius: if k == 2 {
+                    self.deform_radius_chords
+                } else {
+                    0.0
+                },
+            })
+            .collect();
+        let geometry_jacobian = (0..N_PLANFORM)
+            .map(|k| std::array::from_fn(|j| if j == k { 1.0 } else { 0.0 }))
+            .collect();
+        Ok(WingFidelity {
+            model: Box::new(model),
+            binding: SurfaceBinding {
+                points,
+                geometry_jacobian,
+            },
+        })
+    }
+}

@@ -1,0 +1,110 @@
+//! The steady state kept between runs in the run folder: a file named by a hash of everything the
+//! state depends on, read back only when it belongs to the mesh and is physical; a near state
+//! (another design's) seeds the next solve.
+
+use super::*;
+
+impl LfdWingSpec {
+    /// The file in `dir` that holds the steady state of this mesh, wing and flight condition:
+    /// named by a hash of everything the state depends on, so a changed input misses it.
+    pub fn steady_file(&self, wing: &WingContext, dir: &Path) -> PathBuf {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        format!(
+            "{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
+            self.mesh_file.as_ref().map(|f| f.content_hash()),
+            self.mesh_spec(),
+            wing.planform.to_array().map(f64::to_bits),
+            wing.airfoil,
+            wing.flight.mach.to_bits(),
+            self.order,
+            self.limiter
+        )
+        .hash(&mut h);
+        dir.join(format!("{STEADY_PREFIX}{:016x}.bin", h.finish()))
+    }
+}
+
+/// A state read from `file` if it is one of this mesh (length) and physical (finite, positive
+/// density); `None` for anything else.
+pub(super) fn read_state(e: &Euler, file: &Path) -> Option<Vec<gustkit_cfd::residual::State<f64>>> {
+    let bytes = std::fs::read(file).ok()?;
+    let n = e.mesh.n_cells;
+    let nvar = gustkit_cfd::gas::NVAR;
+    if bytes.len() != 8 * nvar * n {
+        return None;
+    }
+    let vals: Vec<f64> = bytes
+        .chunks_exact(8)
+        .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")))
+        .collect();
+    let q: Vec<gustkit_cfd::residual::State<f64>> = vals
+        .chunks_exact(nvar)
+        .map(|c| std::array::from_fn(|k| c[k]))
+        .collect();
+    if q.iter().flatten().any(|v| !v.is_finite()) || q.iter().any(|s| !(s[0] > 0.0)) {
+        return None;
+    }
+    Some(q)
+}
+
+/// A steady state read from `file` if it is one of this mesh, physical, and converged
+/// (‖R‖ within 1e-12 of the flux scale, well above round-off and far below any truncation
+/// error); anything else is ignored and the state solved again.
+pub(super) fn converged_state(
+    e: &Euler,
+    file: &Path,
+) -> Option<Vec<gustkit_cfd::residual::State<f64>>> {
+    let q = read_state(e, file)?;
+    let r: f64 = e
+        .residual(&q)
+        .iter()
+        .flatten()
+        .map(|v| v * v)
+        .sum::<f64>()
+        .sqrt();
+    (r <= 1e-12 * e.flux_scale(&q)).then_some(q)
+}
+
+/// The steady state of the folder's previous wing (another design of an optimization), when one
+/// of this mesh's size is there: the initial guess of the next steady solve, which converges to
+/// the same state as from the free stream in fewer Newton iterations.
+pub(super) fn previous_state(
+    e: &Euler,
+    cache: Option<&Path>,
+) -> Option<Vec<gustkit_cfd::residual::State<f64>>> {
+    cache.and_then(Path::parent).and_then(|dir| {
+        std::fs::read_dir(dir).ok()?.flatten().find_map(|entry| {
+            let name = entry.file_name();
+            let name = name.to_string_lossy();
+            let ours = Some(entry.path()) == cache.map(Path::to_path_buf);
+            (!ours && name.starts_with(STEADY_PREFIX) && name.ends_with(".bin"))
+                .then(|| read_state(e, &entry.path()))
+                .flatten()
+        })
+    })
+}
+
+/// Writes a steady state to `file` atomically (little-endian f64, cell by cell), and removes the
+/// folder's other steady states (a run folder keeps the one of its latest wing).
+pub(super) fn save_state(
+    file: &Path,
+    q: &[gustkit_cfd::residual::State<f64>],
+) -> std::io::Result<()> {
+    let bytes: Vec<u8> = q.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    crate::atomic::write(file, &bytes)?;
+    if let Some(dir) = file.parent() {
+        for entry in std::fs::read_dir(dir)?.flatten() {
+            let path = entry.path();
+            let name = entry.file_name();
+            let name = name.to_string_lossy();
+            if path != file && name.starts_with(STEADY_PREFIX) && name.ends_with(".bin") {
+                let _ = std::fs::remove_file(path);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// File-name prefix of the cached steady states (`steady_lfd_<hash>.bin`).
+pub const STEADY_PREFIX: &str = "steady_lfd_";
