@@ -489,14 +489,14 @@ pub fn bench_pipeline(study: &Study, repeat: usize) -> Result<PipelineTimings> {
         let mut problem = crate::problem::DesignProblem::new(&case, settings.clone(), spec);
         design_function = Some(measure(repeat, || {
             timed(&mut || {
-                problem.values(&x).map_err(anyhow::Error::msg)?;
+                problem.values(&x)?;
                 Ok(())
             })
         })?);
         // the gradient at the point just evaluated, as the SQP asks for it
         design_gradient = Some(measure(repeat, || {
             timed(&mut || {
-                problem.gradients(&x).map_err(anyhow::Error::msg)?;
+                problem.gradients(&x)?;
                 Ok(())
             })
         })?);

@@ -1,0 +1,294 @@
+//! The gust-constrained mass minimization of a wing study: the SQP run with its progress
+//! observer, the atomic checkpoint of every iteration, `--resume`, and the results it reports.
+
+mod cross;
+mod design;
+mod flutter_check;
+mod progress;
+mod resume;
+
+use cross::*;
+pub(crate) use design::*;
+pub(crate) use flutter_check::*;
+use progress::*;
+pub use resume::*;
+
+use super::gust::psd_series;
+use crate::flutter::margin::{ks_rho, DAMPING_SCALE, PK_STEPS};
+use crate::optim::{Checkpointing, Control, Executor};
+use crate::report::results::{
+    element_polygons, CrossDesign, CrossEvaluation, DesignSnapshot, FidelityEvaluation,
+    FlutterCheck, FlutterPoint, HistoryRow, OptimizationResults, Stats, Timing,
+};
+use crate::report::write_atomic;
+use crate::study::Study;
+use anyhow::{Context, Result};
+use std::path::Path;
+use std::time::Instant;
+
+/// A BFGS matrix of the scaled variables, row by row (as checkpoints keep it).
+pub type Hessian = Vec<Vec<f64>>;
+
+/// One pass of an optimization: the first solves the study's problem; each later one (a
+/// resolution correction) starts from the previous pass's optimum and BFGS matrix with the RMS
+/// limit scaled.
+#[derive(Clone, Debug)]
+pub struct Pass {
+    /// 1 for the study's own problem, then 2, 3, ….
+    pub number: usize,
+    /// The constrained limit is this factor × the study's limit.
+    pub rms_factor: f64,
+    /// The discrete gust peak limit likewise (1 without one).
+    pub peak_factor: f64,
+    /// Where the pass starts and its initial BFGS matrix (scaled variables), when not the
+    /// study's.
+    pub start: Option<(Vec<f64>, Option<Hessian>)>,
+}
+
+impl Pass {
+    /// The study's own problem.
+    pub fn first() -> Self {
+        Self {
+            number: 1,
+            rms_factor: 1.0,
+            peak_factor: 1.0,
+            start: None,
+        }
+    }
+}
+
+/// The gust-constrained mass minimization of a study (the `optimization` section).
+pub fn optimize(
+    study: &Study,
+    dir: &Path,
+    resume: bool,
+    quiet: bool,
+) -> Result<OptimizationResults> {
+    optimize_pass(study, dir, resume, quiet, &Pass::first())
+}
+
+/// One pass of the gust-constrained mass minimization of a study.
+pub fn optimize_pass(
+    study: &Study,
+    dir: &Path,
+    resume: bool,
+    quiet: bool,
+    pass: &Pass,
+) -> Result<OptimizationResults> {
+    use crate::problem::DesignProblem;
+    let o = study.spec.optimization.as_ref().expect("caller checked");
+    let settings = study.gust_settings()?;
+    let (lower, upper) = study.design_bounds()?;
+    let case = study.resolve()?;
+    let x0 = case.initial.to_vec();
+    // a warm start begins at another run's final design (a correction pass at the previous
+    // pass's); mass and area stay relative to x0
+    let (x_start, hessian) = match &pass.start {
+        Some((x, h)) => (Some(x.clone()), h.clone()),
+        None => (study.warm_start_design()?, study.warm_start_hessian()?),
+    };
+    let t_ev0 = Instant::now();
+    let ev0 = crate::pipeline::evaluate(&case, &settings, &x0).context("initial design")?;
+    let t_ev0 = t_ev0.elapsed().as_secs_f64();
+    let mut spec = design_spec(study, &settings, &ev0, lower, upper);
+    spec.rms_limit *= pass.rms_factor;
+    let (fixed_basis, floor) = design_basis(study)?;
+    let fixed_basis = fixed_basis.resolve()?;
+    spec.mode_floor = floor;
+    spec.peak = peak_limit(study, &ev0)?;
+    if let Some(pl) = spec.peak.as_mut() {
+        pl.constraint.limit *= pass.peak_factor;
+    }
+    if let (Some(pl), false) = (&spec.peak, quiet) {
+        let (limit, limit_unit) =
+            study
+                .spec
+                .length_unit
+                .display(pl.constraint.limit, &pl.constraint.unit, 1);
+        println!(
+            "discrete gust peak limit: |{}| ≤ {} {} over {} gusts (KS, ρ = ln(n)/{}), on a fixed grid of {:.3} s, {} samples",
+            pl.constraint.name,
+            crate::report::style::tick(&limit),
+            limit_unit,
+            pl.constraint.gusts.len(),
+            crate::gust::discrete::PEAK_KS_GAP,
+            pl.grid.span,
+            pl.grid.time.len()
+        );
+    }
+    if let (Some(f), false) = (floor, quiet) {
+        println!(
+            "modal basis: the {} modes below {:.1} Hz at the initial design; the first mode left out must stay above it",
+            f.retained,
+            f.omega_cut / (2.0 * std::f64::consts::PI)
+        );
+    }
+    let (output, rms_limit) = (spec.output, spec.rms_limit);
+    // the report shows a displacement RMS in the study's own length unit (the unit rule)
+    let (unit_scale, unit) =
+        study
+            .spec
+            .length_unit
+            .display(1.0, settings.outputs[output].quantity.unit(), 1);
+    let params = crate::optim::SqpParams {
+        max_iterations: o.max_iterations,
+        tolerance: o.tolerance,
+        ..Default::default()
+    };
+    let (problem_id, checkpoint) = open_checkpoint(study, dir, pass.number, resume, quiet)?;
+    let checkpoint_path = checkpoint_file(dir, pass.number);
+    let mut observer = RunObserver::new(
+        ev0.mass_kg,
+        (unit_scale, unit, rms_limit),
+        spec.flutter.map(|m| m.damping_max),
+        spec.peak.is_some(),
+        quiet,
+        o.max_iterations,
+    );
+    let mut store = FileCheckpoint {
+        path: checkpoint_path,
+    };
+    let mut problem = DesignProblem::new(&fixed_basis, settings.clone(), spec.clone());
+    let info = Executor::new(params, &problem_id)
+        .resume(checkpoint)
+        .initial_hessian(hessian)
+        .observe(&mut observer)
+        .checkpoint(&mut store)
+        .run(&mut problem, x_start.as_deref().unwrap_or(&x0));
+    observer.bar.finish_and_clear();
+    let info = info.map_err(|e| anyhow::anyhow!("optimization: {e}"))?;
+    // over every session of a resumed run
+    let wall_time_s = info.elapsed_s;
+    let timing = Timing {
+        function: (!problem.function_times.is_empty())
+            .then(|| Stats::of(std::mem::take(&mut problem.function_times))),
+        gradient: (!problem.gradient_times.is_empty())
+            .then(|| Stats::of(std::mem::take(&mut problem.gradient_times))),
+        threads: rayon::current_num_threads(),
+    };
+    let t_ev = Instant::now();
+    let ev = crate::pipeline::evaluate(&fixed_basis, &settings, &info.x).context("final design")?;
+    let t_ev = t_ev.elapsed().as_secs_f64();
+    // the largest p-k damping of each iterate (re-evaluated for iterates of an earlier session)
+    let mut peaks = std::mem::take(&mut problem.damping_peaks);
+    let mut peak_at = |x: &[f64]| -> Result<Option<f64>> {
+        let Some(m) = &spec.flutter else {
+            return Ok(None);
+        };
+        if let Some((_, g)) = peaks.iter().rev().find(|(px, _)| px.as_slice() == x) {
+            return Ok(Some(*g));
+        }
+        let e = crate::pipeline::evaluate(&fixed_basis, &settings, x)?;
+        let g = e.flutter_damping(m)?.2.peak();
+        peaks.push((x.to_vec(), g));
+        Ok(Some(g))
+    };
+    let history = info
+        .history
+        .iter()
+        .map(|it| -> Result<HistoryRow> {
+            Ok(HistoryRow {
+                iteration: it.iteration,
+                mass_kg: it.values.f * ev0.mass_kg,
+                rms_display: (it.values.ineq[0] + 1.0) * rms_limit * unit_scale,
+                area_m2: it
+                    .values
+                    .eq
+                    .first()
+                    .map_or(ev0.area_m2, |h| (h + 1.0) * ev0.area_m2),
+                flutter_damping: match (it.values.ineq.get(1), &spec.flutter) {
+                    (Some(c), Some(m)) => Some(m.damping_max + c * DAMPING_SCALE),
+                    _ => None,
+                },
+                flutter_damping_peak: peak_at(&it.x)?,
+                violation: it.violation,
+                kkt: it.kkt,
+                evaluations: it.evaluations,
+                pass: pass.number,
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    // the flutter check reports; it does not fail a finished optimization
+    let flutter = match flutter_check(&ev0, &ev) {
+        Ok(f) => Some(f),
+        Err(e) => {
+            eprintln!("warning: the flutter check of the initial and final designs failed: {e:#}");
+            None
+        }
+    };
+    if !quiet {
+        println!(
+        "{} after {} iterations ({} evaluations, {:.1} s): mass {:.4} → {:.4} kg ({:+.1} %), RMS {:.4} → {:.4} {unit}",
+        info.message,
+        info.iterations,
+        info.evaluations,
+        wall_time_s,
+        ev0.mass_kg,
+        ev.mass_kg,
+        100.0 * (ev.mass_kg / ev0.mass_kg - 1.0),
+        ev0.rms_m[output] * unit_scale,
+        ev.rms_m[output] * unit_scale
+    );
+    }
+    let cross_evaluation = match study.compare_study()? {
+        Some(other) => {
+            let mut designs = vec![("initial", x0.clone(), Some((&ev0, t_ev0)))];
+            if let Some(x) = &x_start {
+                designs.push(("start", x.clone(), None));
+            }
+            designs.push(("final", info.x.clone(), Some((&ev, t_ev))));
+            let c = cross_evaluate(study, &other, &settings, &designs, output, unit_scale, unit)?;
+            if !quiet {
+                for d in &c.designs {
+                    let row: Vec<String> = d
+                        .evaluations
+                        .iter()
+                        .map(|e| match e.rms_display {
+                            Some(v) => format!("{} {v:.4} {unit}", e.fidelity),
+                            None => format!("{} unstable", e.fidelity),
+                        })
+                        .collect();
+                    println!(
+                        "cross-evaluation, {} design: RMS {}",
+                        d.design,
+                        row.join(", ")
+                    );
+                }
+            }
+            Some(c)
+        }
+        None => None,
+    };
+    let peak_limit = match &spec.peak {
+        Some(pl) => Some(peak_limit_result(study, pl, &ev0, &ev, quiet)?),
+        None => None,
+    };
+    let design = study.initial_design()?;
+    Ok(OptimizationResults {
+        converged: info.converged,
+        message: info.message.clone(),
+        iterations: info.iterations,
+        evaluations: info.evaluations,
+        wall_time_s,
+        output: o.output.clone(),
+        rms_limit: rms_limit * unit_scale,
+        unit: unit.to_string(),
+        fix_area: o.fix_area,
+        flutter_margin: spec.flutter.map(|m| (m.speed_factor, m.damping_max)),
+        ks_rho: ks_rho(ev0.modes.len() * PK_STEPS),
+        damping_scale: DAMPING_SCALE,
+        reference: o.reference.clone(),
+        design_variable_names: (0..x0.len()).map(|i| design.name(i)).collect(),
+        lower: spec.lower,
+        upper: spec.upper,
+        initial: snapshot(study, &ev0, output, unit_scale),
+        final_: snapshot(study, &ev, output, unit_scale),
+        history,
+        flutter_check: flutter,
+        warm_start: o.warm_start.as_ref().map(|w| w.from.display().to_string()),
+        timing: Some(timing),
+        cross_evaluation,
+        corrections: Vec::new(),
+        peak_limit,
+    })
+}
