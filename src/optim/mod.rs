@@ -126,10 +126,38 @@ pub struct Iterate {
     pub recovery: Option<String>,
 }
 
+/// How an SQP iteration ended: the executor goes on after [`SqpStatus::StepTaken`] only, and a
+/// run's [`SqpInfo`] says which of the others ended it (as Clarabel's solver status does).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SqpStatus {
+    /// A step was accepted and the BFGS matrix updated: the next iteration follows.
+    #[default]
+    StepTaken,
+    /// The KKT conditions hold to the tolerance at the current point.
+    Converged,
+    /// The iteration limit was reached.
+    IterationLimit,
+    /// The line search found no acceptable point along the step (`converged` where the point
+    /// met the looser test: violation below the tolerance, KKT below ten times it).
+    LineSearchStalled { converged: bool },
+    /// The subproblem failed as posed and with every recovery: the run ends at its best
+    /// feasible iterate, and its checkpoint says why.
+    SubproblemFailed,
+    /// The gradients at the accepted point could not be evaluated: the run ends at its best
+    /// feasible iterate.
+    GradientsFailed,
+    /// An observer asked to stop.
+    Stopped,
+}
+
 /// How a run ended.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SqpInfo {
     pub converged: bool,
+    /// What ended the run.
+    #[serde(default)]
+    pub status: SqpStatus,
     pub iterations: usize,
     pub evaluations: usize,
     pub message: String,

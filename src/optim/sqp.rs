@@ -1,7 +1,9 @@
 //! The SQP iteration (see the module documentation of `optim`).
 
 use super::qp::{self, QpData};
-use super::{Checkpoint, Gradients, Iterate, Problem, SqpError, SqpInfo, SqpParams, Values};
+use super::{
+    Checkpoint, Gradients, Iterate, Problem, SqpError, SqpInfo, SqpParams, SqpStatus, Values,
+};
 
 /// What an observer tells the run after an iteration.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -290,7 +292,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
     let scaling = Scaling::new(&lb, &ub, x0);
     let started = std::time::Instant::now();
     let mut elapsed_before = 0.0;
-    let (mut z, mut hess, mut penalty, mut history, mut iteration, mut evaluations) = match resume {
+    let (z, hess, penalty, history, iteration, mut evaluations) = match resume {
         Some(c) => {
             if c.problem_id != problem_id || c.z.len() != n || c.hessian.len() != n {
                 return Err(SqpError::Checkpoint(format!(
@@ -370,31 +372,184 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
             (z0, h0, 0.0, Vec::new(), 0, 0)
         }
     };
-    // the checkpoint of the run's state as it stands, with why it stopped (if it did)
-    macro_rules! checkpoint {
-        ($stopped:expr) => {
-            Checkpoint {
-                problem_id: problem_id.to_string(),
-                params: params.clone(),
-                iteration,
-                evaluations,
-                z: z.clone(),
-                hessian: hess.clone(),
-                penalty,
-                history: history.clone(),
-                elapsed_s: elapsed_before + started.elapsed().as_secs_f64(),
-                problem_state: problem.state(),
-                stopped: $stopped,
-            }
-        };
-    }
-    let mut values = problem.values(&scaling.x(&z)).map_err(SqpError::Start)?;
+    let values = problem.values(&scaling.x(&z)).map_err(SqpError::Start)?;
     evaluations += 1;
-    let mut grads = problem
+    let grads = problem
         .gradients(&scaling.x(&z))
         .map_err(|source| SqpError::Gradient { iteration, source })?;
+    let mut state = SqpState {
+        z,
+        hess,
+        penalty,
+        history,
+        iteration,
+        evaluations,
+        values,
+        grads,
+    };
+    let elapsed = || elapsed_before + started.elapsed().as_secs_f64();
     loop {
-        let x = scaling.x(&z);
+        let (status, message) = state.iterate(problem, solver, params, &scaling, (&lb, &ub))?;
+        match status {
+            SqpStatus::StepTaken => {}
+            SqpStatus::Converged
+            | SqpStatus::IterationLimit
+            | SqpStatus::LineSearchStalled { .. } => {
+                let converged = matches!(
+                    status,
+                    SqpStatus::Converged | SqpStatus::LineSearchStalled { converged: true }
+                );
+                return Ok(state.finish(converged, status, message, &scaling, elapsed()));
+            }
+            SqpStatus::SubproblemFailed | SqpStatus::GradientsFailed => {
+                // a failed subproblem stops the checkpoint too: `--resume` then says why at once
+                if status == SqpStatus::SubproblemFailed {
+                    let stopped = state.checkpoint(
+                        problem_id,
+                        params,
+                        elapsed(),
+                        problem.state(),
+                        Some(message.clone()),
+                    );
+                    if let Some(store) = checkpoints.as_mut() {
+                        store
+                            .save(&stopped)
+                            .map_err(|e| SqpError::Checkpoint(format!("cannot save it: {e}")))?;
+                    }
+                }
+                let SqpState {
+                    history,
+                    iteration,
+                    evaluations,
+                    ..
+                } = state;
+                let mut info = stop_at_best(
+                    message,
+                    history,
+                    iteration,
+                    evaluations,
+                    elapsed(),
+                    params.tolerance,
+                );
+                info.status = status;
+                return Ok(info);
+            }
+            SqpStatus::Stopped => unreachable!("only the executor stops a run"),
+        }
+        let checkpoint = state.checkpoint(problem_id, params, elapsed(), problem.state(), None);
+        if let Some(store) = checkpoints.as_mut() {
+            store
+                .save(&checkpoint)
+                .map_err(|e| SqpError::Checkpoint(format!("cannot save it: {e}")))?;
+        }
+        let record = state.history.last().expect("the point left");
+        let mut control = Control::Continue;
+        for o in observers.iter_mut() {
+            if o.iteration(record, &checkpoint)
+                .map_err(SqpError::Observer)?
+                == Control::Stop
+            {
+                control = Control::Stop;
+            }
+        }
+        if control == Control::Stop {
+            let elapsed_s = checkpoint.elapsed_s;
+            return Ok(state.finish(
+                false,
+                SqpStatus::Stopped,
+                "stopped by the observer".into(),
+                &scaling,
+                elapsed_s,
+            ));
+        }
+    }
+}
+
+/// The state of an SQP run between iterations: the scaled iterate with its values and
+/// gradients, the BFGS matrix, the merit penalty, the history and the counters.
+struct SqpState {
+    z: Vec<f64>,
+    hess: Vec<Vec<f64>>,
+    penalty: f64,
+    history: Vec<Iterate>,
+    iteration: usize,
+    evaluations: usize,
+    values: Values,
+    grads: Gradients,
+}
+
+impl SqpState {
+    /// The checkpoint of the run as it stands, with why it stopped (if it did).
+    fn checkpoint(
+        &self,
+        problem_id: &str,
+        params: &SqpParams,
+        elapsed_s: f64,
+        problem_state: serde_json::Value,
+        stopped: Option<String>,
+    ) -> Checkpoint {
+        Checkpoint {
+            problem_id: problem_id.to_string(),
+            params: params.clone(),
+            iteration: self.iteration,
+            evaluations: self.evaluations,
+            z: self.z.clone(),
+            hessian: self.hess.clone(),
+            penalty: self.penalty,
+            history: self.history.clone(),
+            elapsed_s,
+            problem_state,
+            stopped,
+        }
+    }
+
+    /// The run's end at the current point.
+    fn finish(
+        self,
+        converged: bool,
+        status: SqpStatus,
+        message: String,
+        scaling: &Scaling,
+        elapsed_s: f64,
+    ) -> SqpInfo {
+        SqpInfo {
+            converged,
+            status,
+            iterations: self.iteration,
+            evaluations: self.evaluations,
+            message,
+            x: scaling.x(&self.z),
+            values: self.values,
+            history: self.history,
+            elapsed_s,
+        }
+    }
+
+    /// One SQP iteration: the subproblem at the current point (recovered when it fails), the
+    /// KKT test, the merit line search with its second-order correction, the gradients at the
+    /// accepted point and the damped BFGS update. Returns how it ended and the words for a run
+    /// that ends there; after [`SqpStatus::StepTaken`] the state is at the new point, its
+    /// history ending with the record of the point left (with its line search).
+    fn iterate(
+        &mut self,
+        problem: &mut dyn Problem,
+        solver: &mut dyn SubproblemSolver,
+        params: &SqpParams,
+        scaling: &Scaling,
+        (lb, ub): (&[f64], &[f64]),
+    ) -> Result<(SqpStatus, String), SqpError> {
+        let SqpState {
+            z,
+            hess,
+            penalty,
+            history,
+            iteration,
+            evaluations,
+            values,
+            grads,
+        } = self;
+        let n = z.len();
+        let x = scaling.x(z);
         let g = scaling.grad(&grads.f);
         let eq_jac: Vec<Vec<f64>> = grads.eq.iter().map(|r| scaling.grad(r)).collect();
         let ineq_jac: Vec<Vec<f64>> = grads.ineq.iter().map(|r| scaling.grad(r)).collect();
@@ -417,7 +572,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
             })
             .collect();
         let data = QpData {
-            hessian: &hess,
+            hessian: hess,
             grad: &g,
             eq: &values.eq,
             eq_jac: &eq_jac,
@@ -434,43 +589,30 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                 let message = format!(
                     "the QP subproblem failed at iteration {iteration} and every recovery failed too ({reason})"
                 );
-                let x_last = scaling.x(&z);
+                let x_last = scaling.x(z);
                 // no subproblem was solved here: the KKT measure is the previous iteration's
                 let kkt = history.last().map_or(f64::MAX, |it| it.kkt);
                 history.push(Iterate {
-                    iteration,
+                    iteration: *iteration,
                     x: x_last,
                     values: values.clone(),
-                    violation: violation(&values),
+                    violation: violation(values),
                     kkt,
                     step: 0.0,
-                    evaluations,
+                    evaluations: *evaluations,
                     alpha: 0.0,
                     failed_trials: 0,
                     trial_failure: None,
                     recovery: None,
                 });
-                let stopped = checkpoint!(Some(message.clone()));
-                if let Some(store) = checkpoints.as_mut() {
-                    store
-                        .save(&stopped)
-                        .map_err(|e| SqpError::Checkpoint(format!("cannot save it: {e}")))?;
-                }
-                return Ok(stop_at_best(
-                    message,
-                    history,
-                    iteration,
-                    evaluations,
-                    stopped.elapsed_s,
-                    params.tolerance,
-                ));
+                return Ok((SqpStatus::SubproblemFailed, message));
             }
         };
         if recovery.is_some() {
             // the recovered subproblem solved with the identity: the BFGS restarts from it
-            hess = identity(n);
+            *hess = identity(n);
         }
-        let viol = violation(&values);
+        let viol = violation(values);
         let kkt = dot(&g, &step.d).abs()
             + step
                 .lambda_eq
@@ -485,36 +627,23 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                 .map(|(l, c)| (l * c).abs())
                 .sum::<f64>();
         let record = Iterate {
-            iteration,
+            iteration: *iteration,
             x: x.clone(),
             values: values.clone(),
             violation: viol,
             kkt,
             step: step.d.iter().fold(0.0, |a, v| a.max(v.abs())),
-            evaluations,
+            evaluations: *evaluations,
             alpha: 0.0,
             failed_trials: 0,
             trial_failure: None,
             recovery,
         };
         history.push(record);
-        let finish =
-            |converged: bool, message: String, history: Vec<Iterate>, evaluations: usize| SqpInfo {
-                converged,
-                iterations: iteration,
-                evaluations,
-                message,
-                x: x.clone(),
-                values: values.clone(),
-                history,
-                elapsed_s: elapsed_before + started.elapsed().as_secs_f64(),
-            };
         if kkt < params.tolerance && viol < params.tolerance {
-            return Ok(finish(
-                true,
+            return Ok((
+                SqpStatus::Converged,
                 "KKT conditions satisfied to the tolerance".into(),
-                history,
-                evaluations,
             ));
         }
         // the subproblem could not meet the linearized constraints within the bounds
@@ -525,15 +654,13 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
         } else {
             String::new()
         };
-        if iteration >= params.max_iterations {
-            return Ok(finish(
-                false,
+        if *iteration >= params.max_iterations {
+            return Ok((
+                SqpStatus::IterationLimit,
                 format!(
                     "iteration limit {} reached{infeasible}",
                     params.max_iterations
                 ),
-                history,
-                evaluations,
             ));
         }
         // merit penalty above every multiplier, allowed to relax towards it again (Powell's rule):
@@ -544,16 +671,17 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
             .chain(&step.lambda_ineq)
             .fold(0.0f64, |a, l| a.max(l.abs()));
         let needed = 1.1 * lam_max + 1e-8;
-        penalty = needed.max(0.5 * (penalty + needed));
+        *penalty = needed.max(0.5 * (*penalty + needed));
+        let penalty = *penalty;
         let phi = |v: &Values| v.f + penalty * infeasibility_sum(v);
-        let phi0 = phi(&values);
-        let deriv = dot(&g, &step.d) - penalty * (infeasibility_sum(&values) - step.elastic);
+        let phi0 = phi(values);
+        let deriv = dot(&g, &step.d) - penalty * (infeasibility_sum(values) - step.elastic);
         let mut alpha = 1.0;
         let (mut failed, mut last_failure) = (0usize, None);
         let accepted = loop {
             let zt: Vec<f64> = z.iter().zip(&step.d).map(|(a, b)| a + alpha * b).collect();
             let trial = problem.values(&scaling.x(&zt));
-            evaluations += 1;
+            *evaluations += 1;
             match trial {
                 Ok(v) => {
                     if phi(&v) <= phi0 + 1e-4 * alpha * deriv.min(0.0) {
@@ -571,7 +699,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                         };
                         let (eq_soc, ineq_soc) = (shift(&v.eq, &eq_jac), shift(&v.ineq, &ineq_jac));
                         if let Ok(soc) = solver.solve(&QpData {
-                            hessian: &hess,
+                            hessian: hess,
                             grad: &g,
                             eq: &eq_soc,
                             eq_jac: &eq_jac,
@@ -583,7 +711,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                             tolerant: false,
                         }) {
                             let zc: Vec<f64> = z.iter().zip(&soc.d).map(|(a, b)| a + b).collect();
-                            evaluations += 1;
+                            *evaluations += 1;
                             match problem.values(&scaling.x(&zc)) {
                                 Ok(vc) if phi(&vc) <= phi0 + 1e-4 * deriv.min(0.0) => {
                                     break Some((zc, vc));
@@ -612,7 +740,6 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
             last.failed_trials = failed;
             last.trial_failure = last_failure.clone();
         }
-        let record = history.last().expect("pushed above").clone();
         let Some((z_new, v_new)) = accepted else {
             let converged = viol < params.tolerance && kkt < 10.0 * params.tolerance;
             let message = match last_failure {
@@ -621,7 +748,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                 ),
                 None => "line search stalled (no decrease of the merit function along the step)".into(),
             } + &infeasible;
-            return Ok(finish(converged, message, history, evaluations));
+            return Ok((SqpStatus::LineSearchStalled { converged }, message));
         };
         let grads_new = match problem.gradients(&scaling.x(&z_new)) {
             Ok(g) => g,
@@ -629,20 +756,13 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                 let message = format!(
                     "the gradients at the point accepted at iteration {iteration} could not be evaluated ({reason})"
                 );
-                return Ok(stop_at_best(
-                    message,
-                    history,
-                    iteration,
-                    evaluations,
-                    elapsed_before + started.elapsed().as_secs_f64(),
-                    params.tolerance,
-                ));
+                return Ok((SqpStatus::GradientsFailed, message));
             }
         };
         // damped BFGS (Powell) on the Lagrangian with the new multipliers
-        let s: Vec<f64> = z_new.iter().zip(&z).map(|(a, b)| a - b).collect();
-        let gl_new = lagrangian_grad(&scaling, &grads_new, &step.lambda_eq, &step.lambda_ineq);
-        let gl_old = lagrangian_grad(&scaling, &grads, &step.lambda_eq, &step.lambda_ineq);
+        let s: Vec<f64> = z_new.iter().zip(z.iter()).map(|(a, b)| a - b).collect();
+        let gl_new = lagrangian_grad(scaling, &grads_new, &step.lambda_eq, &step.lambda_ineq);
+        let gl_old = lagrangian_grad(scaling, grads, &step.lambda_eq, &step.lambda_ineq);
         let mut y: Vec<f64> = gl_new.iter().zip(&gl_old).map(|(a, b)| a - b).collect();
         let bs: Vec<f64> = (0..n).map(|i| dot(&hess[i], &s)).collect();
         let sbs = dot(&s, &bs);
@@ -661,38 +781,11 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                 }
             }
         }
-        z = z_new;
-        values = v_new;
-        grads = grads_new;
-        iteration += 1;
-        let checkpoint = checkpoint!(None);
-        if let Some(store) = checkpoints.as_mut() {
-            store
-                .save(&checkpoint)
-                .map_err(|e| SqpError::Checkpoint(format!("cannot save it: {e}")))?;
-        }
-        let mut control = Control::Continue;
-        for o in observers.iter_mut() {
-            if o.iteration(&record, &checkpoint)
-                .map_err(SqpError::Observer)?
-                == Control::Stop
-            {
-                control = Control::Stop;
-            }
-        }
-        if control == Control::Stop {
-            let x = scaling.x(&z);
-            return Ok(SqpInfo {
-                converged: false,
-                iterations: iteration,
-                evaluations,
-                message: "stopped by the observer".into(),
-                x,
-                values,
-                history,
-                elapsed_s: checkpoint.elapsed_s,
-            });
-        }
+        *z = z_new;
+        *values = v_new;
+        *grads = grads_new;
+        *iteration += 1;
+        Ok((SqpStatus::StepTaken, String::new()))
     }
 }
 
@@ -781,6 +874,7 @@ fn stop_at_best(
     };
     SqpInfo {
         converged: false,
+        status: SqpStatus::SubproblemFailed,
         iterations: iteration,
         evaluations,
         message: format!("{why}; {which}"),

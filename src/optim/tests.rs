@@ -136,6 +136,7 @@ fn hock_schittkowski_71() {
         r.iterations, r.evaluations, r.values.f, r.x
     );
     assert!(r.converged, "{}", r.message);
+    assert_eq!(r.status, SqpStatus::Converged);
     assert!((r.values.f - 17.0140173).abs() < 1e-6);
     for (a, b) in r.x.iter().zip([1.0, 4.7429994, 3.8211503, 1.3794082]) {
         assert!((a - b).abs() < 1e-5, "{:?}", r.x);
@@ -546,6 +547,7 @@ fn an_unrecoverable_subproblem_ends_the_run_at_the_best_feasible_iterate() {
         .run(&mut hs71(), &x0)
         .unwrap();
     assert!(!r.converged);
+    assert_eq!(r.status, SqpStatus::SubproblemFailed);
     assert!(
         r.message.contains("every recovery failed")
             && r.message.contains("BFGS matrix reset")
