@@ -484,7 +484,7 @@ pub fn bench_pipeline(study: &Study, repeat: usize) -> Result<PipelineTimings> {
     if study.spec.optimization.is_some() {
         let (lower, upper) = study.design_bounds()?;
         let mut spec =
-            crate::runner::wing::optimize::design_spec(study, &settings, &ev, lower, upper);
+            crate::runner::wing::optimize::design_spec(study, &settings, &ev, lower, upper)?;
         spec.peak = crate::runner::wing::optimize::peak_limit(study, &ev)?;
         let mut problem = crate::problem::DesignProblem::new(&case, settings.clone(), spec);
         design_function = Some(measure(repeat, || {

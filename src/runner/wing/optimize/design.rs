@@ -28,19 +28,26 @@ pub(super) fn snapshot(
     }
 }
 
-/// The design problem of the study's `optimization` section (which the caller has checked):
-/// bounds `lower`/`upper`, the constrained output and its limit in SI, the flutter margin, and
-/// the initial design's evaluation `ev0` as the reference of mass and area.
+/// The design problem of the study's `optimization` section: bounds `lower`/`upper`, the
+/// constrained output and its limit in SI, the flutter margin, and the initial design's
+/// evaluation `ev0` as the reference of mass and area; an error for a study without one (or
+/// whose output is not among the gust outputs, which loading refuses).
 pub(crate) fn design_spec(
     study: &Study,
     settings: &crate::gust::GustSettings,
     ev0: &crate::pipeline::Evaluation,
     lower: Vec<f64>,
     upper: Vec<f64>,
-) -> crate::problem::DesignSpec {
-    let o = study.spec.optimization.as_ref().expect("caller checked");
-    let (output, rms_limit) = rms_constraint(study, settings).expect("checked");
-    crate::problem::DesignSpec {
+) -> Result<crate::problem::DesignSpec> {
+    let o = optimization_section(study)?;
+    let (output, rms_limit) = rms_constraint(study, settings).with_context(|| {
+        format!(
+            "{}: optimization.output: '{}' is not one of the gust outputs",
+            study.file.display(),
+            o.output
+        )
+    })?;
+    Ok(crate::problem::DesignSpec {
         lower,
         upper,
         output,
@@ -57,7 +64,7 @@ pub(crate) fn design_spec(
             }),
         mode_floor: None,
         peak: None,
-    }
+    })
 }
 
 /// The discrete gust peak limit of the study's optimization (none without one): its grid is the
@@ -131,6 +138,17 @@ pub(crate) fn design_basis(study: &Study) -> Result<(Study, Option<crate::proble
             omega_cut,
         }),
     ))
+}
+
+/// The study's `optimization` section, or an error naming the file (a runner asked for an
+/// optimization of a study without one).
+pub(crate) fn optimization_section(study: &Study) -> Result<&crate::study::OptimizationSpec> {
+    study.spec.optimization.as_ref().with_context(|| {
+        format!(
+            "{}: the study has no optimization section",
+            study.file.display()
+        )
+    })
 }
 
 /// The discrete gust peak limit's values at the initial and final designs (KS and largest

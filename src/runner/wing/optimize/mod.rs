@@ -76,7 +76,7 @@ pub fn optimize_pass(
     pass: &Pass,
 ) -> Result<OptimizationResults> {
     use crate::problem::DesignProblem;
-    let o = study.spec.optimization.as_ref().expect("caller checked");
+    let o = optimization_section(study)?;
     let settings = study.gust_settings()?;
     let (lower, upper) = study.design_bounds()?;
     let case = study.resolve()?;
@@ -90,7 +90,7 @@ pub fn optimize_pass(
     let t_ev0 = Instant::now();
     let ev0 = crate::pipeline::evaluate(&case, &settings, &x0).context("initial design")?;
     let t_ev0 = t_ev0.elapsed().as_secs_f64();
-    let mut spec = design_spec(study, &settings, &ev0, lower, upper);
+    let mut spec = design_spec(study, &settings, &ev0, lower, upper)?;
     spec.rms_limit *= pass.rms_factor;
     let (fixed_basis, floor) = design_basis(study)?;
     let fixed_basis = fixed_basis.resolve()?;
