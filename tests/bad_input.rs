@@ -91,6 +91,13 @@ fn sizes_beyond_the_machine() {
     );
     refused(
         "run",
+        "aero.fidelity",
+        serde_json::json!({"strip": {"n_strips": 100000}}),
+        "aero.fidelity.strip.n_strips",
+        &["[1, 10000]"],
+    );
+    refused(
+        "run",
         "gust.points",
         10_000_000.into(),
         "gust.points",

@@ -39,7 +39,7 @@ impl Capabilities {
             Ok(())
         } else {
             Err(format!(
-                "{what} needs the gradients of the planform variables (span, sweep_c4, root_chord, tip_chord), and the {name} fidelity's reverse mode covers the thickness variables only (the planform moves its mesh, whose linearization is not implemented yet); gustkit check-gradient --dv t[i] checks the thickness gradients"
+                "{what} needs the gradients of the planform variables (span, sweep_c4, root_chord, tip_chord), and the {name} fidelity's reverse mode covers the thickness variables only (its geometry does not move with the planform in the reverse mode); gustkit check-gradient --dv t[i] checks the thickness gradients"
             ))
         }
     }

@@ -16,6 +16,8 @@ pub enum FidelitySpec {
     Dlm(super::dlm::DlmSpec),
     /// Euler LFD on the built-in wing mesh (or a mesh file).
     Lfd(super::lfd::LfdWingSpec),
+    /// Theodorsen/Sears strip theory on streamwise strips of the planform.
+    Strip(super::strip::StripWingSpec),
 }
 
 impl FidelitySpec {
@@ -36,6 +38,7 @@ impl FidelitySpec {
         match self {
             FidelitySpec::Dlm(spec) => spec,
             FidelitySpec::Lfd(spec) => spec,
+            FidelitySpec::Strip(spec) => spec,
         }
     }
 }

@@ -195,3 +195,32 @@ fn builders_own_their_flight_range_and_memory() {
         on(4)
     );
 }
+
+/// The strip builder's binding: each strip's chord points at the (ξ, η) whose planform map is
+/// the point's (x, y) to round-off, strips at the centres of equal spanwise strips.
+#[test]
+fn strip_binding_matches_its_surface() {
+    let study = agard();
+    let planform = study.planform().unwrap();
+    let (airfoil, flight) = (study.airfoil().unwrap(), study.flight_condition().unwrap());
+    let ctx = WingContext {
+        planform: &planform,
+        airfoil: &airfoil,
+        flight: &flight,
+        cache_dir: None,
+    };
+    let spec: FidelitySpec =
+        serde_json::from_value(serde_json::json!({"strip": {"n_strips": 6, "points": 5}})).unwrap();
+    let built = spec.builder().build(&ctx).unwrap();
+    let pts = &built.model.surface().points;
+    assert_eq!((built.binding.points.len(), pts.len()), (30, 30));
+    let p = planform.to_array();
+    for (xe, x) in built.binding.points.iter().zip(pts) {
+        let q = crate::wing::planform_point(p, xe[0], xe[1]);
+        assert!((q[0] - x[0]).abs() < 1e-12 && (q[1] - x[1]).abs() < 1e-12);
+    }
+    assert!((pts[5][1] - 1.5 * planform.span / 6.0).abs() < 1e-12);
+    let zero: FidelitySpec =
+        serde_json::from_value(serde_json::json!({"strip": {"n_strips": 0}})).unwrap();
+    assert_eq!(zero.builder().validate(&ctx).unwrap_err().path, "n_strips");
+}

@@ -72,9 +72,10 @@ impl StripSection {
             .collect()
     }
 
-    /// The 2 × 2 motion and the gust GAFs at k with the gust phase referred to `x_ref`.
+    /// The 2 × 2 motion and the gust GAFs at the reference reduced frequency k = ω b_ref / U
+    /// (the section's own is k b / b_ref) with the gust phase referred to `x_ref`.
     fn parts(&self, flight: &FlightCondition, k: f64) -> ([[Complex64; 2]; 2], [Complex64; 2]) {
-        let (ss, gs) = strip_gafs(k, self.b, flight.mach);
+        let (ss, gs) = strip_gafs(k * self.b / flight.b_ref, self.b, flight.mach);
         // the gust reaches the mid-chord with phase e^{−iω(x_mid − x_ref)/U}
         let phase = Complex64::new(0.0, -k * (self.x_mid - flight.x_ref) / flight.b_ref).exp();
         let scale = self.span;
@@ -123,6 +124,17 @@ impl Aerodynamics for StripSection {
         k: &[f64],
     ) -> Result<GafTable, AeroError> {
         self.check(flight, modes, k)?;
+        Ok(self.table(flight, modes, k))
+    }
+
+    fn reverse(&self) -> Option<&dyn AerodynamicsReverse> {
+        Some(self)
+    }
+}
+
+impl StripSection {
+    /// The GAF table of this section for modes sampled on its points (checked by the caller).
+    fn table(&self, flight: &FlightCondition, modes: &ModalSurface, k: &[f64]) -> GafTable {
         let a = self.rigid(modes);
         let parts = k
             .iter()
@@ -147,11 +159,7 @@ impl Aerodynamics for StripSection {
                 (q_ss, q_gs)
             })
             .collect();
-        Ok(GafTable::from_parts(flight, k, parts))
-    }
-
-    fn reverse(&self) -> Option<&dyn AerodynamicsReverse> {
-        Some(self)
+        GafTable::from_parts(flight, k, parts)
     }
 }
 
@@ -167,6 +175,22 @@ impl AerodynamicsReverse for StripSection {
         seed: &GafTable,
     ) -> Result<GafGradient, AeroError> {
         self.check(flight, modes, k)?;
+        Ok(GafGradient {
+            modes: self.table_vjp(flight, modes, k, seed),
+            geometry: Vec::new(),
+        })
+    }
+}
+
+impl StripSection {
+    /// The reverse mode of [`StripSection::table`]: the seed pulled back to the mode samples.
+    fn table_vjp(
+        &self,
+        flight: &FlightCondition,
+        modes: &ModalSurface,
+        k: &[f64],
+        seed: &GafTable,
+    ) -> ModalSurface {
         let a = self.rigid(modes);
         let nm = a.len();
         let mut abar = vec![[0.0; 2]; nm];
@@ -188,6 +212,133 @@ impl AerodynamicsReverse for StripSection {
         for m in 0..nm {
             for (p, f) in self.fit.iter().enumerate() {
                 grad.disp[m][p][2] = abar[m][0] * f[0] + abar[m][1] * f[1];
+            }
+        }
+        grad
+    }
+}
+
+/// A strip of a wing: its spanwise station y (m), mid-chord x (m), semichord b (m) and width
+/// (m of span its forces stand for).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StripStation {
+    pub y: f64,
+    pub x_mid: f64,
+    pub b: f64,
+    pub width: f64,
+}
+
+/// Strip theory on a wing: a streamwise Theodorsen/Sears section at each station, with its own
+/// semichord (reduced frequency k b / b_ref), mid-chord and gust phase, its forces per its strip
+/// width; the GAFs are the sum over the strips. No three-dimensional effects: no downwash from
+/// the other strips, no tip loss, no sweep correction (the classical baseline that overestimates
+/// a low-aspect-ratio wing's lift).
+#[derive(Clone, Debug)]
+pub struct StripWing {
+    strips: Vec<StripSection>,
+    surface: AeroSurface,
+}
+
+impl StripWing {
+    /// The wing of these stations, each sampling the modes at `n_points` (≥ 2) chord points.
+    pub fn new(stations: &[StripStation], n_points: usize) -> Self {
+        let strips: Vec<StripSection> = stations
+            .iter()
+            .map(|s| StripSection::new(s.b, s.x_mid, s.width, n_points))
+            .collect();
+        let mut surface = AeroSurface {
+            points: Vec::new(),
+            normals: Vec::new(),
+        };
+        for (st, s) in strips.iter().zip(stations) {
+            surface
+                .points
+                .extend(st.surface.points.iter().map(|p| [p[0], s.y, 0.0]));
+            surface.normals.extend(&st.surface.normals);
+        }
+        Self { strips, surface }
+    }
+
+    /// The modes sampled on strip j's points (its slice of `modes`).
+    fn slice(&self, modes: &ModalSurface, j: usize) -> ModalSurface {
+        let n = self.strips[0].surface.points.len();
+        let r = j * n..(j + 1) * n;
+        ModalSurface {
+            disp: modes.disp.iter().map(|d| d[r.clone()].to_vec()).collect(),
+            disp_x: modes.disp_x.iter().map(|d| d[r.clone()].to_vec()).collect(),
+        }
+    }
+
+    fn check(
+        &self,
+        flight: &FlightCondition,
+        modes: &ModalSurface,
+        k: &[f64],
+    ) -> Result<(), AeroError> {
+        check_request(flight, modes, k, self.surface.points.len())?;
+        if !(flight.mach < 1.0) {
+            return Err(AeroError::Input(format!(
+                "mach: strip theory is subsonic (got {})",
+                flight.mach
+            )));
+        }
+        Ok(())
+    }
+}
+
+impl Aerodynamics for StripWing {
+    fn surface(&self) -> &AeroSurface {
+        &self.surface
+    }
+
+    fn geometry_names(&self) -> Vec<String> {
+        Vec::new()
+    }
+
+    fn gafs(
+        &self,
+        flight: &FlightCondition,
+        modes: &ModalSurface,
+        k: &[f64],
+    ) -> Result<GafTable, AeroError> {
+        self.check(flight, modes, k)?;
+        let mut total = GafTable::zeros(flight, k, modes.n_modes());
+        for (j, strip) in self.strips.iter().enumerate() {
+            let t = strip.table(flight, &self.slice(modes, j), k);
+            for (i, (ss, gs)) in t.q_ss.iter().zip(&t.q_gs).enumerate() {
+                for (m, row) in ss.iter().enumerate() {
+                    for (n, v) in row.iter().enumerate() {
+                        total.q_ss[i][m][n] += v;
+                    }
+                    total.q_gs[i][m] += gs[m];
+                }
+            }
+        }
+        Ok(total)
+    }
+
+    fn reverse(&self) -> Option<&dyn AerodynamicsReverse> {
+        Some(self)
+    }
+}
+
+impl AerodynamicsReverse for StripWing {
+    /// The GAFs are a sum over the strips of functions of each strip's own samples: each
+    /// strip's reverse mode with the whole seed gives its slice of the gradient.
+    fn gafs_vjp(
+        &self,
+        flight: &FlightCondition,
+        modes: &ModalSurface,
+        k: &[f64],
+        seed: &GafTable,
+    ) -> Result<GafGradient, AeroError> {
+        self.check(flight, modes, k)?;
+        let mut grad = ModalSurface::zeros(modes.n_modes(), 0);
+        for (j, strip) in self.strips.iter().enumerate() {
+            let g = strip.table_vjp(flight, &self.slice(modes, j), k, seed);
+            for (m, (d, dx)) in g.disp.into_iter().zip(g.disp_x).enumerate() {
+                grad.disp[m].extend(d);
+                grad.disp_x[m].extend(dx);
             }
         }
         Ok(GafGradient {
@@ -240,7 +391,20 @@ mod tests {
     /// direction) equals Σ gradient · direction, to 1e-12.
     #[test]
     fn reverse_mode_dot_product() {
-        let s = StripSection::new(0.5, 0.1, 2.0, 9);
+        dot_product_check(&StripSection::new(0.5, 0.1, 2.0, 9), &flight());
+        // a wing of three strips of other semichords, stations and widths
+        let stations = [
+            (0.1, 0.0, 0.5, 0.2),
+            (0.3, 0.15, 0.4, 0.2),
+            (0.5, 0.3, 0.3, 0.1),
+        ]
+        .map(|(y, x_mid, b, width)| StripStation { y, x_mid, b, width });
+        dot_product_check(&StripWing::new(&stations, 7), &flight());
+    }
+
+    /// Dot-product test of a model's reverse mode against central differences of its GAFs
+    /// (exact up to round-off: the GAFs are quadratic in the mode samples).
+    fn dot_product_check<A: Aerodynamics + AerodynamicsReverse>(s: &A, f: &FlightCondition) {
         let n = s.surface().points.len();
         let rnd = |i: usize| ((i as f64 * 12.9898).sin() * 43758.5453).fract();
         let mut modes = ModalSurface::zeros(3, n);
@@ -251,9 +415,8 @@ mod tests {
                 dir.disp[m][p][2] = rnd(m * 31 + p + 500);
             }
         }
-        let f = flight();
         let k = [0.0, 0.3, 1.1];
-        let t = s.gafs(&f, &modes, &k).unwrap();
+        let t = s.gafs(f, &modes, &k).unwrap();
         let mut seed = t.clone();
         for (i, v) in seed.q_ss.iter_mut().flatten().flatten().enumerate() {
             *v = Complex64::new(rnd(i + 900), rnd(i + 1900));
@@ -269,7 +432,7 @@ mod tests {
             for (a, d) in m.values_mut().zip(dir.values()) {
                 *a += sign * h * d;
             }
-            s.gafs(&f, &m, &k).unwrap()
+            s.gafs(f, &m, &k).unwrap()
         };
         let (tp, tm) = (shifted(1.0), shifted(-1.0));
         let mut dq = tp.clone();
@@ -291,11 +454,72 @@ mod tests {
             *d = (p - q) / (2.0 * h);
         }
         let forward = seed.pair(&dq);
-        let g = s.gafs_vjp(&f, &modes, &k, &seed).unwrap();
+        let g = s.gafs_vjp(f, &modes, &k, &seed).unwrap();
         let reverse: f64 = g.modes.values().zip(dir.values()).map(|(a, b)| a * b).sum();
         assert!(
             (forward - reverse).abs() < 1e-10 * forward.abs(),
             "{forward} vs {reverse}"
         );
+    }
+
+    /// A wing of identical strips with a spanwise-uniform mode is the section of their total
+    /// span (to round-off); a strip of another semichord than b_ref takes its own reduced
+    /// frequency k b / b_ref and the gust phase of its mid-chord (Theodorsen/Sears directly).
+    #[test]
+    fn strip_wing_sums_its_sections() {
+        let f = flight();
+        let k = [0.0, 0.4, 1.3];
+        let stations: Vec<StripStation> = (0..4)
+            .map(|j| StripStation {
+                y: 0.25 * j as f64,
+                x_mid: 0.1,
+                b: 0.5,
+                width: 0.25,
+            })
+            .collect();
+        let wing = StripWing::new(&stations, 9);
+        let section = StripSection::new(0.5, 0.1, 1.0, 9);
+        let shape = |x: f64| [[0.0, 0.0, 1.0], [0.0, 0.0, -(x - 0.1)]];
+        let sample = |pts: &[[f64; 3]]| {
+            let mut m = ModalSurface::zeros(2, pts.len());
+            for (p, x) in pts.iter().enumerate() {
+                let s = shape(x[0]);
+                m.disp[0][p] = s[0];
+                m.disp[1][p] = s[1];
+            }
+            m
+        };
+        let tw = wing.gafs(&f, &sample(&wing.surface().points), &k).unwrap();
+        let ts = section
+            .gafs(&f, &sample(&section.surface().points), &k)
+            .unwrap();
+        for i in 0..k.len() {
+            for m in 0..2 {
+                assert!((tw.q_gs[i][m] - ts.q_gs[i][m]).norm() < 1e-12 * ts.q_gs[i][0].norm());
+                for n in 0..2 {
+                    let (a, b) = (tw.q_ss[i][m][n], ts.q_ss[i][m][n]);
+                    assert!((a - b).norm() <= 1e-12 * (1.0 + b.norm()), "{i} {m} {n}");
+                }
+            }
+        }
+        // one strip of semichord 0.3 m (b_ref 0.5 m) at x_mid 0.4, width 0.2: plunge lift
+        let one = StripWing::new(
+            &[StripStation {
+                y: 0.0,
+                x_mid: 0.4,
+                b: 0.3,
+                width: 0.2,
+            }],
+            5,
+        );
+        let mut plunge = ModalSurface::zeros(1, 5);
+        for p in 0..5 {
+            plunge.disp[0][p] = [0.0, 0.0, 1.0];
+        }
+        let t = one.gafs(&f, &plunge, &[0.8]).unwrap();
+        let (ss, gs) = strip_gafs(0.8 * 0.3 / 0.5, 0.3, f.mach);
+        let phase = Complex64::new(0.0, -0.8 * (0.4 - f.x_ref) / 0.5).exp();
+        assert!((t.q_ss[0][0][0] - 0.2 * ss[0][0]).norm() < 1e-12 * ss[0][0].norm());
+        assert!((t.q_gs[0][0] - 0.2 * gs[0] * phase).norm() < 1e-12 * gs[0].norm());
     }
 }

@@ -36,7 +36,7 @@ fn not_refinable(study: &Study) -> Option<String> {
     match study.spec.aero.as_ref().map(|a| &a.fidelity) {
         None => Some("the study has no aerodynamic model".into()),
         Some(FidelitySpec::Lfd(l)) => next_lfd_mesh(&mut l.clone()).err(),
-        Some(FidelitySpec::Dlm(_)) => None,
+        Some(FidelitySpec::Dlm(_) | FidelitySpec::Strip(_)) => None,
     }
 }
 
@@ -124,6 +124,10 @@ fn refined_study(
             format!("DLM {} × {} boxes{extended}", d.n_chord, d.n_span)
         }
         FidelitySpec::Lfd(l) => next_lfd_mesh(l)? + &extended,
+        FidelitySpec::Strip(st) => {
+            st.n_strips *= 2;
+            format!("strip theory, {} strips{extended}", st.n_strips)
+        }
     };
     // the second fidelity is not part of the check
     aero.compare_with = None;
@@ -146,6 +150,9 @@ fn model_words(study: &Study, modes: usize) -> String {
     match study.spec.aero.as_ref().map(|a| &a.fidelity) {
         Some(FidelitySpec::Dlm(d)) => {
             format!("DLM {} × {} boxes, {modes} modes", d.n_chord, d.n_span)
+        }
+        Some(FidelitySpec::Strip(st)) => {
+            format!("strip theory, {} strips, {modes} modes", st.n_strips)
         }
         Some(FidelitySpec::Lfd(l)) if l.mesh_file.is_some() => {
             format!("LFD on the external mesh, {modes} modes")
