@@ -68,6 +68,20 @@ pub fn dlm_surface(planform: &Planform, spec: &DlmSpec) -> (SurfaceSpec, Vec<[f6
 }
 
 impl DlmSpec {
+    /// The next resolution for the resolution check (twice the boxes each way) and its words.
+    pub fn refined(&self) -> (Self, String) {
+        let mut d = self.clone();
+        d.n_chord *= 2;
+        d.n_span *= 2;
+        let words = d.words();
+        (d, words)
+    }
+
+    /// The model in words: its lattice.
+    pub fn words(&self) -> String {
+        format!("DLM {} × {} boxes", self.n_chord, self.n_span)
+    }
+
     /// The lattice on a planform (boxes only; influence matrices come with the first GAFs).
     pub fn lattice(&self, planform: &Planform) -> Result<Dlm, BuildError> {
         let (surface, _) = dlm_surface(planform, self);

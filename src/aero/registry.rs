@@ -33,6 +33,34 @@ impl FidelitySpec {
         }
     }
 
+    /// The next resolution of this model for the resolution check (a lattice twice as fine, the
+    /// next mesh level, twice the strips) with its words, or why there is none.
+    pub fn refined(&self) -> Result<(FidelitySpec, String), String> {
+        Ok(match self {
+            FidelitySpec::Dlm(d) => {
+                let (d, w) = d.refined();
+                (FidelitySpec::Dlm(d), w)
+            }
+            FidelitySpec::Lfd(l) => {
+                let (l, w) = l.refined()?;
+                (FidelitySpec::Lfd(l), w)
+            }
+            FidelitySpec::Strip(s) => {
+                let (s, w) = s.refined();
+                (FidelitySpec::Strip(s), w)
+            }
+        })
+    }
+
+    /// The model in words (its lattice, mesh or strips), for reports.
+    pub fn words(&self) -> String {
+        match self {
+            FidelitySpec::Dlm(d) => d.words(),
+            FidelitySpec::Lfd(l) => l.words(),
+            FidelitySpec::Strip(s) => s.words(),
+        }
+    }
+
     /// The builder of this fidelity.
     pub fn builder(&self) -> &dyn WingBuilder {
         match self {

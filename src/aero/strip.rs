@@ -48,6 +48,21 @@ fn default_points() -> usize {
 pub const MAX_STRIPS: usize = 10_000;
 
 impl StripWingSpec {
+    /// The next resolution for the resolution check (twice the strips) and its words.
+    pub fn refined(&self) -> (Self, String) {
+        let s = Self {
+            n_strips: 2 * self.n_strips,
+            points: self.points,
+        };
+        let words = s.words();
+        (s, words)
+    }
+
+    /// The model in words.
+    pub fn words(&self) -> String {
+        format!("strip theory, {} strips", self.n_strips)
+    }
+
     /// The strips' stations on a planform: centre y, mid-chord x, semichord, width (m).
     fn stations(&self, p: &crate::wing::Planform) -> Vec<gustkit_core::strip::StripStation> {
         let a = p.to_array();

@@ -224,3 +224,30 @@ fn strip_binding_matches_its_surface() {
         serde_json::from_value(serde_json::json!({"strip": {"n_strips": 0}})).unwrap();
     assert_eq!(zero.builder().validate(&ctx).unwrap_err().path, "n_strips");
 }
+
+/// Each fidelity's next resolution for the resolution check, in its own words: the DLM's lattice
+/// doubled each way, the LFD's next mesh level (coarse 7 168 → medium 57 344 cells; none above
+/// the fine one), twice the strips.
+#[test]
+fn each_fidelity_refines_itself() {
+    let spec = |v: serde_json::Value| -> FidelitySpec { serde_json::from_value(v).unwrap() };
+    let (d, w) = spec(serde_json::json!({"dlm": {"n_chord": 8, "n_span": 12}}))
+        .refined()
+        .unwrap();
+    assert_eq!((d.words(), w.as_str()), (w.clone(), "DLM 16 × 24 boxes"));
+    let (_, w) = spec(serde_json::json!({"lfd": {"mesh": "coarse"}}))
+        .refined()
+        .unwrap();
+    assert_eq!(w, "LFD medium mesh (57344 cells)");
+    let e = spec(serde_json::json!({"lfd": {"mesh": "fine"}}))
+        .refined()
+        .unwrap_err();
+    assert!(e.contains("finest built-in level"), "{e}");
+    let (s, w) = spec(serde_json::json!({"strip": {"n_strips": 10}}))
+        .refined()
+        .unwrap();
+    assert_eq!(
+        (w.as_str(), s.words()),
+        ("strip theory, 20 strips", w.clone())
+    );
+}

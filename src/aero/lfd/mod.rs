@@ -483,3 +483,61 @@ impl WingBuilder for LfdWingSpec {
         })
     }
 }
+
+/// Moves an LFD spec to the next mesh: the built-in level above (coarse → medium → fine, each
+/// 2× finer in every direction) or explicit sizes doubled the same way (the first spacing
+/// halved); returns its words. An external mesh has no next level, nor has the fine one.
+fn next_mesh(l: &mut LfdWingSpec) -> Result<String, String> {
+    if l.mesh_file.is_some() {
+        return Err("an external LFD mesh (mesh_file) has no next level to check it on: check it with a finer mesh file of your own".into());
+    }
+    if let Some(m) = &mut l.mesh_sizes {
+        m.n_around *= 2;
+        m.n_radial *= 2;
+        m.n_span *= 2;
+        m.n_outboard *= 2;
+        m.first_spacing_chords /= 2.0;
+        return Ok(format!(
+            "LFD mesh sizes doubled ({} cells)",
+            l.mesh_spec().n_cells()
+        ));
+    }
+    l.mesh = match l.mesh {
+        WingMeshLevel::Coarse => WingMeshLevel::Medium,
+        WingMeshLevel::Medium => WingMeshLevel::Fine,
+        WingMeshLevel::Fine => {
+            return Err("the LFD runs on the fine mesh, the finest built-in level: there is no next level to check it on".into())
+        }
+    };
+    Ok(format!(
+        "LFD {} mesh ({} cells)",
+        l.mesh.name(),
+        l.mesh_spec().n_cells()
+    ))
+}
+
+impl LfdWingSpec {
+    /// The next resolution for the resolution check (the next mesh level) and its words, or why
+    /// there is none.
+    pub fn refined(&self) -> Result<(Self, String), String> {
+        let mut l = self.clone();
+        let words = next_mesh(&mut l)?;
+        Ok((l, words))
+    }
+
+    /// The model in words: its mesh and cell count.
+    pub fn words(&self) -> String {
+        if self.mesh_file.is_some() {
+            return "LFD on the external mesh".into();
+        }
+        format!(
+            "LFD {} mesh ({} cells)",
+            if self.mesh_sizes.is_some() {
+                "given"
+            } else {
+                self.mesh.name()
+            },
+            self.mesh_spec().n_cells()
+        )
+    }
+}

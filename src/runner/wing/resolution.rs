@@ -5,8 +5,6 @@
 //! depends on what the model leaves out shows it. A design that fails its flutter margin or RMS
 //! limit at the refined resolution beyond the tolerances below does not pass.
 
-use crate::aero::lfd::{LfdWingSpec, WingMeshLevel};
-use crate::aero::FidelitySpec;
 use crate::flutter::{PkProblem, Verdict};
 use crate::gust::GustSettings;
 use crate::report::results::ResolutionCheck;
@@ -35,41 +33,8 @@ pub struct Requirement {
 fn not_refinable(study: &Study) -> Option<String> {
     match study.spec.aero.as_ref().map(|a| &a.fidelity) {
         None => Some("the study has no aerodynamic model".into()),
-        Some(FidelitySpec::Lfd(l)) => next_lfd_mesh(&mut l.clone()).err(),
-        Some(FidelitySpec::Dlm(_) | FidelitySpec::Strip(_)) => None,
+        Some(f) => f.refined().err(),
     }
-}
-
-/// Moves an LFD spec to the next mesh: the built-in level above (coarse → medium → fine, each
-/// 2× finer in every direction) or explicit sizes doubled the same way (the first spacing
-/// halved); returns its words. An external mesh has no next level, nor has the fine one.
-fn next_lfd_mesh(l: &mut LfdWingSpec) -> Result<String, String> {
-    if l.mesh_file.is_some() {
-        return Err("an external LFD mesh (mesh_file) has no next level to check it on: check it with a finer mesh file of your own".into());
-    }
-    if let Some(m) = &mut l.mesh_sizes {
-        m.n_around *= 2;
-        m.n_radial *= 2;
-        m.n_span *= 2;
-        m.n_outboard *= 2;
-        m.first_spacing_chords /= 2.0;
-        return Ok(format!(
-            "LFD mesh sizes doubled ({} cells)",
-            l.mesh_spec().n_cells()
-        ));
-    }
-    l.mesh = match l.mesh {
-        WingMeshLevel::Coarse => WingMeshLevel::Medium,
-        WingMeshLevel::Medium => WingMeshLevel::Fine,
-        WingMeshLevel::Fine => {
-            return Err("the LFD runs on the fine mesh, the finest built-in level: there is no next level to check it on".into())
-        }
-    };
-    Ok(format!(
-        "LFD {} mesh ({} cells)",
-        l.mesh.name(),
-        l.mesh_spec().n_cells()
-    ))
 }
 
 /// The study at the refined resolution and its words, or why there is none.
@@ -117,18 +82,9 @@ fn refined_study(
         }
         extended = format!(", reduced frequencies to {k:.2}");
     }
-    let model = match &mut aero.fidelity {
-        FidelitySpec::Dlm(d) => {
-            d.n_chord *= 2;
-            d.n_span *= 2;
-            format!("DLM {} × {} boxes{extended}", d.n_chord, d.n_span)
-        }
-        FidelitySpec::Lfd(l) => next_lfd_mesh(l)? + &extended,
-        FidelitySpec::Strip(st) => {
-            st.n_strips *= 2;
-            format!("strip theory, {} strips{extended}", st.n_strips)
-        }
-    };
+    let (refined, words) = aero.fidelity.refined()?;
+    aero.fidelity = refined;
+    let model = words + &extended;
     // the second fidelity is not part of the check
     aero.compare_with = None;
     // the refined model leaves nothing in the run folder (the LFD would write its steady state
@@ -148,24 +104,7 @@ fn refined_study(
 /// The words of a study's aerodynamic model and mode count.
 fn model_words(study: &Study, modes: usize) -> String {
     match study.spec.aero.as_ref().map(|a| &a.fidelity) {
-        Some(FidelitySpec::Dlm(d)) => {
-            format!("DLM {} × {} boxes, {modes} modes", d.n_chord, d.n_span)
-        }
-        Some(FidelitySpec::Strip(st)) => {
-            format!("strip theory, {} strips, {modes} modes", st.n_strips)
-        }
-        Some(FidelitySpec::Lfd(l)) if l.mesh_file.is_some() => {
-            format!("LFD on the external mesh, {modes} modes")
-        }
-        Some(FidelitySpec::Lfd(l)) => format!(
-            "LFD {} mesh ({} cells), {modes} modes",
-            if l.mesh_sizes.is_some() {
-                "given"
-            } else {
-                l.mesh.name()
-            },
-            l.mesh_spec().n_cells()
-        ),
+        Some(f) => format!("{}, {modes} modes", f.words()),
         None => format!("{modes} modes"),
     }
 }
