@@ -158,6 +158,16 @@ impl Case {
         }
     }
 
+    /// The gust settings, or an error naming the missing section.
+    pub fn gust_settings(&self) -> Result<&GustSettings, StudyError> {
+        self.gust.as_ref().ok_or_else(|| {
+            self.err(
+                "gust",
+                "the study has no gust section (add one for a gust response)",
+            )
+        })
+    }
+
     /// The plate model of a design.
     pub fn model_at(&self, design: DesignVector) -> Result<PlateModel, StudyError> {
         plate_model(&self.file, self.length_unit, &self.structure, design)
@@ -170,27 +180,50 @@ impl Case {
 
     /// The aerodynamic model on a plate (its current planform), bound to it.
     pub fn aero_model(&self, plate: &PlateModel) -> Result<AeroModel, StudyError> {
-        let aero = self.aero.as_ref().ok_or_else(|| {
-            self.err(
-                "aero",
-                "the study has no aerodynamic model (add an \"aero\" section)",
-            )
-        })?;
-        AeroModel::new(
-            &aero.fidelity,
-            aero.flight,
-            aero.reduced_frequencies.clone(),
+        aero_model(
+            &self.file,
+            self.aero.as_ref(),
             plate,
             &self.structure.airfoil,
             self.cache_dir.as_deref(),
         )
-        .map_err(|e| {
-            self.err(
-                &e.path_in(&format!("aero.fidelity.{}", aero.fidelity.builder().name())),
-                e.reason.clone(),
-            )
-        })
     }
+}
+
+/// The aerodynamic model of `aero` on a plate, bound to it; an error names the study field
+/// (`aero` when there is none).
+pub fn aero_model(
+    file: &std::path::Path,
+    aero: Option<&AeroCase>,
+    plate: &PlateModel,
+    airfoil: &Airfoil,
+    cache_dir: Option<&std::path::Path>,
+) -> Result<AeroModel, StudyError> {
+    let err = |path: &str, reason: String| StudyError {
+        file: file.to_path_buf(),
+        path: path.into(),
+        reason,
+    };
+    let aero = aero.ok_or_else(|| {
+        err(
+            "aero",
+            "the study has no aerodynamic model (add an \"aero\" section)".into(),
+        )
+    })?;
+    AeroModel::new(
+        &aero.fidelity,
+        aero.flight,
+        aero.reduced_frequencies.clone(),
+        plate,
+        airfoil,
+        cache_dir,
+    )
+    .map_err(|e| {
+        err(
+            &e.path_in(&format!("aero.fidelity.{}", aero.fidelity.builder().name())),
+            e.reason.clone(),
+        )
+    })
 }
 
 /// The plate model of a design from a plate source; an error names the study field (a

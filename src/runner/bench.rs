@@ -416,7 +416,7 @@ pub struct PipelineTimings {
 pub fn bench_pipeline(study: &Study, repeat: usize) -> Result<PipelineTimings> {
     use crate::optim::Problem;
     let case = study.resolve()?;
-    let settings = study.gust_settings()?;
+    let settings = case.gust_settings()?;
     let x = case.initial.to_vec();
     let margin = study
         .spec
@@ -434,7 +434,7 @@ pub fn bench_pipeline(study: &Study, repeat: usize) -> Result<PipelineTimings> {
     };
     let function = measure(repeat, || {
         timed(&mut || {
-            std::hint::black_box(crate::pipeline::evaluate(&case, &settings, &x)?);
+            std::hint::black_box(crate::pipeline::evaluate(&case, settings, &x)?);
             Ok(())
         })
     })?;
@@ -444,7 +444,7 @@ pub fn bench_pipeline(study: &Study, repeat: usize) -> Result<PipelineTimings> {
             Ok(())
         })
     })?;
-    let ev = crate::pipeline::evaluate(&case, &settings, &x)?;
+    let ev = crate::pipeline::evaluate(&case, settings, &x)?;
     let stability = measure(repeat, || {
         timed(&mut || crate::flutter::check_stability(&ev.modes, &ev.table, &ev.aero.flight))
     })?;
@@ -452,7 +452,7 @@ pub fn bench_pipeline(study: &Study, repeat: usize) -> Result<PipelineTimings> {
     for rep in 0..WARMUP + repeat.max(1) {
         let a = crate::pipeline::aeroelastic(&case, &x)?;
         let t = Instant::now();
-        std::hint::black_box(crate::pipeline::respond(a, &settings)?);
+        std::hint::black_box(crate::pipeline::respond(a, settings)?);
         let t = t.elapsed().as_secs_f64();
         if rep >= WARMUP {
             response.push(t);
@@ -484,7 +484,7 @@ pub fn bench_pipeline(study: &Study, repeat: usize) -> Result<PipelineTimings> {
     if study.spec.optimization.is_some() {
         let (lower, upper) = study.design_bounds()?;
         let mut spec =
-            crate::runner::wing::optimize::design_spec(study, &settings, &ev, lower, upper)?;
+            crate::runner::wing::optimize::design_spec(study, settings, &ev, lower, upper)?;
         spec.peak = crate::runner::wing::optimize::peak_limit(study, &ev)?;
         let mut problem = crate::problem::DesignProblem::new(&case, settings.clone(), spec);
         design_function = Some(measure(repeat, || {

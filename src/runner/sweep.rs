@@ -51,9 +51,9 @@ fn sweep_metrics(
             }
         }
         if study.spec.gust.is_some() {
-            let settings = study.gust_settings()?;
             let case = study.resolve()?;
-            let ev = crate::pipeline::evaluate(&case, &settings, &case.initial.to_vec())?;
+            let settings = case.gust_settings()?;
+            let ev = crate::pipeline::evaluate(&case, settings, &case.initial.to_vec())?;
             for (o, rms) in settings.outputs.iter().zip(&ev.rms_m) {
                 let (rms, unit) = study.spec.length_unit.display(*rms, o.quantity.unit(), 1);
                 out.push(metric(&format!("RMS {}", o.name), unit, rms));

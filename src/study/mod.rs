@@ -330,7 +330,26 @@ impl Study {
 
     /// The study's aerodynamic model on a plate (its current planform), bound to it.
     pub fn aero_model(&self, plate: &PlateModel) -> Result<AeroModel, StudyError> {
-        self.resolve()?.aero_model(plate)
+        crate::case::aero_model(
+            &self.file,
+            self.aero_case()?.as_ref(),
+            plate,
+            &self.airfoil()?,
+            self.cache_dir.as_deref(),
+        )
+    }
+
+    /// The aerodynamic model's spec, flight condition and reduced frequencies (SI); None for a
+    /// study without aerodynamics.
+    fn aero_case(&self) -> Result<Option<AeroCase>, StudyError> {
+        Ok(match &self.spec.aero {
+            Some(a) if self.spec.flight.is_some() => Some(AeroCase {
+                fidelity: a.fidelity.clone(),
+                flight: self.flight_condition()?,
+                reduced_frequencies: a.reduced_frequencies.clone(),
+            }),
+            _ => None,
+        })
     }
 
     /// The reduced frequency at which the run writes the LFD amplitude fields, if any.
@@ -1021,14 +1040,7 @@ impl Study {
     /// The study resolved (SI, every default applied) for the pipeline: see [`Case`]. The study
     /// is validated at load, so this fails only for a study edited since.
     pub fn resolve(&self) -> Result<Case, StudyError> {
-        let aero = match &self.spec.aero {
-            Some(a) if self.spec.flight.is_some() => Some(AeroCase {
-                fidelity: a.fidelity.clone(),
-                flight: self.flight_condition()?,
-                reduced_frequencies: a.reduced_frequencies.clone(),
-            }),
-            _ => None,
-        };
+        let aero = self.aero_case()?;
         let gust = match &self.spec.gust {
             Some(_) => Some(self.gust_settings()?),
             None => None,

@@ -11,6 +11,17 @@ use crate::{
 };
 use num_complex::Complex64;
 
+/// Refuses a flight condition at or above Mach 1 (Prandtl–Glauert strip theory is subsonic).
+fn subsonic(flight: &FlightCondition) -> Result<(), AeroError> {
+    if !(flight.mach < 1.0) {
+        return Err(AeroError::Input(format!(
+            "mach: strip theory is subsonic (got {})",
+            flight.mach
+        )));
+    }
+    Ok(())
+}
+
 /// A flat-plate section of semichord `b` along x (mid-chord at x = `x_mid`), forces per `span`
 /// metres of span.
 #[derive(Clone, Debug)]
@@ -98,13 +109,7 @@ impl StripSection {
                 self.b, flight.b_ref
             )));
         }
-        if !(flight.mach < 1.0) {
-            return Err(AeroError::Input(format!(
-                "mach: strip theory is subsonic (got {})",
-                flight.mach
-            )));
-        }
-        Ok(())
+        subsonic(flight)
     }
 }
 
@@ -276,13 +281,7 @@ impl StripWing {
         k: &[f64],
     ) -> Result<(), AeroError> {
         check_request(flight, modes, k, self.surface.points.len())?;
-        if !(flight.mach < 1.0) {
-            return Err(AeroError::Input(format!(
-                "mach: strip theory is subsonic (got {})",
-                flight.mach
-            )));
-        }
-        Ok(())
+        subsonic(flight)
     }
 }
 

@@ -44,8 +44,8 @@ pub fn check_gradient(study: &Study, dvs: &[String], json: bool) -> Result<()> {
             Some(ScratchDir(dir))
         }
     };
-    let settings = study.gust_settings()?;
     let case = study.resolve()?;
+    let settings = case.gust_settings()?;
     let x0 = case.initial.to_vec();
     let design = &case.initial;
     let names: Vec<String> = (0..x0.len()).map(|i| design.name(i)).collect();
@@ -58,7 +58,7 @@ pub fn check_gradient(study: &Study, dvs: &[String], json: bool) -> Result<()> {
                 .ok_or_else(|| anyhow::anyhow!("--dv {d}: unknown design variable (use t[i] or one of span, sweep_c4, root_chord, tip_chord)"))
         })
         .collect::<Result<_>>()?;
-    let ev = crate::pipeline::evaluate(&case, &settings, &x0)?;
+    let ev = crate::pipeline::evaluate(&case, settings, &x0)?;
     let t0 = Instant::now();
     let g = crate::pipeline::gradient(
         &ev,
@@ -72,7 +72,7 @@ pub fn check_gradient(study: &Study, dvs: &[String], json: bool) -> Result<()> {
     )?;
     let t_grad = t0.elapsed().as_secs_f64();
     let f =
-        |x: &[f64]| -> Result<f64> { Ok(crate::pipeline::evaluate(&case, &settings, x)?.rms_m[0]) };
+        |x: &[f64]| -> Result<f64> { Ok(crate::pipeline::evaluate(&case, settings, x)?.rms_m[0]) };
     let mut rows = Vec::new();
     for (&k, name) in index.iter().zip(dvs) {
         let mut fd = Vec::new();

@@ -23,9 +23,9 @@ pub(crate) fn psd_series(ev: &crate::pipeline::Evaluation, i: usize) -> PsdSerie
 
 /// The gust response part of the results at the study's design, with the evaluation it came from.
 pub(crate) fn gust_results(study: &Study) -> Result<(GustResults, crate::pipeline::Evaluation)> {
-    let settings = study.gust_settings()?;
     let case = study.resolve()?;
-    let ev = crate::pipeline::evaluate(&case, &settings, &case.initial.to_vec())
+    let settings = case.gust_settings()?;
+    let ev = crate::pipeline::evaluate(&case, settings, &case.initial.to_vec())
         .with_context(|| format!("{}: gust analysis", study.file.display()))?;
     let f = ev.aero.flight;
     let outputs: Vec<OutputRow> = settings

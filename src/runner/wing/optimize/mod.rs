@@ -77,9 +77,9 @@ pub fn optimize_pass(
 ) -> Result<OptimizationResults> {
     use crate::problem::DesignProblem;
     let o = optimization_section(study)?;
-    let settings = study.gust_settings()?;
     let (lower, upper) = study.design_bounds()?;
     let case = study.resolve()?;
+    let settings = case.gust_settings()?.clone();
     let x0 = case.initial.to_vec();
     // a warm start begins at another run's final design (a correction pass at the previous
     // pass's); mass and area stay relative to x0
@@ -263,7 +263,7 @@ pub fn optimize_pass(
         Some(pl) => Some(peak_limit_result(study, pl, &ev0, &ev, quiet)?),
         None => None,
     };
-    let design = study.initial_design()?;
+    let design = &case.initial;
     Ok(OptimizationResults {
         converged: info.converged,
         message: info.message.clone(),
