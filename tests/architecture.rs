@@ -261,3 +261,35 @@ fn evaluation_layer_reads_no_study() {
     }
     assert!(found.is_empty(), "{found:#?}");
 }
+
+/// Builders leave no files for a person (the run folder writes a model's artifacts, SU2's
+/// lesson: solvers keep out of output): inside `src/aero` only the steady-state cache writes to
+/// disk, and the fidelity crates write nothing. Any file write (`fs::write`, `File::create`,
+/// `atomic::write`) elsewhere fails this test.
+#[test]
+fn fidelities_write_no_files() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = sources(&root.join("src/aero"));
+    for krate in std::fs::read_dir(root.join("fidelity")).unwrap() {
+        files.extend(sources(&krate.unwrap().path().join("src")));
+    }
+    assert!(files.len() > 20, "too few files found: {}", files.len());
+    let mut found = Vec::new();
+    for f in &files {
+        if f.ends_with("src/aero/lfd/steady_cache.rs") || f.ends_with("tests.rs") {
+            continue;
+        }
+        let text = code(&std::fs::read_to_string(f).unwrap());
+        for call in [
+            "fs::write(",
+            "File::create(",
+            "atomic::write(",
+            "OpenOptions",
+        ] {
+            if text.contains(call) {
+                found.push(format!("{} calls {call}", f.display()));
+            }
+        }
+    }
+    assert!(found.is_empty(), "{found:#?}");
+}

@@ -329,17 +329,17 @@ fn steady_state_is_saved_and_reused() {
         f.sort();
         f
     };
-    study.aero_model(&plate).unwrap();
-    // the state, its field for ParaView and the C_p sections (CSV: 3 sections of 16 wall cells
-    // each, every value finite; `gustkit run` draws them), taken away after each fresh solve
-    let vtk = dir.join("steady_lfd_flow.vtk");
-    let take_side_files = || {
-        let text = std::fs::read_to_string(&vtk).unwrap();
+    let model = study.aero_model(&plate).unwrap();
+    // the model reports its field for ParaView and the C_p sections (CSV: 3 sections of 16 wall
+    // cells each, every value finite; `gustkit run` draws them) for the run folder to write: the
+    // builder itself leaves only its state in the folder
+    let check_artifacts = |aero: &gustkit::aero::AeroModel| {
+        let files = aero.fidelity.artifacts("test");
+        let names: Vec<&str> = files.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["steady_lfd_flow.vtk", "steady_cp_sections.csv"]);
+        let text = &files[0].1;
         assert!(text.starts_with("# vtk DataFile") && text.contains("SCALARS cp"));
-        std::fs::remove_file(&vtk).unwrap();
-        let csv = dir.join("steady_cp_sections.csv");
-        let text = std::fs::read_to_string(&csv).unwrap();
-        let rows: Vec<&str> = text.lines().collect();
+        let rows: Vec<&str> = files[1].1.lines().collect();
         assert_eq!(rows[0], "eta,x_c,side,cp");
         assert_eq!(rows.len(), 1 + 3 * 16);
         assert!(rows[1..].iter().all(|r| r
@@ -349,9 +349,8 @@ fn steady_state_is_saved_and_reused() {
             .parse::<f64>()
             .unwrap()
             .is_finite()));
-        std::fs::remove_file(&csv).unwrap();
     };
-    take_side_files();
+    check_artifacts(&model);
     let saved = files();
     assert_eq!(saved.len(), 1, "{saved:?}");
     let file = &saved[0];
@@ -386,8 +385,7 @@ fn steady_state_is_saved_and_reused() {
     v["flight"]["mach"] = 0.45.into();
     let mut other = load(&v).unwrap();
     other.cache_dir = Some(dir.clone());
-    other.aero_model(&plate).unwrap();
-    take_side_files();
+    check_artifacts(&other.aero_model(&plate).unwrap());
     let now = files();
     assert_eq!(now.len(), 1, "{now:?}");
     assert_ne!(&now[0], file);
@@ -517,7 +515,9 @@ fn amplitude_fields_are_written() {
     let o = run(&file);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let folder = dir.join("lfd_fields");
-    // the steady state's C_p sections, drawn by the run's report
+    // the steady flow field and its C_p sections, drawn by the run's report (the model's
+    // artifacts, written by the run folder)
+    assert!(folder.join("steady_lfd_flow.vtk").is_file());
     for ext in ["csv", "png", "svg"] {
         assert!(
             folder.join(format!("steady_cp_sections.{ext}")).is_file(),

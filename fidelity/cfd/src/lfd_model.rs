@@ -17,6 +17,7 @@ use crate::gas::primitive;
 use crate::lfd::{Factored, HarmonicGust, LfdError, LfdOperator, Symbol};
 use crate::mesh::{Boundary, Side};
 use crate::mesh_sensitivity::{Column, MeshTangent};
+use crate::wing_mesh::SectionCell;
 use gustkit_core::aero::check_request;
 use gustkit_core::{
     AeroError, AeroSurface, Aerodynamics, AerodynamicsReverse, FlightCondition, GafGradient,
@@ -44,6 +45,45 @@ pub struct Lfd {
     pub tangents: Vec<MeshTangent>,
     /// The forward solutions of the last GAF table, reused by a reverse sweep at the same point.
     last_forward: std::sync::Mutex<Option<ForwardCache>>,
+    /// Chordwise wall sections whose steady C_p the model reports among its artifacts (a
+    /// built-in wing mesh's root, mid-span and tip, say): (η of the section, its wall cells).
+    pub sections: Vec<(f64, Vec<SectionCell>)>,
+}
+
+/// The file name of the steady flow field among an LFD model's artifacts (legacy VTK).
+pub const STEADY_FLOW_FILE: &str = "steady_lfd_flow.vtk";
+
+/// The stem of the steady C_p sections among an LFD model's artifacts (CSV: eta, x_c, side, cp).
+pub const CP_SECTIONS_STEM: &str = "steady_cp_sections";
+
+/// Steady C_p of the wall cells of `sections`: (η, [(wall cell, C_p)] around the contour).
+pub fn section_pressures(
+    sections: &[(f64, Vec<SectionCell>)],
+    q: &[crate::residual::State<f64>],
+    mach: f64,
+) -> Vec<(f64, Vec<(SectionCell, f64)>)> {
+    sections
+        .iter()
+        .map(|(eta, cells)| {
+            let cp = cells
+                .iter()
+                .map(|&c| (c, crate::gas::pressure_coefficient(&q[c.cell], mach)))
+                .collect();
+            (*eta, cp)
+        })
+        .collect()
+}
+
+/// [`section_pressures`] as CSV: a header `eta,x_c,side,cp`, then one row a wall cell.
+pub fn section_pressures_csv(sections: &[(f64, Vec<(SectionCell, f64)>)]) -> String {
+    let mut csv = String::from("eta,x_c,side,cp\n");
+    for (eta, cells) in sections {
+        for (c, cp) in cells {
+            let side = if c.upper { "upper" } else { "lower" };
+            csv.push_str(&format!("{eta:.6},{:.6},{side},{cp:.8e}\n", c.x_c));
+        }
+    }
+    csv
 }
 
 /// The LFD solutions of one GAF table and what they were solved for.
@@ -172,6 +212,7 @@ impl Lfd {
             reverse: std::sync::OnceLock::new(),
             tangents: Vec::new(),
             last_forward: std::sync::Mutex::new(None),
+            sections: Vec::new(),
         }
     }
 
@@ -450,6 +491,29 @@ impl Aerodynamics for Lfd {
                 (stem, text)
             })
             .collect()
+    }
+
+    /// The steady flow field for ParaView (ρ, p, C_p, Mach, velocity per cell) and, where the
+    /// model has sections, their C_p (the run's report draws them).
+    fn artifacts(&self, title: &str) -> Vec<(String, String)> {
+        let e = &self.lfd.euler;
+        let mut files = vec![(
+            STEADY_FLOW_FILE.to_string(),
+            crate::vtk::flow_vtk(
+                &e.mesh,
+                &self.lfd.q0,
+                self.mach,
+                &format!("{title}: steady Euler flow at M = {}", self.mach),
+            ),
+        )];
+        if !self.sections.is_empty() {
+            let cp = section_pressures(&self.sections, &self.lfd.q0, self.mach);
+            files.push((
+                format!("{CP_SECTIONS_STEM}.csv"),
+                section_pressures_csv(&cp),
+            ));
+        }
+        files
     }
 
     fn linearization_checks(&self) -> Vec<gustkit_core::LinearizationCheck> {

@@ -371,6 +371,13 @@ pub trait Aerodynamics: Send + Sync {
         let _ = (k, title);
         Vec::new()
     }
+    /// Files a person reads about the model's own state (a CFD model's steady flow field and
+    /// surface pressures): (file name, text) for the caller's run folder; a model writes no
+    /// file itself (the default: none).
+    fn artifacts(&self, title: &str) -> Vec<(String, String)> {
+        let _ = title;
+        Vec::new()
+    }
 }
 
 /// The reverse mode of an [`Aerodynamics`] model.

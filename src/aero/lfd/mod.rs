@@ -398,21 +398,6 @@ impl WingBuilder for LfdWingSpec {
                 if let Some(f) = &cache {
                     // a cache that cannot be written costs the next run a steady solve, no more
                     let _ = save_state(f, &q);
-                    // and the field for ParaView beside it (ρ, p, C_p, Mach, velocity per cell)
-                    let vtk = gustkit_cfd::vtk::flow_vtk(
-                        &volume,
-                        &q,
-                        wing.flight.mach,
-                        &format!(
-                            "gustkit: steady Euler about the wing at M = {}",
-                            wing.flight.mach
-                        ),
-                    );
-                    let _ = crate::atomic::write(&f.with_file_name(STEADY_VTK), vtk.as_bytes());
-                    // and C_p at the root, mid-span and tip sections (the report draws them)
-                    if let (Some(dir), Some(mesh)) = (f.parent(), &built_in) {
-                        let _ = write_cp_sections(mesh, &q, wing.flight.mach, dir);
-                    }
                 }
                 q
             }
@@ -455,9 +440,11 @@ impl WingBuilder for LfdWingSpec {
             .iter()
             .map(|&n| mesh.parametric(n))
             .collect();
+        let mut model = model;
+        // C_p at the root, mid-span and tip sections among its artifacts (the report draws them)
+        model.sections = wall_sections(&mesh);
         // the planform variables move the mesh (and the deformation radius, a multiple of the
         // root chord): their tangents, for the reverse mode's geometry gradient
-        let mut model = model;
         let pd: [Dual<N_PLANFORM>; N_PLANFORM] = std::array::from_fn(|k| Dual::var(p[k], k));
         let xd = mesh.nodes_at(pd);
         model.tangents = (0..N_PLANFORM)

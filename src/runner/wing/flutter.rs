@@ -57,6 +57,7 @@ pub(crate) fn flutter_analysis(
     let velocities = study.flutter_velocities()?;
     let (plate, modes, _) = super::analyze(study)?;
     let aero = study.aero_model(&plate)?;
+    super::write_artifacts(dir, &aero, study)?;
     let table = aero
         .gafs(&plate, &modes)
         .map_err(|e| anyhow::anyhow!("{}: aero: {e}", file.display()))?;

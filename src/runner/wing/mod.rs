@@ -87,6 +87,22 @@ fn write_modal_files(study: &Study, model: &PlateModel, modes: &Modes, dir: &Pat
     write_atomic(&dir.join("modes.vtk"), vtk.as_bytes())
 }
 
+/// Writes what the aerodynamic model reports about its own state (the LFD's steady flow field
+/// and C_p sections) into the run folder `dir`; a model writes no file itself.
+pub(crate) fn write_artifacts(
+    dir: &Path,
+    aero: &crate::aero::AeroModel,
+    study: &Study,
+) -> Result<()> {
+    for (name, text) in aero
+        .fidelity
+        .artifacts(&format!("gustkit {}", study.spec.name))
+    {
+        write_atomic(&dir.join(name), text.as_bytes())?;
+    }
+    Ok(())
+}
+
 /// `gustkit modes`.
 pub fn modes(study: &Study, json: bool, reports: &Path) -> Result<()> {
     let study = study.clone();
@@ -137,6 +153,9 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
         }
         None => (None, None),
     };
+    if let Some(ev) = &gust_evaluation {
+        write_artifacts(&dir, &ev.aero, &study)?;
+    }
     let discrete_gust = match &gust_evaluation {
         Some(ev) => discrete::discrete_results(&study, ev, &dir)?,
         None => None,

@@ -99,29 +99,8 @@ pub fn optimize_pass(
     if let Some(pl) = spec.peak.as_mut() {
         pl.constraint.limit *= pass.peak_factor;
     }
-    if let (Some(pl), false) = (&spec.peak, quiet) {
-        let (limit, limit_unit) =
-            study
-                .spec
-                .length_unit
-                .display(pl.constraint.limit, &pl.constraint.unit, 1);
-        println!(
-            "discrete gust peak limit: |{}| ≤ {} {} over {} gusts (KS, ρ = ln(n)/{}), on a fixed grid of {:.3} s, {} samples",
-            pl.constraint.name,
-            crate::report::style::tick(&limit),
-            limit_unit,
-            pl.constraint.gusts.len(),
-            crate::gust::discrete::PEAK_KS_GAP,
-            pl.grid.span,
-            pl.grid.time.len()
-        );
-    }
-    if let (Some(f), false) = (floor, quiet) {
-        println!(
-            "modal basis: the {} modes below {:.1} Hz at the initial design; the first mode left out must stay above it",
-            f.retained,
-            f.omega_cut / (2.0 * std::f64::consts::PI)
-        );
+    if !quiet {
+        print_limits(study, &spec, floor);
     }
     let (output, rms_limit) = (spec.output, spec.rms_limit);
     // the report shows a displacement RMS in the study's own length unit (the unit rule)
@@ -168,46 +147,17 @@ pub fn optimize_pass(
     };
     let t_ev = Instant::now();
     let ev = crate::pipeline::evaluate(&fixed_basis, &settings, &info.x).context("final design")?;
+    // the final design's flow (an LFD's steady field and C_p) in the run folder
+    super::write_artifacts(dir, &ev.aero, study)?;
     let t_ev = t_ev.elapsed().as_secs_f64();
-    // the largest p-k damping of each iterate (re-evaluated for iterates of an earlier session)
-    let mut peaks = std::mem::take(&mut problem.damping_peaks);
-    let mut peak_at = |x: &[f64]| -> Result<Option<f64>> {
-        let Some(m) = &spec.flutter else {
-            return Ok(None);
-        };
-        if let Some((_, g)) = peaks.iter().rev().find(|(px, _)| px.as_slice() == x) {
-            return Ok(Some(*g));
-        }
-        let e = crate::pipeline::evaluate(&fixed_basis, &settings, x)?;
-        let g = e.flutter_damping(m)?.2.peak();
-        peaks.push((x.to_vec(), g));
-        Ok(Some(g))
-    };
-    let history = info
-        .history
-        .iter()
-        .map(|it| -> Result<HistoryRow> {
-            Ok(HistoryRow {
-                iteration: it.iteration,
-                mass_kg: it.values.f * ev0.mass_kg,
-                rms_display: (it.values.ineq[0] + 1.0) * rms_limit * unit_scale,
-                area_m2: it
-                    .values
-                    .eq
-                    .first()
-                    .map_or(ev0.area_m2, |h| (h + 1.0) * ev0.area_m2),
-                flutter_damping: match (it.values.ineq.get(1), &spec.flutter) {
-                    (Some(c), Some(m)) => Some(m.damping_max + c * DAMPING_SCALE),
-                    _ => None,
-                },
-                flutter_damping_peak: peak_at(&it.x)?,
-                violation: it.violation,
-                kkt: it.kkt,
-                evaluations: it.evaluations,
-                pass: pass.number,
-            })
-        })
-        .collect::<Result<Vec<_>>>()?;
+    let history = history_rows(
+        &info,
+        &ev0,
+        &spec,
+        (rms_limit, unit_scale, pass.number),
+        std::mem::take(&mut problem.damping_peaks),
+        |x| crate::pipeline::evaluate(&fixed_basis, &settings, x),
+    )?;
     // the flutter check reports; it does not fail a finished optimization
     let flutter = match flutter_check(&ev0, &ev) {
         Ok(f) => Some(f),
@@ -218,17 +168,9 @@ pub fn optimize_pass(
     };
     if !quiet {
         println!(
-        "{} after {} iterations ({} evaluations, {:.1} s): mass {:.4} → {:.4} kg ({:+.1} %), RMS {:.4} → {:.4} {unit}",
-        info.message,
-        info.iterations,
-        info.evaluations,
-        wall_time_s,
-        ev0.mass_kg,
-        ev.mass_kg,
-        100.0 * (ev.mass_kg / ev0.mass_kg - 1.0),
-        ev0.rms_m[output] * unit_scale,
-        ev.rms_m[output] * unit_scale
-    );
+            "{}",
+            outcome_words(&info, (&ev0, &ev), output, (unit_scale, unit))
+        );
     }
     let cross_evaluation = match study.compare_study()? {
         Some(other) => {
@@ -239,21 +181,7 @@ pub fn optimize_pass(
             designs.push(("final", info.x.clone(), Some((&ev, t_ev))));
             let c = cross_evaluate(study, &other, &settings, &designs, output, unit_scale, unit)?;
             if !quiet {
-                for d in &c.designs {
-                    let row: Vec<String> = d
-                        .evaluations
-                        .iter()
-                        .map(|e| match e.rms_display {
-                            Some(v) => format!("{} {v:.4} {unit}", e.fidelity),
-                            None => format!("{} unstable", e.fidelity),
-                        })
-                        .collect();
-                    println!(
-                        "cross-evaluation, {} design: RMS {}",
-                        d.design,
-                        row.join(", ")
-                    );
-                }
+                print_cross_evaluation(&c, unit);
             }
             Some(c)
         }
