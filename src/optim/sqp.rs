@@ -272,122 +272,16 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
     let (params, problem_id) = (&params, problem_id.as_str());
     params.validate()?;
     let (lb, ub) = (problem.lower(), problem.upper());
-    if lb.len() != x0.len() || ub.len() != x0.len() {
-        return Err(SqpError::BoundsLength {
-            n: x0.len(),
-            lower: lb.len(),
-            upper: ub.len(),
-        });
-    }
-    for i in 0..x0.len() {
-        if !(lb[i] <= ub[i]) {
-            return Err(SqpError::InfeasibleBounds {
-                index: i,
-                lower: lb[i],
-                upper: ub[i],
-            });
-        }
-    }
-    let n = x0.len();
+    check_bounds(&lb, &ub, x0.len())?;
     let scaling = Scaling::new(&lb, &ub, x0);
     let started = std::time::Instant::now();
-    let mut elapsed_before = 0.0;
-    let (z, hess, penalty, history, iteration, mut evaluations) = match resume {
-        Some(c) => {
-            if c.problem_id != problem_id || c.z.len() != n || c.hessian.len() != n {
-                return Err(SqpError::Checkpoint(format!(
-                    "it belongs to another problem ('{}' with {} variables, this is '{problem_id}' with {n})",
-                    c.problem_id,
-                    c.z.len()
-                )));
-            }
-            // the iteration limit may be raised to continue a run that reached it
-            let same_settings = SqpParams {
-                max_iterations: params.max_iterations,
-                ..c.params.clone()
-            } == *params;
-            if !same_settings {
-                return Err(SqpError::Checkpoint(
-                    "it was written with other optimizer settings".into(),
-                ));
-            }
-            if let Some(reason) = &c.stopped {
-                return Err(SqpError::Checkpoint(format!(
-                    "the run it belongs to stopped at iteration {} because {reason}; every recovery was tried there, so resuming would stop the same way: change the study (bounds, constraints, starting point) and run without --resume",
-                    c.iteration
-                )));
-            }
-            problem
-                .restore(&c.problem_state)
-                .map_err(|e| SqpError::Checkpoint(format!("the problem's records: {e:#}")))?;
-            elapsed_before = c.elapsed_s;
-            (
-                c.z,
-                c.hessian,
-                c.penalty,
-                c.history,
-                c.iteration,
-                c.evaluations,
-            )
-        }
-        None => {
-            // start inside the bounds
-            let z0: Vec<f64> = scaling
-                .z(x0)
-                .iter()
-                .enumerate()
-                .map(|(i, v)| {
-                    if lb[i].is_finite() && ub[i].is_finite() {
-                        v.clamp(0.0, 1.0)
-                    } else {
-                        *v
-                    }
-                })
-                .collect();
-            let h0 = match hessian {
-                Some(h) => {
-                    let square = h.len() == n && h.iter().all(|r| r.len() == n);
-                    if !square {
-                        return Err(SqpError::InitialHessian(format!(
-                            "need {n} × {n} entries for {n} design variables (got {} rows)",
-                            h.len()
-                        )));
-                    }
-                    let symmetric = (0..n).all(|i| {
-                        (0..n).all(|j| {
-                            h[i][j].is_finite()
-                                && (h[i][j] - h[j][i]).abs()
-                                    <= 1e-10 * (h[i][i].abs() + h[j][j].abs())
-                        })
-                    });
-                    if !symmetric || (0..n).any(|i| !(h[i][i] > 0.0)) {
-                        return Err(SqpError::InitialHessian(
-                            "must be finite and symmetric with a positive diagonal".into(),
-                        ));
-                    }
-                    h
-                }
-                None => identity(n),
-            };
-            (z0, h0, 0.0, Vec::new(), 0, 0)
-        }
+    let start = match resume {
+        Some(c) => Start::resumed(c, problem, params, problem_id, x0.len())?,
+        None => Start::fresh(x0, &scaling, (&lb, &ub), hessian)?,
     };
-    let values = problem.values(&scaling.x(&z)).map_err(SqpError::Start)?;
-    evaluations += 1;
-    let grads = problem
-        .gradients(&scaling.x(&z))
-        .map_err(|source| SqpError::Gradient { iteration, source })?;
-    let mut state = SqpState {
-        z,
-        hess,
-        penalty,
-        history,
-        iteration,
-        evaluations,
-        values,
-        grads,
-    };
+    let elapsed_before = start.elapsed_s;
     let elapsed = || elapsed_before + started.elapsed().as_secs_f64();
+    let mut state = SqpState::evaluated(start, problem, &scaling)?;
     loop {
         let (status, message) = state.iterate(problem, solver, params, &scaling, (&lb, &ub))?;
         match status {
@@ -411,48 +305,15 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
                         problem.state(),
                         Some(message.clone()),
                     );
-                    if let Some(store) = checkpoints.as_mut() {
-                        store
-                            .save(&stopped)
-                            .map_err(|e| SqpError::Checkpoint(format!("cannot save it: {e}")))?;
-                    }
+                    save(&mut checkpoints, &stopped)?;
                 }
-                let SqpState {
-                    history,
-                    iteration,
-                    evaluations,
-                    ..
-                } = state;
-                let mut info = stop_at_best(
-                    message,
-                    history,
-                    iteration,
-                    evaluations,
-                    elapsed(),
-                    params.tolerance,
-                );
-                info.status = status;
-                return Ok(info);
+                return Ok(state.stop_at_best(status, message, elapsed(), params.tolerance));
             }
             SqpStatus::Stopped => unreachable!("only the executor stops a run"),
         }
         let checkpoint = state.checkpoint(problem_id, params, elapsed(), problem.state(), None);
-        if let Some(store) = checkpoints.as_mut() {
-            store
-                .save(&checkpoint)
-                .map_err(|e| SqpError::Checkpoint(format!("cannot save it: {e}")))?;
-        }
-        let record = state.history.last().expect("the point left");
-        let mut control = Control::Continue;
-        for o in observers.iter_mut() {
-            if o.iteration(record, &checkpoint)
-                .map_err(SqpError::Observer)?
-                == Control::Stop
-            {
-                control = Control::Stop;
-            }
-        }
-        if control == Control::Stop {
+        save(&mut checkpoints, &checkpoint)?;
+        if observe(&mut observers, &state, &checkpoint)? == Control::Stop {
             let elapsed_s = checkpoint.elapsed_s;
             return Ok(state.finish(
                 false,
@@ -463,6 +324,178 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
             ));
         }
     }
+}
+
+/// Refuses bounds of the wrong length or with a lower bound above its upper one.
+fn check_bounds(lb: &[f64], ub: &[f64], n: usize) -> Result<(), SqpError> {
+    if lb.len() != n || ub.len() != n {
+        return Err(SqpError::BoundsLength {
+            n,
+            lower: lb.len(),
+            upper: ub.len(),
+        });
+    }
+    for i in 0..n {
+        if !(lb[i] <= ub[i]) {
+            return Err(SqpError::InfeasibleBounds {
+                index: i,
+                lower: lb[i],
+                upper: ub[i],
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Saves a checkpoint in the store, if the run keeps one.
+fn save(
+    store: &mut Option<&mut dyn Checkpointing>,
+    checkpoint: &Checkpoint,
+) -> Result<(), SqpError> {
+    match store {
+        Some(store) => store
+            .save(checkpoint)
+            .map_err(|e| SqpError::Checkpoint(format!("cannot save it: {e}"))),
+        None => Ok(()),
+    }
+}
+
+/// Shows the record of the point just left to every observer (all of them, even after one asks
+/// to stop); stop when any asked to.
+fn observe(
+    observers: &mut [&mut dyn Observer],
+    state: &SqpState,
+    checkpoint: &Checkpoint,
+) -> Result<Control, SqpError> {
+    let record = state.history.last().expect("the point left");
+    let mut control = Control::Continue;
+    for o in observers.iter_mut() {
+        if o.iteration(record, checkpoint)
+            .map_err(SqpError::Observer)?
+            == Control::Stop
+        {
+            control = Control::Stop;
+        }
+    }
+    Ok(control)
+}
+
+/// Where a run starts, before its point is evaluated: a fresh point or a checkpoint's.
+struct Start {
+    z: Vec<f64>,
+    hess: Vec<Vec<f64>>,
+    penalty: f64,
+    history: Vec<Iterate>,
+    iteration: usize,
+    evaluations: usize,
+    /// Wall time of the sessions before this one.
+    elapsed_s: f64,
+}
+
+impl Start {
+    /// A checkpoint of this problem, written with these settings (the iteration limit may be
+    /// raised to continue a run that reached it) by a run that did not stop for good; the
+    /// problem's own records restored from it.
+    fn resumed(
+        c: Checkpoint,
+        problem: &mut dyn Problem,
+        params: &SqpParams,
+        problem_id: &str,
+        n: usize,
+    ) -> Result<Self, SqpError> {
+        if c.problem_id != problem_id || c.z.len() != n || c.hessian.len() != n {
+            return Err(SqpError::Checkpoint(format!(
+                "it belongs to another problem ('{}' with {} variables, this is '{problem_id}' with {n})",
+                c.problem_id,
+                c.z.len()
+            )));
+        }
+        let same_settings = SqpParams {
+            max_iterations: params.max_iterations,
+            ..c.params.clone()
+        } == *params;
+        if !same_settings {
+            return Err(SqpError::Checkpoint(
+                "it was written with other optimizer settings".into(),
+            ));
+        }
+        if let Some(reason) = &c.stopped {
+            return Err(SqpError::Checkpoint(format!(
+                "the run it belongs to stopped at iteration {} because {reason}; every recovery was tried there, so resuming would stop the same way: change the study (bounds, constraints, starting point) and run without --resume",
+                c.iteration
+            )));
+        }
+        problem
+            .restore(&c.problem_state)
+            .map_err(|e| SqpError::Checkpoint(format!("the problem's records: {e:#}")))?;
+        Ok(Self {
+            z: c.z,
+            hess: c.hessian,
+            penalty: c.penalty,
+            history: c.history,
+            iteration: c.iteration,
+            evaluations: c.evaluations,
+            elapsed_s: c.elapsed_s,
+        })
+    }
+
+    /// `x0` moved inside the bounds, with the given BFGS matrix (checked) or the identity.
+    fn fresh(
+        x0: &[f64],
+        scaling: &Scaling,
+        (lb, ub): (&[f64], &[f64]),
+        hessian: Option<Vec<Vec<f64>>>,
+    ) -> Result<Self, SqpError> {
+        let z: Vec<f64> = scaling
+            .z(x0)
+            .iter()
+            .enumerate()
+            .map(|(i, v)| {
+                if lb[i].is_finite() && ub[i].is_finite() {
+                    v.clamp(0.0, 1.0)
+                } else {
+                    *v
+                }
+            })
+            .collect();
+        let n = z.len();
+        let hess = match hessian {
+            Some(h) => checked_hessian(h, n)?,
+            None => identity(n),
+        };
+        Ok(Self {
+            z,
+            hess,
+            penalty: 0.0,
+            history: Vec::new(),
+            iteration: 0,
+            evaluations: 0,
+            elapsed_s: 0.0,
+        })
+    }
+}
+
+/// A given initial BFGS matrix: n × n, finite, symmetric to round-off, with a positive diagonal.
+fn checked_hessian(h: Vec<Vec<f64>>, n: usize) -> Result<Vec<Vec<f64>>, SqpError> {
+    let square = h.len() == n && h.iter().all(|r| r.len() == n);
+    if !square {
+        return Err(SqpError::InitialHessian(format!(
+            "need {n} × {n} entries for {n} design variables (got {} rows)",
+            h.len()
+        )));
+    }
+    let symmetric = (0..n).all(|i| {
+        (0..n).all(|j| {
+            h[i][j].is_finite()
+                && (h[i][j] - h[j][i]).abs() <= 1e-10 * (h[i][i].abs() + h[j][j].abs())
+        })
+    });
+    if !symmetric || (0..n).any(|i| !(h[i][i] > 0.0)) {
+        return Err(SqpError::InitialHessian(
+            "must be finite and symmetric with a positive diagonal".into(),
+        ));
+    }
+    Ok(h)
 }
 
 /// The state of an SQP run between iterations: the scaled iterate with its values and
@@ -478,7 +511,141 @@ struct SqpState {
     grads: Gradients,
 }
 
+/// The subproblem's data at the current point, in the scaled variables: the objective's
+/// gradient, the constraint Jacobians and the step bounds.
+struct Linearization {
+    g: Vec<f64>,
+    eq_jac: Vec<Vec<f64>>,
+    ineq_jac: Vec<Vec<f64>>,
+    lower: Vec<f64>,
+    upper: Vec<f64>,
+}
+
+impl Linearization {
+    fn at(z: &[f64], grads: &Gradients, scaling: &Scaling, (lb, ub): (&[f64], &[f64])) -> Self {
+        let x = scaling.x(z);
+        let step_bound = |b: f64, i: usize, infinite: f64| {
+            if b.is_finite() {
+                (b - x[i]) / scaling.scale[i]
+            } else {
+                infinite
+            }
+        };
+        Self {
+            g: scaling.grad(&grads.f),
+            eq_jac: grads.eq.iter().map(|r| scaling.grad(r)).collect(),
+            ineq_jac: grads.ineq.iter().map(|r| scaling.grad(r)).collect(),
+            lower: (0..z.len())
+                .map(|i| step_bound(lb[i], i, f64::NEG_INFINITY))
+                .collect(),
+            upper: (0..z.len())
+                .map(|i| step_bound(ub[i], i, f64::INFINITY))
+                .collect(),
+        }
+    }
+
+    /// The QP with this linearization, the BFGS matrix and the constraint values `eq`, `ineq`
+    /// (the point's, or shifted ones for a second-order correction).
+    fn qp<'a>(
+        &'a self,
+        hessian: &'a [Vec<f64>],
+        eq: &'a [f64],
+        ineq: &'a [f64],
+        params: &SqpParams,
+    ) -> QpData<'a> {
+        QpData {
+            hessian,
+            grad: &self.g,
+            eq,
+            eq_jac: &self.eq_jac,
+            ineq,
+            ineq_jac: &self.ineq_jac,
+            lower: &self.lower,
+            upper: &self.upper,
+            rho: params.elastic_penalty,
+            tolerant: false,
+        }
+    }
+}
+
+/// The KKT measure of a QP step: |gᵀd| + Σ|λ_eq h| + Σ|λ_ineq c|.
+fn kkt_measure(g: &[f64], step: &qp::QpStep, values: &Values) -> f64 {
+    dot(g, &step.d).abs()
+        + step
+            .lambda_eq
+            .iter()
+            .zip(&values.eq)
+            .map(|(l, h)| (l * h).abs())
+            .sum::<f64>()
+        + step
+            .lambda_ineq
+            .iter()
+            .zip(&values.ineq)
+            .map(|(l, c)| (l * c).abs())
+            .sum::<f64>()
+}
+
+/// Where a line search ended: the accepted point and its values (none when it stalled), its
+/// step length, and the trial points that could not be evaluated (their count, the last reason).
+struct LineSearch {
+    accepted: Option<(Vec<f64>, Values)>,
+    alpha: f64,
+    failed: usize,
+    last_failure: Option<String>,
+}
+
+/// Powell's damped BFGS update of `hess` with the step `s` and the change `y` of the
+/// Lagrangian's gradient (y is damped towards B s when sᵀy < 0.2 sᵀBs, keeping B positive).
+fn damped_bfgs(hess: &mut [Vec<f64>], s: &[f64], mut y: Vec<f64>) {
+    let n = s.len();
+    let bs: Vec<f64> = (0..n).map(|i| dot(&hess[i], s)).collect();
+    let sbs = dot(s, &bs);
+    let sy = dot(s, &y);
+    if sbs > 1e-300 {
+        if sy < 0.2 * sbs {
+            let theta = 0.8 * sbs / (sbs - sy);
+            for i in 0..n {
+                y[i] = theta * y[i] + (1.0 - theta) * bs[i];
+            }
+        }
+        let sy = dot(s, &y);
+        for i in 0..n {
+            for j in 0..n {
+                hess[i][j] += y[i] * y[j] / sy - bs[i] * bs[j] / sbs;
+            }
+        }
+    }
+}
+
 impl SqpState {
+    /// The run's state at its start, with the values and gradients of its point.
+    fn evaluated(
+        start: Start,
+        problem: &mut dyn Problem,
+        scaling: &Scaling,
+    ) -> Result<Self, SqpError> {
+        let values = problem
+            .values(&scaling.x(&start.z))
+            .map_err(SqpError::Start)?;
+        let grads =
+            problem
+                .gradients(&scaling.x(&start.z))
+                .map_err(|source| SqpError::Gradient {
+                    iteration: start.iteration,
+                    source,
+                })?;
+        Ok(Self {
+            z: start.z,
+            hess: start.hess,
+            penalty: start.penalty,
+            history: start.history,
+            iteration: start.iteration,
+            evaluations: start.evaluations + 1,
+            values,
+            grads,
+        })
+    }
+
     /// The checkpoint of the run as it stands, with why it stopped (if it did).
     fn checkpoint(
         &self,
@@ -525,171 +692,90 @@ impl SqpState {
         }
     }
 
-    /// One SQP iteration: the subproblem at the current point (recovered when it fails), the
-    /// KKT test, the merit line search with its second-order correction, the gradients at the
-    /// accepted point and the damped BFGS update. Returns how it ended and the words for a run
-    /// that ends there; after [`SqpStatus::StepTaken`] the state is at the new point, its
-    /// history ending with the record of the point left (with its line search).
-    fn iterate(
-        &mut self,
-        problem: &mut dyn Problem,
-        solver: &mut dyn SubproblemSolver,
-        params: &SqpParams,
-        scaling: &Scaling,
-        (lb, ub): (&[f64], &[f64]),
-    ) -> Result<(SqpStatus, String), SqpError> {
-        let SqpState {
-            z,
-            hess,
-            penalty,
-            history,
-            iteration,
-            evaluations,
-            values,
-            grads,
-        } = self;
-        let n = z.len();
-        let x = scaling.x(z);
-        let g = scaling.grad(&grads.f);
-        let eq_jac: Vec<Vec<f64>> = grads.eq.iter().map(|r| scaling.grad(r)).collect();
-        let ineq_jac: Vec<Vec<f64>> = grads.ineq.iter().map(|r| scaling.grad(r)).collect();
-        let lower: Vec<f64> = (0..n)
-            .map(|i| {
-                if lb[i].is_finite() {
-                    (lb[i] - x[i]) / scaling.scale[i]
-                } else {
-                    f64::NEG_INFINITY
-                }
-            })
-            .collect();
-        let upper: Vec<f64> = (0..n)
-            .map(|i| {
-                if ub[i].is_finite() {
-                    (ub[i] - x[i]) / scaling.scale[i]
-                } else {
-                    f64::INFINITY
-                }
-            })
-            .collect();
-        let data = QpData {
-            hessian: hess,
-            grad: &g,
-            eq: &values.eq,
-            eq_jac: &eq_jac,
-            ineq: &values.ineq,
-            ineq_jac: &ineq_jac,
-            lower: &lower,
-            upper: &upper,
-            rho: params.elastic_penalty,
-            tolerant: false,
-        };
-        let (step, recovery) = match solve_with_recovery(solver, &data) {
-            Ok(s) => s,
-            Err(reason) => {
-                let message = format!(
-                    "the QP subproblem failed at iteration {iteration} and every recovery failed too ({reason})"
-                );
-                let x_last = scaling.x(z);
-                // no subproblem was solved here: the KKT measure is the previous iteration's
-                let kkt = history.last().map_or(f64::MAX, |it| it.kkt);
-                history.push(Iterate {
-                    iteration: *iteration,
-                    x: x_last,
-                    values: values.clone(),
-                    violation: violation(values),
-                    kkt,
-                    step: 0.0,
-                    evaluations: *evaluations,
-                    alpha: 0.0,
-                    failed_trials: 0,
-                    trial_failure: None,
-                    recovery: None,
-                });
-                return Ok((SqpStatus::SubproblemFailed, message));
-            }
-        };
-        if recovery.is_some() {
-            // the recovered subproblem solved with the identity: the BFGS restarts from it
-            *hess = identity(n);
-        }
-        let viol = violation(values);
-        let kkt = dot(&g, &step.d).abs()
-            + step
-                .lambda_eq
-                .iter()
-                .zip(&values.eq)
-                .map(|(l, h)| (l * h).abs())
-                .sum::<f64>()
-            + step
-                .lambda_ineq
-                .iter()
-                .zip(&values.ineq)
-                .map(|(l, c)| (l * c).abs())
-                .sum::<f64>();
-        let record = Iterate {
-            iteration: *iteration,
-            x: x.clone(),
-            values: values.clone(),
-            violation: viol,
+    /// The run's end where it cannot go on: at the best feasible iterate of its history.
+    fn stop_at_best(
+        self,
+        status: SqpStatus,
+        message: String,
+        elapsed_s: f64,
+        tolerance: f64,
+    ) -> SqpInfo {
+        let mut info = stop_at_best(
+            message,
+            self.history,
+            self.iteration,
+            self.evaluations,
+            elapsed_s,
+            tolerance,
+        );
+        info.status = status;
+        info
+    }
+
+    /// The record of the current point where no subproblem could be solved (its KKT measure
+    /// the previous iteration's).
+    fn record_failed_subproblem(&mut self, scaling: &Scaling) {
+        let kkt = self.history.last().map_or(f64::MAX, |it| it.kkt);
+        self.history.push(Iterate {
+            iteration: self.iteration,
+            x: scaling.x(&self.z),
+            values: self.values.clone(),
+            violation: violation(&self.values),
             kkt,
-            step: step.d.iter().fold(0.0, |a, v| a.max(v.abs())),
-            evaluations: *evaluations,
+            step: 0.0,
+            evaluations: self.evaluations,
             alpha: 0.0,
             failed_trials: 0,
             trial_failure: None,
-            recovery,
-        };
-        history.push(record);
-        if kkt < params.tolerance && viol < params.tolerance {
-            return Ok((
-                SqpStatus::Converged,
-                "KKT conditions satisfied to the tolerance".into(),
-            ));
-        }
-        // the subproblem could not meet the linearized constraints within the bounds
-        let infeasible = if viol >= params.tolerance && step.elastic > 1e-8 {
-            format!(
-                "; the linearized constraints cannot be met within the bounds (largest violation {viol:.3e}): the problem looks infeasible"
-            )
-        } else {
-            String::new()
-        };
-        if *iteration >= params.max_iterations {
-            return Ok((
-                SqpStatus::IterationLimit,
-                format!(
-                    "iteration limit {} reached{infeasible}",
-                    params.max_iterations
-                ),
-            ));
-        }
-        // merit penalty above every multiplier, allowed to relax towards it again (Powell's rule):
-        // a penalty stuck at early, large multipliers makes the merit reject good steps
+            recovery: None,
+        });
+    }
+
+    /// Raises the merit penalty above every multiplier of the step, letting it relax towards
+    /// that bound again (Powell's rule: a penalty stuck at early, large multipliers makes the
+    /// merit reject good steps).
+    fn update_penalty(&mut self, step: &qp::QpStep) -> f64 {
         let lam_max = step
             .lambda_eq
             .iter()
             .chain(&step.lambda_ineq)
             .fold(0.0f64, |a, l| a.max(l.abs()));
         let needed = 1.1 * lam_max + 1e-8;
-        *penalty = needed.max(0.5 * (*penalty + needed));
-        let penalty = *penalty;
+        self.penalty = needed.max(0.5 * (self.penalty + needed));
+        self.penalty
+    }
+
+    /// Backtracking on the ℓ1 merit φ = f + penalty · Σ violation along the QP step (Armijo,
+    /// halving down to `min_step`), with a second-order correction of a rejected full step (the
+    /// Maratos effect: the curvature of the constraints raises the violation along the QP
+    /// step; the QP is solved again with its constraints shifted by the trial point's values).
+    #[allow(clippy::too_many_arguments)]
+    fn line_search(
+        &mut self,
+        problem: &mut dyn Problem,
+        solver: &mut dyn SubproblemSolver,
+        params: &SqpParams,
+        scaling: &Scaling,
+        lin: &Linearization,
+        step: &qp::QpStep,
+        penalty: f64,
+    ) -> LineSearch {
         let phi = |v: &Values| v.f + penalty * infeasibility_sum(v);
-        let phi0 = phi(values);
-        let deriv = dot(&g, &step.d) - penalty * (infeasibility_sum(values) - step.elastic);
+        let phi0 = phi(&self.values);
+        let deriv =
+            dot(&lin.g, &step.d) - penalty * (infeasibility_sum(&self.values) - step.elastic);
+        let z = &self.z;
         let mut alpha = 1.0;
         let (mut failed, mut last_failure) = (0usize, None);
         let accepted = loop {
             let zt: Vec<f64> = z.iter().zip(&step.d).map(|(a, b)| a + alpha * b).collect();
             let trial = problem.values(&scaling.x(&zt));
-            *evaluations += 1;
+            self.evaluations += 1;
             match trial {
                 Ok(v) => {
                     if phi(&v) <= phi0 + 1e-4 * alpha * deriv.min(0.0) {
                         break Some((zt, v));
                     }
-                    // second-order correction of a rejected full step (the Maratos effect: the
-                    // curvature of the constraints raises the violation along the QP step): the
-                    // QP again, with its constraints shifted by the values at the trial point
                     if alpha == 1.0 {
                         let shift = |c: &[f64], jac: &[Vec<f64>]| -> Vec<f64> {
                             c.iter()
@@ -697,21 +783,13 @@ impl SqpState {
                                 .map(|(c, row)| c - dot(row, &step.d))
                                 .collect()
                         };
-                        let (eq_soc, ineq_soc) = (shift(&v.eq, &eq_jac), shift(&v.ineq, &ineq_jac));
-                        if let Ok(soc) = solver.solve(&QpData {
-                            hessian: hess,
-                            grad: &g,
-                            eq: &eq_soc,
-                            eq_jac: &eq_jac,
-                            ineq: &ineq_soc,
-                            ineq_jac: &ineq_jac,
-                            lower: &lower,
-                            upper: &upper,
-                            rho: params.elastic_penalty,
-                            tolerant: false,
-                        }) {
+                        let (eq_soc, ineq_soc) =
+                            (shift(&v.eq, &lin.eq_jac), shift(&v.ineq, &lin.ineq_jac));
+                        if let Ok(soc) =
+                            solver.solve(&lin.qp(&self.hess, &eq_soc, &ineq_soc, params))
+                        {
                             let zc: Vec<f64> = z.iter().zip(&soc.d).map(|(a, b)| a + b).collect();
-                            *evaluations += 1;
+                            self.evaluations += 1;
                             match problem.values(&scaling.x(&zc)) {
                                 Ok(vc) if phi(&vc) <= phi0 + 1e-4 * deriv.min(0.0) => {
                                     break Some((zc, vc));
@@ -735,16 +813,102 @@ impl SqpState {
                 break None;
             }
         };
-        if let Some(last) = history.last_mut() {
-            last.alpha = if accepted.is_some() { alpha } else { 0.0 };
-            last.failed_trials = failed;
-            last.trial_failure = last_failure.clone();
+        LineSearch {
+            accepted,
+            alpha,
+            failed,
+            last_failure,
         }
-        let Some((z_new, v_new)) = accepted else {
+    }
+
+    /// One SQP iteration: the subproblem at the current point (recovered when it fails), the
+    /// KKT test, the merit line search with its second-order correction, the gradients at the
+    /// accepted point and the damped BFGS update. Returns how it ended and the words for a run
+    /// that ends there; after [`SqpStatus::StepTaken`] the state is at the new point, its
+    /// history ending with the record of the point left (with its line search).
+    fn iterate(
+        &mut self,
+        problem: &mut dyn Problem,
+        solver: &mut dyn SubproblemSolver,
+        params: &SqpParams,
+        scaling: &Scaling,
+        bounds: (&[f64], &[f64]),
+    ) -> Result<(SqpStatus, String), SqpError> {
+        let n = self.z.len();
+        let iteration = self.iteration;
+        let lin = Linearization::at(&self.z, &self.grads, scaling, bounds);
+        let qp = lin.qp(&self.hess, &self.values.eq, &self.values.ineq, params);
+        let (step, recovery) = match solve_with_recovery(solver, &qp) {
+            Ok(s) => s,
+            Err(reason) => {
+                self.record_failed_subproblem(scaling);
+                return Ok((
+                    SqpStatus::SubproblemFailed,
+                    format!(
+                        "the QP subproblem failed at iteration {iteration} and every recovery failed too ({reason})"
+                    ),
+                ));
+            }
+        };
+        if recovery.is_some() {
+            // the recovered subproblem solved with the identity: the BFGS restarts from it
+            self.hess = identity(n);
+        }
+        let viol = violation(&self.values);
+        let kkt = kkt_measure(&lin.g, &step, &self.values);
+        self.history.push(Iterate {
+            iteration,
+            x: scaling.x(&self.z),
+            values: self.values.clone(),
+            violation: viol,
+            kkt,
+            step: step.d.iter().fold(0.0, |a, v| a.max(v.abs())),
+            evaluations: self.evaluations,
+            alpha: 0.0,
+            failed_trials: 0,
+            trial_failure: None,
+            recovery,
+        });
+        if kkt < params.tolerance && viol < params.tolerance {
+            return Ok((
+                SqpStatus::Converged,
+                "KKT conditions satisfied to the tolerance".into(),
+            ));
+        }
+        // the subproblem could not meet the linearized constraints within the bounds
+        let infeasible = if viol >= params.tolerance && step.elastic > 1e-8 {
+            format!(
+                "; the linearized constraints cannot be met within the bounds (largest violation {viol:.3e}): the problem looks infeasible"
+            )
+        } else {
+            String::new()
+        };
+        if iteration >= params.max_iterations {
+            return Ok((
+                SqpStatus::IterationLimit,
+                format!(
+                    "iteration limit {} reached{infeasible}",
+                    params.max_iterations
+                ),
+            ));
+        }
+        let penalty = self.update_penalty(&step);
+        let search = self.line_search(problem, solver, params, scaling, &lin, &step, penalty);
+        if let Some(last) = self.history.last_mut() {
+            last.alpha = if search.accepted.is_some() {
+                search.alpha
+            } else {
+                0.0
+            };
+            last.failed_trials = search.failed;
+            last.trial_failure = search.last_failure.clone();
+        }
+        let Some((z_new, v_new)) = search.accepted else {
             let converged = viol < params.tolerance && kkt < 10.0 * params.tolerance;
-            let message = match last_failure {
+            let message = match search.last_failure {
                 Some(reason) => format!(
-                    "line search stalled ({failed} of its trial points could not be evaluated; the last: {reason})"
+                    "line search stalled ({} of its trial points could not be evaluated; the last: {reason})",
+                    search.failed
                 ),
                 None => "line search stalled (no decrease of the merit function along the step)".into(),
             } + &infeasible;
@@ -759,32 +923,16 @@ impl SqpState {
                 return Ok((SqpStatus::GradientsFailed, message));
             }
         };
-        // damped BFGS (Powell) on the Lagrangian with the new multipliers
-        let s: Vec<f64> = z_new.iter().zip(z.iter()).map(|(a, b)| a - b).collect();
+        // damped BFGS on the Lagrangian with the new multipliers
+        let s: Vec<f64> = z_new.iter().zip(&self.z).map(|(a, b)| a - b).collect();
         let gl_new = lagrangian_grad(scaling, &grads_new, &step.lambda_eq, &step.lambda_ineq);
-        let gl_old = lagrangian_grad(scaling, grads, &step.lambda_eq, &step.lambda_ineq);
-        let mut y: Vec<f64> = gl_new.iter().zip(&gl_old).map(|(a, b)| a - b).collect();
-        let bs: Vec<f64> = (0..n).map(|i| dot(&hess[i], &s)).collect();
-        let sbs = dot(&s, &bs);
-        let sy = dot(&s, &y);
-        if sbs > 1e-300 {
-            if sy < 0.2 * sbs {
-                let theta = 0.8 * sbs / (sbs - sy);
-                for i in 0..n {
-                    y[i] = theta * y[i] + (1.0 - theta) * bs[i];
-                }
-            }
-            let sy = dot(&s, &y);
-            for i in 0..n {
-                for j in 0..n {
-                    hess[i][j] += y[i] * y[j] / sy - bs[i] * bs[j] / sbs;
-                }
-            }
-        }
-        *z = z_new;
-        *values = v_new;
-        *grads = grads_new;
-        *iteration += 1;
+        let gl_old = lagrangian_grad(scaling, &self.grads, &step.lambda_eq, &step.lambda_ineq);
+        let y: Vec<f64> = gl_new.iter().zip(&gl_old).map(|(a, b)| a - b).collect();
+        damped_bfgs(&mut self.hess, &s, y);
+        self.z = z_new;
+        self.values = v_new;
+        self.grads = grads_new;
+        self.iteration += 1;
         Ok((SqpStatus::StepTaken, String::new()))
     }
 }

@@ -189,3 +189,52 @@ pub(super) fn peak_limit_result(
         final_peak: k1.peak,
     })
 }
+
+/// The report's row of every SQP iterate: mass, constrained RMS (shown: the
+/// SI limit times the unit scale, with the pass number), area, flutter damping and the largest p-k
+/// damping of the iterate (from `peaks`, the problem's records, or `evaluate`d again for the
+/// iterates of an earlier session).
+pub(super) fn history_rows(
+    info: &crate::optim::SqpInfo,
+    ev0: &crate::pipeline::Evaluation,
+    spec: &crate::problem::DesignSpec,
+    (rms_limit, unit_scale, pass): (f64, f64, usize),
+    mut peaks: Vec<(Vec<f64>, f64)>,
+    evaluate: impl Fn(&[f64]) -> Result<crate::pipeline::Evaluation>,
+) -> Result<Vec<HistoryRow>> {
+    let mut peak_at = |x: &[f64]| -> Result<Option<f64>> {
+        let Some(m) = &spec.flutter else {
+            return Ok(None);
+        };
+        if let Some((_, g)) = peaks.iter().rev().find(|(px, _)| px.as_slice() == x) {
+            return Ok(Some(*g));
+        }
+        let g = evaluate(x)?.flutter_damping(m)?.2.peak();
+        peaks.push((x.to_vec(), g));
+        Ok(Some(g))
+    };
+    info.history
+        .iter()
+        .map(|it| -> Result<HistoryRow> {
+            Ok(HistoryRow {
+                iteration: it.iteration,
+                mass_kg: it.values.f * ev0.mass_kg,
+                rms_display: (it.values.ineq[0] + 1.0) * rms_limit * unit_scale,
+                area_m2: it
+                    .values
+                    .eq
+                    .first()
+                    .map_or(ev0.area_m2, |h| (h + 1.0) * ev0.area_m2),
+                flutter_damping: match (it.values.ineq.get(1), &spec.flutter) {
+                    (Some(c), Some(m)) => Some(m.damping_max + c * DAMPING_SCALE),
+                    _ => None,
+                },
+                flutter_damping_peak: peak_at(&it.x)?,
+                violation: it.violation,
+                kkt: it.kkt,
+                evaluations: it.evaluations,
+                pass,
+            })
+        })
+        .collect()
+}

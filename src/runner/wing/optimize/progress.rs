@@ -135,3 +135,77 @@ impl crate::optim::Observer for RunObserver {
         Ok(Control::Continue)
     }
 }
+
+/// Prints the limits the optimization sets besides the study's RMS: the discrete gust peak
+/// limit and the modal basis kept whole.
+pub(super) fn print_limits(
+    study: &Study,
+    spec: &crate::problem::DesignSpec,
+    floor: Option<crate::problem::ModeFloor>,
+) {
+    if let Some(pl) = &spec.peak {
+        let (limit, limit_unit) =
+            study
+                .spec
+                .length_unit
+                .display(pl.constraint.limit, &pl.constraint.unit, 1);
+        println!(
+            "discrete gust peak limit: |{}| ≤ {} {} over {} gusts (KS, ρ = ln(n)/{}), on a fixed grid of {:.3} s, {} samples",
+            pl.constraint.name,
+            crate::report::style::tick(&limit),
+            limit_unit,
+            pl.constraint.gusts.len(),
+            crate::gust::discrete::PEAK_KS_GAP,
+            pl.grid.span,
+            pl.grid.time.len()
+        );
+    }
+    if let Some(f) = floor {
+        println!(
+            "modal basis: the {} modes below {:.1} Hz at the initial design; the first mode left out must stay above it",
+            f.retained,
+            f.omega_cut / (2.0 * std::f64::consts::PI)
+        );
+    }
+}
+
+/// The line that ends an optimization: why, how long, the mass and the constrained RMS from
+/// the initial design (`evs.0`) to the final (`evs.1`), shown as (scale, unit).
+pub(super) fn outcome_words(
+    info: &crate::optim::SqpInfo,
+    (ev0, ev): (&crate::pipeline::Evaluation, &crate::pipeline::Evaluation),
+    output: usize,
+    (unit_scale, unit): (f64, &str),
+) -> String {
+    format!(
+        "{} after {} iterations ({} evaluations, {:.1} s): mass {:.4} → {:.4} kg ({:+.1} %), RMS {:.4} → {:.4} {unit}",
+        info.message,
+        info.iterations,
+        info.evaluations,
+        info.elapsed_s,
+        ev0.mass_kg,
+        ev.mass_kg,
+        100.0 * (ev.mass_kg / ev0.mass_kg - 1.0),
+        ev0.rms_m[output] * unit_scale,
+        ev.rms_m[output] * unit_scale
+    )
+}
+
+/// Prints the RMS of every design of a cross-evaluation with each fidelity.
+pub(super) fn print_cross_evaluation(c: &crate::report::results::CrossEvaluation, unit: &str) {
+    for d in &c.designs {
+        let row: Vec<String> = d
+            .evaluations
+            .iter()
+            .map(|e| match e.rms_display {
+                Some(v) => format!("{} {v:.4} {unit}", e.fidelity),
+                None => format!("{} unstable", e.fidelity),
+            })
+            .collect();
+        println!(
+            "cross-evaluation, {} design: RMS {}",
+            d.design,
+            row.join(", ")
+        );
+    }
+}
