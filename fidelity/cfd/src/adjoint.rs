@@ -279,24 +279,79 @@ pub fn linearization_table(
     deform: &crate::deform::Deformation,
     seed: u64,
 ) -> Vec<gustkit_core::LinearizationCheck> {
-    let e = &lfd.euler;
-    let mesh = &e.mesh;
-    let (n, nn, nf) = (lfd.n(), mesh.nodes.len(), mesh.faces.len());
-    let r = lcg_vector(
-        2 * n + 3 * nn + nf + mesh.n_cells + 3 * rev.wall_faces.len(),
-        seed,
-    );
-    let mut it = r.iter().copied();
-    let mut take = |m: usize| -> Vec<f64> { (0..m).map(|_| it.next().unwrap_or(0.0)).collect() };
-    let (v, w) = (take(n), take(n));
-    // node motions of the size of the local spacing (so the differences see a smooth function
-    // of the step), vanishing on the far field (as the deformation's do)
-    let far = mesh
-        .nodes
-        .iter()
-        .map(|p| p[0].hypot(p[1]))
-        .fold(0.0f64, f64::max);
-    let mut spacing = vec![f64::MAX; nn];
+    let p = Probes::new(lfd, rev, seed);
+    let mut rows = vec![
+        p.state_jacobian(),
+        p.motion_rhs(),
+        p.volume_flux_rhs(),
+        p.cell_volumes(),
+    ];
+    rows.extend(p.wall_forces());
+    rows.push(p.deformation(deform));
+    rows
+}
+
+/// The random directions of the linearization table and the state they probe about.
+struct Probes<'a> {
+    lfd: &'a LfdOperator,
+    rev: &'a LfdReverse,
+    /// State direction v and residual weight w.
+    v: Vec<f64>,
+    w: Vec<f64>,
+    /// Node motion (3 a node): of the local spacing's size, zero on the far field.
+    x: Vec<f64>,
+    /// Face volume-flux direction.
+    g: Vec<f64>,
+    /// Cell-volume weight.
+    wv: Vec<f64>,
+    /// Wall-face force weight (3 a face).
+    wf: Vec<f64>,
+    q0: Vec<f64>,
+    x0: Vec<[f64; 3]>,
+}
+
+/// One table row.
+fn row(
+    name: &str,
+    forward: f64,
+    reverse: Option<f64>,
+    fd: Vec<(f64, f64)>,
+) -> gustkit_core::LinearizationCheck {
+    gustkit_core::LinearizationCheck {
+        name: name.into(),
+        forward,
+        reverse,
+        fd,
+    }
+}
+
+/// Real finite differences (f(h) − f(0))/h at the table's steps.
+fn differences(f: &dyn Fn(f64) -> f64) -> Vec<(f64, f64)> {
+    let f0 = f(0.0);
+    TABLE_STEPS.iter().map(|&h| (h, (f(h) - f0) / h)).collect()
+}
+
+fn complex(x: &[f64]) -> Vec<C64> {
+    x.iter().map(|v| C64::new(*v, 0.0)).collect()
+}
+
+fn real(x: &[C64]) -> Vec<f64> {
+    x.iter().map(|v| v.re).collect()
+}
+
+fn nodes3(x: &[f64]) -> Vec<[f64; 3]> {
+    x.chunks(3).map(|c| [c[0], c[1], c[2]]).collect()
+}
+
+fn states(q: &[f64]) -> Vec<State<f64>> {
+    q.chunks(NVAR)
+        .map(|c| std::array::from_fn(|k| c[k]))
+        .collect()
+}
+
+/// The smallest edge length at each node of a mesh.
+fn node_spacing(mesh: &crate::mesh::Mesh) -> Vec<f64> {
+    let mut spacing = vec![f64::MAX; mesh.nodes.len()];
     for f in &mesh.faces {
         for (i, &a) in f.nodes.iter().enumerate() {
             let b = f.nodes[(i + 1) % f.nodes.len()];
@@ -308,203 +363,270 @@ pub fn linearization_table(
             spacing[b] = spacing[b].min(d);
         }
     }
-    let x: Vec<f64> = take(3 * nn)
-        .chunks(3)
-        .zip(&mesh.nodes)
-        .zip(&spacing)
-        .flat_map(|((c, p), &h)| {
-            let on = if p[0].hypot(p[1]) < 0.5 * far {
-                0.1 * h
-            } else {
-                0.0
-            };
-            [c[0] * on, c[1] * on, c[2] * on]
-        })
-        .collect();
-    let g = take(nf);
-    let wv = take(mesh.n_cells);
-    let wf = take(3 * rev.wall_faces.len());
-    let c = |x: &[f64]| -> Vec<C64> { x.iter().map(|v| C64::new(*v, 0.0)).collect() };
-    let re = |x: &[C64]| -> Vec<f64> { x.iter().map(|v| v.re).collect() };
-    let nodes3 = |x: &[f64]| -> Vec<[f64; 3]> { x.chunks(3).map(|c| [c[0], c[1], c[2]]).collect() };
-    let residual = |q: &[f64], nodes: &[[f64; 3]], vg: &[f64]| -> Vec<f64> {
-        let qs: Vec<State<f64>> = q
-            .chunks(NVAR)
-            .map(|c| std::array::from_fn(|k| c[k]))
+    spacing
+}
+
+impl<'a> Probes<'a> {
+    fn new(lfd: &'a LfdOperator, rev: &'a LfdReverse, seed: u64) -> Self {
+        let mesh = &lfd.euler.mesh;
+        let (n, nn, nf) = (lfd.n(), mesh.nodes.len(), mesh.faces.len());
+        let r = lcg_vector(
+            2 * n + 3 * nn + nf + mesh.n_cells + 3 * rev.wall_faces.len(),
+            seed,
+        );
+        let mut it = r.iter().copied();
+        let mut take =
+            |m: usize| -> Vec<f64> { (0..m).map(|_| it.next().unwrap_or(0.0)).collect() };
+        let (v, w) = (take(n), take(n));
+        // node motions of the size of the local spacing (so the differences see a smooth
+        // function of the step), vanishing on the far field (as the deformation's do)
+        let far = mesh
+            .nodes
+            .iter()
+            .map(|p| p[0].hypot(p[1]))
+            .fold(0.0f64, f64::max);
+        let spacing = node_spacing(mesh);
+        let x: Vec<f64> = take(3 * nn)
+            .chunks(3)
+            .zip(&mesh.nodes)
+            .zip(&spacing)
+            .flat_map(|((c, p), &h)| {
+                let on = if p[0].hypot(p[1]) < 0.5 * far {
+                    0.1 * h
+                } else {
+                    0.0
+                };
+                [c[0] * on, c[1] * on, c[2] * on]
+            })
             .collect();
-        let geom = e.geometry_at(nodes, vg.to_vec(), e.order);
-        e.residual_in(&qs, &geom).0.into_iter().flatten().collect()
-    };
-    let q0: Vec<f64> = lfd.q0.iter().flatten().copied().collect();
-    let x0 = mesh.nodes.clone();
-    let moved = |h: f64| -> Vec<[f64; 3]> {
-        x0.iter()
-            .zip(nodes3(&x))
+        let g = take(nf);
+        let wv = take(mesh.n_cells);
+        let wf = take(3 * rev.wall_faces.len());
+        Self {
+            lfd,
+            rev,
+            v,
+            w,
+            x,
+            g,
+            wv,
+            wf,
+            q0: lfd.q0.iter().flatten().copied().collect(),
+            x0: mesh.nodes.clone(),
+        }
+    }
+
+    /// The nodes moved by h along the node direction.
+    fn moved(&self, h: f64) -> Vec<[f64; 3]> {
+        self.x0
+            .iter()
+            .zip(nodes3(&self.x))
             .map(|(p, d)| std::array::from_fn(|k| p[k] + h * d[k]))
             .collect()
-    };
-    let fd = |f: &dyn Fn(f64) -> f64| -> Vec<(f64, f64)> {
-        let f0 = f(0.0);
-        TABLE_STEPS.iter().map(|&h| (h, (f(h) - f0) / h)).collect()
-    };
-    let mut rows = Vec::new();
-    let row = |name: &str, forward: f64, reverse: Option<f64>, fd: Vec<(f64, f64)>| {
-        gustkit_core::LinearizationCheck {
-            name: name.into(),
-            forward,
-            reverse,
-            fd,
-        }
-    };
-    // ∂R/∂q: the LFD operator at s = 0
-    let zero = C64::new(0.0, 0.0);
-    rows.push(row(
-        "dR/dq (LFD operator, A at s = 0)",
-        dot_re(&w, &re(&lfd.apply_dual(zero, &c(&v)))),
-        Some(dot_re(&re(&lfd.apply_transpose(zero, &c(&w))), &v)),
-        fd(&|h| {
-            let q: Vec<f64> = q0.iter().zip(&v).map(|(a, b)| a + h * b).collect();
-            dot_re(&w, &residual(&q, &x0, &e.face_vg))
-        }),
-    ));
-    // ∂R/∂x_G: the mode-motion right-hand side at s = 0
-    let x_hat: Vec<[C64; 3]> = nodes3(&x)
-        .iter()
-        .map(|p| p.map(|v| C64::new(v, 0.0)))
-        .collect();
-    let bt = rev.motion_rhs_transpose(lfd, zero, &c(&w));
-    rows.push(row(
-        "dR/dx_G (mesh-motion right-hand side)",
-        dot_re(&w, &re(&lfd.motion_rhs(zero, &x_hat))),
-        Some(bt.iter().flatten().zip(&x).map(|(a, b)| a.re * b).sum()),
-        fd(&|h| dot_re(&w, &residual(&q0, &moved(h), &e.face_vg))),
-    ));
-    // ∂R/∂v_G: the face volume fluxes (grid velocity and gust right-hand sides)
-    let adj = rev.geometry.vjp(&{
-        let mut s = c(&w);
-        s.extend(std::iter::repeat_n(zero, mesh.n_cells));
-        s
-    });
-    rows.push(row(
-        "dR/dv_G (grid-velocity and gust fluxes)",
-        dot_re(&w, &re(&lfd.volume_flux_rhs(&c(&g)))),
-        Some(
-            adj[3 * nn..3 * nn + nf]
-                .iter()
-                .zip(&g)
-                .map(|(a, b)| a.re * b)
-                .sum(),
-        ),
-        fd(&|h| {
-            let vg: Vec<f64> = e.face_vg.iter().zip(&g).map(|(a, b)| a + h * b).collect();
-            dot_re(&w, &residual(&q0, &x0, &vg))
-        }),
-    ));
-    // ∂V/∂x_G: the cell volumes (the s V̂ q₀ term)
-    let vol_forward: f64 = {
-        let nd: Vec<[Dual<1>; 3]> = x0
+    }
+
+    /// The state moved by h along v.
+    fn state_at(&self, h: f64) -> Vec<f64> {
+        self.q0
             .iter()
-            .zip(nodes3(&x))
-            .map(|(p, d)| std::array::from_fn(|k| Dual::new(p[k], [d[k]])))
-            .collect();
-        mesh.volumes_at(&nd)
+            .zip(&self.v)
+            .map(|(a, b)| a + h * b)
+            .collect()
+    }
+
+    /// The node direction as complex amplitudes.
+    fn x_hat(&self) -> Vec<[C64; 3]> {
+        nodes3(&self.x)
             .iter()
-            .zip(&wv)
-            .map(|(a, b)| a.d[0] * b)
-            .sum()
-    };
-    let adj = rev.geometry.vjp(&{
-        let mut s = vec![zero; n];
-        s.extend(c(&wv));
-        s
-    });
-    rows.push(row(
-        "dV/dx_G (cell volumes)",
-        vol_forward,
-        Some(adj[..3 * nn].iter().zip(&x).map(|(a, b)| a.re * b).sum()),
-        fd(&|h| {
-            mesh.volumes_at(&moved(h))
-                .iter()
-                .zip(&wv)
-                .map(|(a, b)| a * b)
-                .sum()
-        }),
-    ));
-    // ∂f/∂q and ∂f/∂x_G: the linearized wall forces
-    let forces = |q: &[f64], nodes: &[[f64; 3]]| -> Vec<f64> {
-        let qs: Vec<State<f64>> = q
-            .chunks(NVAR)
-            .map(|c| std::array::from_fn(|k| c[k]))
-            .collect();
-        let geom = e.geometry_at(nodes, vec![0.0; nf], e.order);
-        e.wall_face_forces(&qs, &geom)
+            .map(|p| p.map(|v| C64::new(v, 0.0)))
+            .collect()
+    }
+
+    /// The steady residual of state `q` on `nodes` with face volume fluxes `vg`.
+    fn residual(&self, q: &[f64], nodes: &[[f64; 3]], vg: &[f64]) -> Vec<f64> {
+        let e = &self.lfd.euler;
+        let geom = e.geometry_at(nodes, vg.to_vec(), e.order);
+        e.residual_in(&states(q), &geom)
+            .0
+            .into_iter()
+            .flatten()
+            .collect()
+    }
+
+    /// The wall-face forces of state `q` on `nodes` (a static grid).
+    fn forces(&self, q: &[f64], nodes: &[[f64; 3]]) -> Vec<f64> {
+        let e = &self.lfd.euler;
+        let geom = e.geometry_at(nodes, vec![0.0; e.mesh.faces.len()], e.order);
+        e.wall_face_forces(&states(q), &geom)
             .into_iter()
             .flat_map(|(_, f)| f)
             .collect()
-    };
-    let u: Vec<[C64; 3]> = wf
-        .chunks(3)
-        .map(|c| [c[0], c[1], c[2]].map(|v| C64::new(v, 0.0)))
-        .collect();
-    let (uq, ux) = rev.wall_forces_transpose(&u);
-    let fq: Vec<f64> = lfd
-        .wall_face_forces(&c(&v), None)
-        .into_iter()
-        .flat_map(|(_, f)| f.map(|z| z.re))
-        .collect();
-    rows.push(row(
-        "df/dq (wall forces, state)",
-        dot_re(&wf, &fq),
-        Some(dot_re(&re(&uq), &v)),
-        fd(&|h| {
-            let q: Vec<f64> = q0.iter().zip(&v).map(|(a, b)| a + h * b).collect();
-            dot_re(&wf, &forces(&q, &x0))
-        }),
-    ));
-    let fx: Vec<f64> = lfd
-        .wall_face_forces(&vec![zero; n], Some(&x_hat))
-        .into_iter()
-        .flat_map(|(_, f)| f.map(|z| z.re))
-        .collect();
-    rows.push(row(
-        "df/dx_G (wall forces, nodes)",
-        dot_re(&wf, &fx),
-        Some(ux.iter().flatten().zip(&x).map(|(a, b)| a.re * b).sum()),
-        fd(&|h| dot_re(&wf, &forces(&q0, &moved(h)))),
-    ));
-    // the mesh deformation (linear)
-    let nw = deform.wall_nodes.len();
-    let wall: Vec<[f64; 3]> = nodes3(&x[..3 * nw.min(nn)]);
-    let seed_nodes = nodes3(&x);
-    let spread = deform.apply(&wall);
-    let back = deform.apply_transpose(&seed_nodes);
-    rows.push(row(
-        "mesh deformation",
-        spread
-            .iter()
-            .flatten()
-            .zip(seed_nodes.iter().flatten())
-            .map(|(a, b)| a * b)
-            .sum(),
-        Some(
-            back.iter()
-                .flatten()
-                .zip(wall.iter().flatten())
-                .map(|(a, b)| a * b)
-                .sum(),
-        ),
-        fd(&|h| {
-            let moved: Vec<[f64; 3]> = wall.iter().map(|p| p.map(|v| h * v)).collect();
-            deform
-                .apply(&moved)
+    }
+
+    /// ∂R/∂q: the LFD operator at s = 0.
+    fn state_jacobian(&self) -> gustkit_core::LinearizationCheck {
+        let (lfd, v, w) = (self.lfd, &self.v, &self.w);
+        let zero = C64::new(0.0, 0.0);
+        let face_vg = &lfd.euler.face_vg;
+        row(
+            "dR/dq (LFD operator, A at s = 0)",
+            dot_re(w, &real(&lfd.apply_dual(zero, &complex(v)))),
+            Some(dot_re(&real(&lfd.apply_transpose(zero, &complex(w))), v)),
+            differences(&|h| dot_re(w, &self.residual(&self.state_at(h), &self.x0, face_vg))),
+        )
+    }
+
+    /// ∂R/∂x_G: the mode-motion right-hand side at s = 0.
+    fn motion_rhs(&self) -> gustkit_core::LinearizationCheck {
+        let (lfd, w, x) = (self.lfd, &self.w, &self.x);
+        let zero = C64::new(0.0, 0.0);
+        let bt = self.rev.motion_rhs_transpose(lfd, zero, &complex(w));
+        row(
+            "dR/dx_G (mesh-motion right-hand side)",
+            dot_re(w, &real(&lfd.motion_rhs(zero, &self.x_hat()))),
+            Some(bt.iter().flatten().zip(x).map(|(a, b)| a.re * b).sum()),
+            differences(&|h| {
+                dot_re(
+                    w,
+                    &self.residual(&self.q0, &self.moved(h), &lfd.euler.face_vg),
+                )
+            }),
+        )
+    }
+
+    /// ∂R/∂v_G: the face volume fluxes (grid velocity and gust right-hand sides).
+    fn volume_flux_rhs(&self) -> gustkit_core::LinearizationCheck {
+        let (lfd, w, g) = (self.lfd, &self.w, &self.g);
+        let mesh = &lfd.euler.mesh;
+        let nn = mesh.nodes.len();
+        let zero = C64::new(0.0, 0.0);
+        let adj = self.rev.geometry.vjp(&{
+            let mut s = complex(w);
+            s.extend(std::iter::repeat_n(zero, mesh.n_cells));
+            s
+        });
+        row(
+            "dR/dv_G (grid-velocity and gust fluxes)",
+            dot_re(w, &real(&lfd.volume_flux_rhs(&complex(g)))),
+            Some(
+                adj[3 * nn..3 * nn + mesh.faces.len()]
+                    .iter()
+                    .zip(g)
+                    .map(|(a, b)| a.re * b)
+                    .sum(),
+            ),
+            differences(&|h| {
+                let vg: Vec<f64> = lfd
+                    .euler
+                    .face_vg
+                    .iter()
+                    .zip(g)
+                    .map(|(a, b)| a + h * b)
+                    .collect();
+                dot_re(w, &self.residual(&self.q0, &self.x0, &vg))
+            }),
+        )
+    }
+
+    /// ∂V/∂x_G: the cell volumes (the s V̂ q₀ term).
+    fn cell_volumes(&self) -> gustkit_core::LinearizationCheck {
+        let mesh = &self.lfd.euler.mesh;
+        let (wv, x) = (&self.wv, &self.x);
+        let forward: f64 = {
+            let nd: Vec<[Dual<1>; 3]> = self
+                .x0
                 .iter()
+                .zip(nodes3(x))
+                .map(|(p, d)| std::array::from_fn(|k| Dual::new(p[k], [d[k]])))
+                .collect();
+            mesh.volumes_at(&nd)
+                .iter()
+                .zip(wv)
+                .map(|(a, b)| a.d[0] * b)
+                .sum()
+        };
+        let adj = self.rev.geometry.vjp(&{
+            let mut s = vec![C64::new(0.0, 0.0); self.lfd.n()];
+            s.extend(complex(wv));
+            s
+        });
+        row(
+            "dV/dx_G (cell volumes)",
+            forward,
+            Some(
+                adj[..3 * mesh.nodes.len()]
+                    .iter()
+                    .zip(x)
+                    .map(|(a, b)| a.re * b)
+                    .sum(),
+            ),
+            differences(&|h| {
+                mesh.volumes_at(&self.moved(h))
+                    .iter()
+                    .zip(wv)
+                    .map(|(a, b)| a * b)
+                    .sum()
+            }),
+        )
+    }
+
+    /// ∂f/∂q and ∂f/∂x_G: the linearized wall forces.
+    fn wall_forces(&self) -> [gustkit_core::LinearizationCheck; 2] {
+        let (lfd, wf, v, x) = (self.lfd, &self.wf, &self.v, &self.x);
+        let u: Vec<[C64; 3]> = wf
+            .chunks(3)
+            .map(|c| [c[0], c[1], c[2]].map(|v| C64::new(v, 0.0)))
+            .collect();
+        let (uq, ux) = self.rev.wall_forces_transpose(&u);
+        let fq: Vec<f64> = lfd
+            .wall_face_forces(&complex(v), None)
+            .into_iter()
+            .flat_map(|(_, f)| f.map(|z| z.re))
+            .collect();
+        let fx: Vec<f64> = lfd
+            .wall_face_forces(&vec![C64::new(0.0, 0.0); lfd.n()], Some(&self.x_hat()))
+            .into_iter()
+            .flat_map(|(_, f)| f.map(|z| z.re))
+            .collect();
+        [
+            row(
+                "df/dq (wall forces, state)",
+                dot_re(wf, &fq),
+                Some(dot_re(&real(&uq), v)),
+                differences(&|h| dot_re(wf, &self.forces(&self.state_at(h), &self.x0))),
+            ),
+            row(
+                "df/dx_G (wall forces, nodes)",
+                dot_re(wf, &fx),
+                Some(ux.iter().flatten().zip(x).map(|(a, b)| a.re * b).sum()),
+                differences(&|h| dot_re(wf, &self.forces(&self.q0, &self.moved(h)))),
+            ),
+        ]
+    }
+
+    /// The mesh deformation (linear): wall motion → node motion and its transpose.
+    fn deformation(&self, deform: &crate::deform::Deformation) -> gustkit_core::LinearizationCheck {
+        let x = &self.x;
+        let nw = deform.wall_nodes.len();
+        let wall: Vec<[f64; 3]> = nodes3(&x[..3 * nw.min(self.x0.len())]);
+        let seed_nodes = nodes3(x);
+        let pair = |a: &[[f64; 3]], b: &[[f64; 3]]| -> f64 {
+            a.iter()
                 .flatten()
-                .zip(seed_nodes.iter().flatten())
+                .zip(b.iter().flatten())
                 .map(|(a, b)| a * b)
                 .sum()
-        }),
-    ));
-    rows
+        };
+        row(
+            "mesh deformation",
+            pair(&deform.apply(&wall), &seed_nodes),
+            Some(pair(&deform.apply_transpose(&seed_nodes), &wall)),
+            differences(&|h| {
+                let moved: Vec<[f64; 3]> = wall.iter().map(|p| p.map(|v| h * v)).collect();
+                pair(&deform.apply(&moved), &seed_nodes)
+            }),
+        )
+    }
 }
 
 /// Reproducible pseudo-random numbers in [−1, 1) (a 64-bit LCG), for the table's vectors.

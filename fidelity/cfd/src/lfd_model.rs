@@ -559,7 +559,6 @@ impl AerodynamicsReverse for Lfd {
             return Ok(Vec::new());
         }
         gustkit_core::aero::check_seeds(seeds, k.len(), nm)?;
-        let rev = self.reverse_tapes();
         let (x_hat, shapes) = self.mode_motion(modes);
         // the forward solutions of the last GAF table, when it was this one
         let cached: Option<Vec<Vec<Solution>>> = self
@@ -569,12 +568,247 @@ impl AerodynamicsReverse for Lfd {
             .as_ref()
             .filter(|c| c.flight == *flight && c.k == k && c.modes == *modes)
             .map(|c| c.solutions.clone());
-        let scale = self.force_scale();
+        let sweep = SeedSweep {
+            model: self,
+            rev: self.reverse_tapes(),
+            flight,
+            face_shape: self.face_means(&shapes),
+            // the geometry directions: steady tangents δq₀ and the spread shapes' tangents δx̂
+            geometry: self.geometry_tangents(modes)?,
+            x_hat,
+            scale: self.force_scale(),
+            nm,
+            n_cols: if self.tangents.is_empty() { nm } else { nm + 1 },
+        };
+        let per_k: Vec<PerFrequency> = k
+            .par_iter()
+            .enumerate()
+            .map(|(ik, &kk)| {
+                let (f, sol) = match cached.as_ref() {
+                    Some(c) => (self.factor_at(flight, kk, nm)?, c[ik].clone()),
+                    None => self.forward(flight, kk, &sweep.x_hat)?,
+                };
+                sweep.at_frequency(ik, kk, &f, &sol, seeds)
+            })
+            .collect::<Result<_, AeroError>>()?;
+        Ok(self.sum_over_frequencies(per_k, nm, seeds.len()))
+    }
+}
+
+/// One frequency's part of the reverse sweep: per seed, the node seeds of every mode (from the
+/// force projection, per metre of shape, and from the mode motion, per mesh unit), and the
+/// geometry gradient.
+type PerFrequency = (Vec<NodeSeeds>, Vec<Vec<f64>>);
+
+/// What the reverse sweep of one GAF table shares across its frequencies.
+struct SeedSweep<'a> {
+    model: &'a Lfd,
+    rev: &'a LfdReverse,
+    flight: &'a FlightCondition,
+    /// The spread mode motions (mesh units).
+    x_hat: Vec<NodeField>,
+    /// φ̄_i on each wall face: the mean of its nodes' shapes (metres, mesh frame).
+    face_shape: Vec<Vec<[f64; 3]>>,
+    /// Per geometry tangent: δq₀ and the δx̂ of every mode.
+    geometry: Vec<(Vec<f64>, Vec<NodeField>)>,
+    scale: f64,
+    nm: usize,
+    /// Adjoint columns a seed: the modes, and the gust where the geometry needs it.
+    n_cols: usize,
+}
+
+impl SeedSweep<'_> {
+    /// The reverse sweep at reduced frequency `kk` (index `ik`) with its factorization and the
+    /// forward solutions: the projection's seeds, the adjoint solves (sᵀV + ∂R/∂q)ᵀ λ = F_qᵀ u
+    /// of every seed and column, the geometry gradient and the motion seeds.
+    fn at_frequency(
+        &self,
+        ik: usize,
+        kk: f64,
+        f: &Factored,
+        sol: &[Solution],
+        seeds: &[GafTable],
+    ) -> Result<PerFrequency, AeroError> {
+        let (nm, n_cols) = (self.nm, self.n_cols);
+        let lfd = &self.model.lfd;
+        let n_nodes = lfd.euler.mesh.nodes.len();
+        // linearized wall forces of each mode motion and of the gust
+        let forces: Vec<Vec<[C64; 3]>> = (0..=nm)
+            .map(|j| {
+                let x = (j < nm).then(|| self.x_hat[j].as_slice());
+                lfd.wall_face_forces(&sol[j].0, x)
+                    .into_iter()
+                    .map(|(_, v)| v)
+                    .collect()
+            })
+            .collect();
+        let mut out = Vec::with_capacity(seeds.len());
+        let mut adjoint_rhs = Vec::with_capacity(seeds.len() * n_cols);
+        let mut direct = Vec::with_capacity(seeds.len() * n_cols);
+        let mut force_seeds = Vec::with_capacity(seeds.len() * n_cols);
+        for seed in seeds {
+            let (s_ss, s_gs) = (&seed.q_ss[ik], &seed.q_gs[ik]);
+            out.push((
+                self.projection_seed(s_ss, s_gs, &forces),
+                vec![vec![[0.0; 3]; n_nodes]; nm],
+            ));
+            // u_j = Σ_i conj(Q̄_ij) scale φ̄_i: the seed on mode j's wall forces
+            for j in 0..nm {
+                let u = self.force_seed(|i| s_ss[i][j].conj());
+                let (uq, ux) = self.rev.wall_forces_transpose(&u);
+                adjoint_rhs.push(uq);
+                direct.push(ux);
+                force_seeds.push(u);
+            }
+            if n_cols > nm {
+                // the gust column's seed, for the geometry derivative only
+                let u = self.force_seed(|i| s_gs[i].conj());
+                adjoint_rhs.push(self.rev.wall_forces_transpose(&u).0);
+                direct.push(Vec::new());
+                force_seeds.push(u);
+            }
+        }
+        let lambda = self
+            .rev
+            .solve_transpose(lfd, f, &adjoint_rhs)
+            .map_err(|e| adjoint_error(e, kk, nm, n_cols))?;
+        let geo = self.geometry_gradient(kk, f, sol, &lambda, &force_seeds, seeds.len());
+        self.motion_seeds(f, &lambda, &direct, &mut out);
+        Ok((out, geo))
+    }
+
+    /// The seed of the force projection on the node shapes: Re(conj(Q̄_ij) scale f̂_j) on φ_i
+    /// for every mode i, each face's value spread evenly over its nodes.
+    fn projection_seed(
+        &self,
+        s_ss: &[Vec<C64>],
+        s_gs: &[C64],
+        forces: &[Vec<[C64; 3]>],
+    ) -> Vec<Vec<[f64; 3]>> {
+        let nm = self.nm;
+        let mesh = &self.model.lfd.euler.mesh;
+        let mut proj = vec![vec![[0.0; 3]; mesh.nodes.len()]; nm];
+        for i in 0..nm {
+            for (w, &fi) in self.rev.wall_faces.iter().enumerate() {
+                let mut g = [0.0; 3];
+                for c in 0..3 {
+                    let mut acc = s_gs[i].conj() * forces[nm][w][c];
+                    for j in 0..nm {
+                        acc += s_ss[i][j].conj() * forces[j][w][c];
+                    }
+                    g[c] = acc.re * self.scale;
+                }
+                let nodes = &mesh.faces[fi].nodes;
+                let wn = 1.0 / nodes.len() as f64;
+                for &n in nodes {
+                    for c in 0..3 {
+                        proj[i][n][c] += g[c] * wn;
+                    }
+                }
+            }
+        }
+        proj
+    }
+
+    /// The seed on a column's wall-face forces: u = Σ_i coefficient(i) · φ̄_i · scale.
+    fn force_seed(&self, coefficient: impl Fn(usize) -> C64) -> Vec<[C64; 3]> {
+        (0..self.rev.wall_faces.len())
+            .map(|w| {
+                std::array::from_fn(|c| {
+                    (0..self.nm)
+                        .map(|i| coefficient(i) * self.face_shape[i][w][c])
+                        .sum::<C64>()
+                        * self.scale
+                })
+            })
+            .collect()
+    }
+
+    /// Per seed, the geometry gradient at one frequency: Σ_columns Re(uᵀ ∂f̂ − λᵀ t) along
+    /// each mesh tangent, where t and ∂f̂ are the column's residual and force tangents.
+    fn geometry_gradient(
+        &self,
+        kk: f64,
+        f: &Factored,
+        sol: &[Solution],
+        lambda: &[(Vec<C64>, crate::krylov::GmresInfo)],
+        force_seeds: &[Vec<[C64; 3]>],
+        n_seeds: usize,
+    ) -> Vec<Vec<f64>> {
+        let tangents = &self.model.tangents;
+        let mut geo = vec![vec![0.0; tangents.len()]; n_seeds];
+        for (d, (dq0, dx_hat)) in self.geometry.iter().enumerate() {
+            for col in 0..self.n_cols {
+                let gust_fluxes;
+                let column = if col < self.nm {
+                    Column::Motion {
+                        x_hat: &self.x_hat[col],
+                        dx_hat: &dx_hat[col],
+                    }
+                } else {
+                    gust_fluxes = self.model.gust_flux_tangent(self.flight, kk, &tangents[d]);
+                    Column::Gust {
+                        g: &gust_fluxes.0,
+                        dg: &gust_fluxes.1,
+                    }
+                };
+                let (t, df) = self.model.lfd.column_tangent(
+                    f.s,
+                    &sol[col].0,
+                    &column,
+                    &tangents[d].nodes,
+                    dq0,
+                );
+                for (si, g) in geo.iter_mut().enumerate() {
+                    let idx = si * self.n_cols + col;
+                    let lam = &lambda[idx].0;
+                    let mut acc = C64::new(0.0, 0.0);
+                    for (uw, fw) in force_seeds[idx].iter().zip(&df) {
+                        for c in 0..3 {
+                            acc += uw[c] * fw[c];
+                        }
+                    }
+                    for (a, b) in lam.iter().zip(&t) {
+                        acc -= a * b;
+                    }
+                    g[d] += acc.re;
+                }
+            }
+        }
+        geo
+    }
+
+    /// The seeds on the mode motions: Re(F_xᵀ u_j − Bᵀ λ_j) on every mesh node, into each
+    /// seed's second part (the gust columns have none).
+    fn motion_seeds(
+        &self,
+        f: &Factored,
+        lambda: &[(Vec<C64>, crate::krylov::GmresInfo)],
+        direct: &[Vec<[C64; 3]>],
+        out: &mut [NodeSeeds],
+    ) {
+        for (idx, ((lam, _), ux)) in lambda.iter().zip(direct).enumerate() {
+            let (si, j) = (idx / self.n_cols, idx % self.n_cols);
+            if j >= self.nm {
+                continue;
+            }
+            let bt = self.rev.motion_rhs_transpose(&self.model.lfd, f.s, lam);
+            let motion = &mut out[si].1[j];
+            for n in 0..motion.len() {
+                for c in 0..3 {
+                    motion[n][c] = (ux[n][c] - bt[n][c]).re;
+                }
+            }
+        }
+    }
+}
+
+impl Lfd {
+    /// φ̄ of every shape on each wall face of the reverse tapes: the mean of its nodes' values.
+    fn face_means(&self, shapes: &[Vec<[f64; 3]>]) -> Vec<Vec<[f64; 3]>> {
         let mesh = &self.lfd.euler.mesh;
-        let n_nodes = mesh.nodes.len();
-        let wall_faces = &rev.wall_faces;
-        // φ̄_i on each wall face: the mean of its nodes' shapes (metres, mesh frame)
-        let face_shape: Vec<Vec<[f64; 3]>> = shapes
+        let wall_faces = &self.reverse_tapes().wall_faces;
+        shapes
             .iter()
             .map(|phi| {
                 wall_faces
@@ -586,161 +820,26 @@ impl AerodynamicsReverse for Lfd {
                     })
                     .collect()
             })
-            .collect();
-        let zero_nodes = || vec![vec![[0.0; 3]; n_nodes]; nm];
-        // the geometry directions: steady tangents δq₀ and the spread shapes' tangents δx̂
-        let l = self.length_m;
-        let geometry = self.geometry_tangents(modes)?;
-        let n_cols = if self.tangents.is_empty() { nm } else { nm + 1 };
-        type PerK = (Vec<NodeSeeds>, Vec<Vec<f64>>);
-        let per_k: Result<Vec<PerK>, AeroError> = k
-            .par_iter()
-            .enumerate()
-            .map(|(ik, &kk)| {
-                let (f, sol) = match cached.as_ref() {
-                    Some(c) => (self.factor_at(flight, kk, nm)?, c[ik].clone()),
-                    None => self.forward(flight, kk, &x_hat)?,
-                };
-                // linearized wall forces of each mode motion and of the gust
-                let forces: Vec<Vec<[C64; 3]>> = (0..=nm)
-                    .map(|j| {
-                        let x = (j < nm).then(|| x_hat[j].as_slice());
-                        self.lfd
-                            .wall_face_forces(&sol[j].0, x)
-                            .into_iter()
-                            .map(|(_, v)| v)
-                            .collect()
-                    })
-                    .collect();
-                let mut out = Vec::with_capacity(seeds.len());
-                let mut adjoint_rhs = Vec::with_capacity(seeds.len() * n_cols);
-                let mut direct = Vec::with_capacity(seeds.len() * n_cols);
-                let mut force_seeds = Vec::with_capacity(seeds.len() * n_cols);
-                for seed in seeds {
-                    let (s_ss, s_gs) = (&seed.q_ss[ik], &seed.q_gs[ik]);
-                    // the projection's seed: Re(conj(Q̄_ij) scale f̂_j) on φ_i, face mean spread
-                    let mut proj = zero_nodes();
-                    for i in 0..nm {
-                        for (w, &fi) in wall_faces.iter().enumerate() {
-                            let mut g = [0.0; 3];
-                            for c in 0..3 {
-                                let mut acc = s_gs[i].conj() * forces[nm][w][c];
-                                for j in 0..nm {
-                                    acc += s_ss[i][j].conj() * forces[j][w][c];
-                                }
-                                g[c] = acc.re * scale;
-                            }
-                            let nodes = &mesh.faces[fi].nodes;
-                            let wn = 1.0 / nodes.len() as f64;
-                            for &n in nodes {
-                                for c in 0..3 {
-                                    proj[i][n][c] += g[c] * wn;
-                                }
-                            }
-                        }
-                    }
-                    out.push((proj, zero_nodes()));
-                    // u_j = Σ_i conj(Q̄_ij) scale φ̄_i: the seed on mode j's wall forces
-                    for j in 0..nm {
-                        let u: Vec<[C64; 3]> = (0..wall_faces.len())
-                            .map(|w| {
-                                std::array::from_fn(|c| {
-                                    (0..nm)
-                                        .map(|i| s_ss[i][j].conj() * face_shape[i][w][c])
-                                        .sum::<C64>()
-                                        * scale
-                                })
-                            })
-                            .collect();
-                        let (uq, ux) = rev.wall_forces_transpose(&u);
-                        adjoint_rhs.push(uq);
-                        direct.push(ux);
-                        force_seeds.push(u);
-                    }
-                    if n_cols > nm {
-                        // the gust column's seed, for the geometry derivative only
-                        let u: Vec<[C64; 3]> = (0..wall_faces.len())
-                            .map(|w| {
-                                std::array::from_fn(|c| {
-                                    (0..nm)
-                                        .map(|i| s_gs[i].conj() * face_shape[i][w][c])
-                                        .sum::<C64>()
-                                        * scale
-                                })
-                            })
-                            .collect();
-                        adjoint_rhs.push(rev.wall_forces_transpose(&u).0);
-                        direct.push(Vec::new());
-                        force_seeds.push(u);
-                    }
-                }
-                let lambda = rev
-                    .solve_transpose(&self.lfd, &f, &adjoint_rhs)
-                    .map_err(|e| adjoint_error(e, kk, nm, n_cols))?;
-                // geometry: Σ_columns Re(uᵀ ∂f̂ − λᵀ t) for each mesh tangent
-                let mut geo = vec![vec![0.0; self.tangents.len()]; seeds.len()];
-                for (d, (dq0, dx_hat)) in geometry.iter().enumerate() {
-                    for col in 0..n_cols {
-                        let gust_fluxes;
-                        let column = if col < nm {
-                            Column::Motion {
-                                x_hat: &x_hat[col],
-                                dx_hat: &dx_hat[col],
-                            }
-                        } else {
-                            gust_fluxes = self.gust_flux_tangent(flight, kk, &self.tangents[d]);
-                            Column::Gust {
-                                g: &gust_fluxes.0,
-                                dg: &gust_fluxes.1,
-                            }
-                        };
-                        let (t, df) = self.lfd.column_tangent(
-                            f.s,
-                            &sol[col].0,
-                            &column,
-                            &self.tangents[d].nodes,
-                            dq0,
-                        );
-                        for (si, g) in geo.iter_mut().enumerate() {
-                            let idx = si * n_cols + col;
-                            let u = &force_seeds[idx];
-                            let lam = &lambda[idx].0;
-                            let mut acc = C64::new(0.0, 0.0);
-                            for (uw, fw) in u.iter().zip(&df) {
-                                for c in 0..3 {
-                                    acc += uw[c] * fw[c];
-                                }
-                            }
-                            for (a, b) in lam.iter().zip(&t) {
-                                acc -= a * b;
-                            }
-                            g[d] += acc.re;
-                        }
-                    }
-                }
-                for (idx, ((lam, _), ux)) in lambda.iter().zip(&direct).enumerate() {
-                    let (si, j) = (idx / n_cols, idx % n_cols);
-                    if j >= nm {
-                        continue;
-                    }
-                    let bt = rev.motion_rhs_transpose(&self.lfd, f.s, lam);
-                    let motion = &mut out[si].1[j];
-                    for n in 0..n_nodes {
-                        for c in 0..3 {
-                            motion[n][c] = (ux[n][c] - bt[n][c]).re;
-                        }
-                    }
-                }
-                Ok((out, geo))
-            })
-            .collect();
-        let (per_k, geo_k): (Vec<_>, Vec<_>) = per_k?.into_iter().unzip();
+            .collect()
+    }
+
+    /// Every seed's gradient: its node seeds summed over the frequencies in their order
+    /// (deterministic), the motion part carried to the wall through the mesh deformation's
+    /// transpose, and the geometry gradients summed likewise.
+    fn sum_over_frequencies(
+        &self,
+        per_k: Vec<PerFrequency>,
+        nm: usize,
+        n_seeds: usize,
+    ) -> Vec<GafGradient> {
+        let (per_k, geo_k): (Vec<_>, Vec<_>) = per_k.into_iter().unzip();
+        let n_nodes = self.lfd.euler.mesh.nodes.len();
         let wall = self.wall_nodes();
-        Ok((0..seeds.len())
+        let l = self.length_m;
+        (0..n_seeds)
             .map(|si| {
                 let mut grad = ModalSurface::zeros(nm, wall.len());
                 for m in 0..nm {
-                    // sum over frequencies in their order (deterministic)
                     let mut proj = vec![[0.0; 3]; n_nodes];
                     let mut motion = vec![[0.0; 3]; n_nodes];
                     for part in &per_k {
@@ -765,7 +864,7 @@ impl AerodynamicsReverse for Lfd {
                         .collect(),
                 }
             })
-            .collect())
+            .collect()
     }
 }
 
