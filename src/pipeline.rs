@@ -86,13 +86,13 @@ fn tables(
     let Some(settings) = settings.filter(|s| s.mode_acceleration) else {
         let table = aero
             .gafs(plate, modes)
-            .map_err(|e| anyhow::anyhow!("aerodynamics: {e}"))?;
+            .map_err(|e| anyhow::Error::new(e).context("aerodynamics"))?;
         return Ok((table, None));
     };
     let shapes = residual_shapes(plate, modes, &output_samplers(plate, settings));
     let all = aero
         .gafs_of_shapes(plate, &with_residual(modes, &shapes))
-        .map_err(|e| anyhow::anyhow!("aerodynamics: {e}"))?;
+        .map_err(|e| anyhow::Error::new(e).context("aerodynamics"))?;
     let (table, gafs) = ResidualGafs::split(&all, modes.len());
     Ok((table, Some(Residual { shapes, gafs })))
 }

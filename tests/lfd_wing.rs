@@ -1042,3 +1042,40 @@ fn lfd_discrete_gust_peak_gradient_matches_differences() {
     });
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A GMRES solve that stalls reaches the pipeline's caller typed: the `AeroError::Solver` with
+/// its whole residual history comes out of the evaluation's error by downcast, and the words
+/// printed at the edge (`{:#}`) name the stage, the frequency and right-hand side, the reason
+/// and the history's digest, each once.
+#[test]
+fn solver_failure_reaches_the_edge_typed() {
+    let (mut study, dir) = small_lfd_study("gmres-limit");
+    match study.spec.aero.as_mut().map(|a| &mut a.fidelity) {
+        Some(gustkit::aero::FidelitySpec::Lfd(l)) => {
+            l.gmres_max_iterations = 2;
+            l.gmres_restart = 2;
+        }
+        _ => panic!("an LFD study"),
+    }
+    let case = study.resolve().unwrap();
+    let Err(e) = gustkit::pipeline::aeroelastic(&case, &case.initial.to_vec()) else {
+        panic!("two GMRES iterations cannot reach 1e-12")
+    };
+    match e.downcast_ref::<gustkit_core::AeroError>() {
+        Some(gustkit_core::AeroError::Solver { failure, rhs, .. }) => {
+            assert!(rhs.starts_with("mode") || rhs == "gust", "{rhs}");
+            assert!(!failure.history.is_empty());
+        }
+        other => panic!("the solver failure is lost: {other:?}"),
+    }
+    let words = format!("{e:#}");
+    for part in [
+        "aerodynamics",
+        "solver failed at k = ",
+        "GMRES stalled",
+        "residual history",
+    ] {
+        assert_eq!(words.matches(part).count(), 1, "{part} in: {words}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -44,7 +44,7 @@ impl Problem for SolverFails {
         let failure = gustkit_core::AeroError::Solver {
             k: 0.5,
             rhs: "gust".into(),
-            source: gustkit_core::SolverFailure {
+            failure: gustkit_core::SolverFailure {
                 reason: "GMRES stalled".into(),
                 history: vec![1.0, 0.1, 0.09],
             },
@@ -73,8 +73,8 @@ fn evaluation_errors_stay_typed_to_the_edge() {
         panic!("not a start error: {e}")
     };
     match source.downcast_ref::<gustkit_core::AeroError>() {
-        Some(gustkit_core::AeroError::Solver { source, .. }) => {
-            assert_eq!(source.history, vec![1.0, 0.1, 0.09])
+        Some(gustkit_core::AeroError::Solver { failure, .. }) => {
+            assert_eq!(failure.history, vec![1.0, 0.1, 0.09])
         }
         other => panic!("the solver failure is lost: {other:?}"),
     }
@@ -82,6 +82,8 @@ fn evaluation_errors_stay_typed_to_the_edge() {
     for part in ["GAF table", "k = 0.5 (gust)", "GMRES stalled", "3 values"] {
         assert!(words.contains(part), "{part} missing from: {words}");
     }
+    // said once: the failure is in the solver error's words, not repeated as its source
+    assert_eq!(words.matches("GMRES stalled").count(), 1, "{words}");
 }
 
 fn hs71() -> impl Problem {

@@ -112,7 +112,7 @@ fn solver_error(e: LfdError, k: f64, n_modes: usize) -> AeroError {
             } else {
                 "gust".into()
             },
-            source: SolverFailure {
+            failure: SolverFailure {
                 reason: format!(
                     "GMRES stalled at relative residual {:.3e} (wanted {:.1e}) after {} iterations",
                     source.reached, source.wanted, source.iterations
@@ -123,7 +123,7 @@ fn solver_error(e: LfdError, k: f64, n_modes: usize) -> AeroError {
         LfdError::Factor { reason, .. } => AeroError::Solver {
             k,
             rhs: "preconditioner".into(),
-            source: SolverFailure {
+            failure: SolverFailure {
                 reason,
                 history: Vec::new(),
             },
@@ -140,7 +140,7 @@ fn adjoint_error(e: LfdError, k: f64, n_modes: usize, n_cols: usize) -> AeroErro
         _ => None,
     };
     match (solver_error(e, k, usize::MAX), rhs_index) {
-        (AeroError::Solver { k, source, .. }, Some(i)) => {
+        (AeroError::Solver { k, failure, .. }, Some(i)) => {
             let (seed, col) = (i / n_cols, i % n_cols);
             AeroError::Solver {
                 k,
@@ -149,7 +149,7 @@ fn adjoint_error(e: LfdError, k: f64, n_modes: usize, n_cols: usize) -> AeroErro
                 } else {
                     format!("adjoint of the gust (seed {})", seed + 1)
                 },
-                source,
+                failure,
             }
         }
         (other, _) => other,
@@ -1125,9 +1125,9 @@ mod tests {
             (3, "adjoint of mode 1 (seed 2)"),
         ] {
             match adjoint_error(stalled(rhs), 0.5, 2, 3) {
-                AeroError::Solver { k, rhs, source } => {
+                AeroError::Solver { k, rhs, failure } => {
                     assert_eq!((k, rhs.as_str()), (0.5, want));
-                    assert_eq!(source.history, vec![1.0, 1e-2, 1e-3]);
+                    assert_eq!(failure.history, vec![1.0, 1e-2, 1e-3]);
                 }
                 other => panic!("{other:?}"),
             }
@@ -1172,10 +1172,10 @@ mod tests {
         assert!(e.contains("GMRES stalled") && e.contains("history"), "{e}");
         // a typed solver failure: the reduced frequency, the right-hand side and the history
         match err {
-            AeroError::Solver { k, rhs, source } => {
+            AeroError::Solver { k, rhs, failure } => {
                 assert_eq!(k, 0.5);
                 assert!(rhs == "mode 1" || rhs == "mode 2" || rhs == "gust", "{rhs}");
-                assert!(!source.history.is_empty());
+                assert!(!failure.history.is_empty());
             }
             other => panic!("expected a solver error, got {other:?}"),
         }

@@ -263,15 +263,16 @@ pub enum AeroError {
     Input(String),
     #[error("the aerodynamic influence matrix is singular at k = {k}")]
     Singular { k: f64 },
-    /// A solver failed (a Krylov solve that stalled, a factorization that broke down).
-    #[error("solver failed at k = {k} ({rhs}): {source}")]
+    /// A solver failed (a Krylov solve that stalled, a factorization that broke down). The
+    /// failure is part of the message, not a separate source (an error chain printed whole would
+    /// repeat it); its residual history stays in the value for a caller that downcasts.
+    #[error("solver failed at k = {k} ({rhs}): {failure}")]
     Solver {
         /// The reduced frequency.
         k: f64,
         /// Which right-hand side: "mode 3", "gust", "preconditioner", ….
         rhs: String,
-        #[source]
-        source: SolverFailure,
+        failure: SolverFailure,
     },
     /// The fidelity has no such capability (e.g. no reverse mode).
     #[error("the {fidelity} fidelity cannot {what}")]
