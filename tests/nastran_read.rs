@@ -1159,3 +1159,160 @@ fn shell_thickness_derivatives_match_differences() {
         }
     }
 }
+
+/// A cantilever of 8 CBARs along x (PBAR 1) clamped at grid 1 and, when `strut`, a strut
+/// of PBAR 2 from a clamped grid below to mid-span, pinned (θy, θz released) at the beam; PBAR
+/// shear factors K1, K2 when `shear`; consistent mass when `coupled`.
+fn cantilever_bar_deck(strut: bool, shear: bool, coupled: bool) -> String {
+    let mut d = String::from("SOL 103\nCEND\nSPC = 1\nMETHOD = 1\nBEGIN BULK\nEIGRL,1,,,8\n");
+    if coupled {
+        d.push_str("PARAM,COUPMASS,1\n");
+    }
+    d.push_str("MAT1,1,7.0e10,,0.3,2700.\n");
+    let k = if shear { "0.85,0.8" } else { "," };
+    d.push_str(&format!(
+        "PBAR,1,1,1.2e-3,9.0e-8,2.5e-8,6.0e-8,0.4,,+P1\n+P1,0.,0.,0.,0.,0.,0.,0.,0.,+P2\n+P2,{k}\n"
+    ));
+    d.push_str(&format!(
+        "PBAR,2,1,3.0e-4,4.0e-9,3.0e-9,5.0e-9,0.1,,+Q1\n+Q1,0.,0.,0.,0.,0.,0.,0.,0.,+Q2\n+Q2,{k}\n"
+    ));
+    for i in 0..=8 {
+        d.push_str(&format!("GRID,{},,{},0.,0.\n", i + 1, 0.125 * i as f64));
+    }
+    for i in 0..8 {
+        d.push_str(&format!("CBAR,{},1,{},{},0.,0.3,1.\n", i + 1, i + 1, i + 2));
+    }
+    d.push_str("SPC1,1,123456,1\n");
+    if strut {
+        d.push_str("GRID,20,,0.2,0.,-0.3\nSPC1,1,123456,20\n");
+        d.push_str("CBAR,20,2,20,5,1.,0.,0.,,+S1\n+S1,,56\n");
+    }
+    d.push_str("ENDDATA\n");
+    d
+}
+
+/// The exact PBAR dimension derivatives (`Structure::bar_property_derivative`: the element
+/// matrices in dual numbers through the shear flexibility and the pin condensation) give the
+/// eigenvalue derivatives ∂λᵢ/∂p = φᵢᵀ(∂K − λᵢ∂M)φᵢ.
+/// 1. Against central differences (step 1e-4 p) for A, I1, I2, J of both properties of the
+///    strutted cantilever, with and without shear factors, lumped and consistent mass: the
+///    first six modes, p |∂λ/∂p − difference| / λ below 1e-7 (truncation ≈ 1e-8).
+/// 2. Against an identity of the theory: without shear factors K is linear and homogeneous in
+///    (A, I1, I2, J) and M = (ρA + NSM) M₀ per unit length, so for every mode of the plain
+///    cantilever Σ_p p ∂λ/∂p = λ · NSM/(ρA + NSM), to 1e-9 relative.
+#[test]
+fn bar_dimension_derivatives_match_differences_and_homogeneity() {
+    use gustkit::nastran::structure::{subcase_modes, BarDimension};
+    let dims = [
+        BarDimension::Area,
+        BarDimension::I1,
+        BarDimension::I2,
+        BarDimension::J,
+    ];
+    let dir = common::scratch("nastran", "bar-derivatives");
+    let eigen_derivative =
+        |dk: &faer::Mat<f64>, dm: &faer::Mat<f64>, phi: &dyn Fn(usize) -> f64, lambda: f64| {
+            let n = dk.nrows();
+            let mut v = 0.0;
+            for r in 0..n {
+                for c in 0..n {
+                    v += phi(r) * (dk[(r, c)] - lambda * dm[(r, c)]) * phi(c);
+                }
+            }
+            v
+        };
+    let value = |p: &gustkit::nastran::bulk::BarProperty, d: BarDimension| match d {
+        BarDimension::Area => p.area,
+        BarDimension::I1 => p.i1,
+        BarDimension::I2 => p.i2,
+        BarDimension::J => p.j,
+    };
+    for (shear, coupled) in [(false, false), (true, false), (true, true)] {
+        let path = dir.join(format!("bar_{shear}_{coupled}.bdf"));
+        std::fs::write(&path, cantilever_bar_deck(true, shear, coupled)).unwrap();
+        let input = Input::read(&path).unwrap();
+        let mut b = BulkData::from_cards(&input.deck.bulk).unwrap();
+        let sub = input.case_control.subcase(1).unwrap();
+        let (s, modes) = subcase_modes(&b, &sub).unwrap();
+        for pid in [1u32, 2] {
+            let exact: Vec<Vec<f64>> = dims
+                .iter()
+                .map(|&d| {
+                    let (dk, dm) = s.bar_property_derivative(&b, pid, d).unwrap();
+                    (0..6)
+                        .map(|i| {
+                            eigen_derivative(&dk, &dm, &|r| modes.phi_g[(r, i)], modes.lambda[i])
+                        })
+                        .collect()
+                })
+                .collect();
+            for (di, &d) in dims.iter().enumerate() {
+                let p0 = value(&b.bar_properties[&pid], d);
+                let h = 1e-4 * p0;
+                let mut at = |v: f64| {
+                    let p = b.bar_properties.get_mut(&pid).unwrap();
+                    match d {
+                        BarDimension::Area => p.area = v,
+                        BarDimension::I1 => p.i1 = v,
+                        BarDimension::I2 => p.i2 = v,
+                        BarDimension::J => p.j = v,
+                    }
+                    subcase_modes(&b, &sub).unwrap().1.lambda
+                };
+                let (up, down) = (at(p0 + h), at(p0 - h));
+                at(p0);
+                for i in 0..6 {
+                    let fd = (up[i] - down[i]) / (2.0 * h);
+                    // in the log-derivative p ∂λ/∂p relative to λ (the relative change of λ
+                    // per relative change of p), which differences resolve for every pair
+                    let err = p0 * (exact[di][i] - fd).abs() / modes.lambda[i];
+                    eprintln!("shear {shear} coupled {coupled} PBAR {pid} {d:?} mode {}: {:.8e} vs {fd:.8e} ({err:.1e})", i + 1, exact[di][i]);
+                    assert!(
+                        err < 1e-7,
+                        "PBAR {pid} {d:?} mode {}: {} vs {fd}",
+                        i + 1,
+                        exact[di][i]
+                    );
+                }
+            }
+        }
+    }
+    // homogeneity of the plain cantilever (no shear factors, no strut)
+    for coupled in [false, true] {
+        let path = dir.join(format!("plain_{coupled}.bdf"));
+        std::fs::write(&path, cantilever_bar_deck(false, false, coupled)).unwrap();
+        let input = Input::read(&path).unwrap();
+        let b = BulkData::from_cards(&input.deck.bulk).unwrap();
+        let sub = input.case_control.subcase(1).unwrap();
+        let (s, modes) = subcase_modes(&b, &sub).unwrap();
+        let p = &b.bar_properties[&1];
+        let rho = 2700.0;
+        let derivatives: Vec<(f64, faer::Mat<f64>, faer::Mat<f64>)> = dims
+            .iter()
+            .map(|&d| {
+                let (dk, dm) = s.bar_property_derivative(&b, 1, d).unwrap();
+                (value(p, d), dk, dm)
+            })
+            .collect();
+        for i in 0..6 {
+            let lambda = modes.lambda[i];
+            let sum: f64 = derivatives
+                .iter()
+                .map(|(v, dk, dm)| v * eigen_derivative(dk, dm, &|r| modes.phi_g[(r, i)], lambda))
+                .sum();
+            let expected = lambda * p.nsm / (rho * p.area + p.nsm);
+            let rel = (sum - expected).abs() / lambda;
+            eprintln!("coupled {coupled} mode {}: Σ p ∂λ/∂p = {sum:.10e}, λ NSM/m = {expected:.10e} ({rel:.1e})", i + 1);
+            assert!(rel < 1e-9, "mode {}: {sum} vs {expected}", i + 1);
+        }
+    }
+    // an undefined property is refused by name
+    let path = dir.join("plain_false.bdf");
+    let input = Input::read(&path).unwrap();
+    let b = BulkData::from_cards(&input.deck.bulk).unwrap();
+    let (s, _) = subcase_modes(&b, &input.case_control.subcase(1).unwrap()).unwrap();
+    let e = s
+        .bar_property_derivative(&b, 7, BarDimension::J)
+        .unwrap_err();
+    assert!(e.to_string().contains("PBAR 7"), "{e}");
+}

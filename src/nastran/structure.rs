@@ -13,6 +13,7 @@ use faer::linalg::triangular_solve::{
     solve_lower_triangular_in_place, solve_upper_triangular_in_place,
 };
 use faer::{Mat, Par, Side};
+use gustkit_core::scalar::{Dual, Scalar as ScalarOps};
 use std::collections::{BTreeMap, BTreeSet};
 
 /// The largest g-set the dense assembly takes (two matrices of 16 n² bytes: 1.2 GB at 6 000).
@@ -331,6 +332,19 @@ impl Structure {
     /// element frame, pins condensed out, lumped (or with COUPMASS, consistent) translational
     /// mass; then offsets and the grids' displacement frames.
     fn add_bar(&mut self, b: &BulkData, bar: &Bar, coupled: bool) -> R<()> {
+        self.add_bar_part(b, bar, coupled, None)
+    }
+
+    /// A CBAR or CBEAM's matrices (`wrt` none) or their derivatives in one dimension of its
+    /// PBAR/PBEAM (exact: the element matrices in forward-mode dual numbers, the pin
+    /// condensation included).
+    fn add_bar_part(
+        &mut self,
+        b: &BulkData,
+        bar: &Bar,
+        coupled: bool,
+        wrt: Option<BarDimension>,
+    ) -> R<()> {
         let what = format!("{} {}", if bar.beam { "CBEAM" } else { "CBAR" }, bar.id);
         let p = b.bar_properties.get(&bar.pid).ok_or_else(|| {
             NastranError::model(
@@ -404,87 +418,28 @@ impl Structure {
         }
         let ez = scale(ez, 1.0 / norm(ez));
         let ey = cross(ez, ex);
-        // local stiffness, dofs [u v w θx θy θz] at A then B
-        let mut k = vec![vec![0.0; 12]; 12];
-        let ea = e * p.area / l;
-        let gj = g * p.j / l;
-        for (i, j, val) in [
-            (0, 0, ea),
-            (6, 6, ea),
-            (0, 6, -ea),
-            (3, 3, gj),
-            (9, 9, gj),
-            (3, 9, -gj),
-        ] {
-            k[i][j] += val;
-            if i != j {
-                k[j][i] += val;
-            }
-        }
-        // bending in plane 1 (x–y: v, θz) with I1, in plane 2 (x–z: w, θy) with I2
-        for (inertia, kf, dofs, sign) in [
-            (p.i1, p.k1, [1usize, 5, 7, 11], 1.0),
-            (p.i2, p.k2, [2usize, 4, 8, 10], -1.0),
-        ] {
-            let phi = match kf {
-                Some(kf) if kf > 0.0 && g > 0.0 && p.area > 0.0 => {
-                    12.0 * e * inertia / (g * kf * p.area * l * l)
-                }
-                _ => 0.0,
-            };
-            let c = e * inertia / (l * l * l * (1.0 + phi));
-            let s = sign * l;
-            let kb = [
-                [12.0, 6.0 * s, -12.0, 6.0 * s],
-                [6.0 * s, (4.0 + phi) * l * l, -6.0 * s, (2.0 - phi) * l * l],
-                [-12.0, -6.0 * s, 12.0, -6.0 * s],
-                [6.0 * s, (2.0 - phi) * l * l, -6.0 * s, (4.0 + phi) * l * l],
-            ];
-            for a in 0..4 {
-                for bb in 0..4 {
-                    k[dofs[a]][dofs[bb]] += c * kb[a][bb];
-                }
-            }
-        }
-        // pins: the released components (element frame) condensed out
         let released: Vec<usize> = bar
             .pa
             .iter()
             .map(|&c| c as usize - 1)
             .chain(bar.pb.iter().map(|&c| c as usize + 5))
             .collect();
-        if !released.is_empty() {
-            condense(&mut k, &released).map_err(|r| NastranError::model(&what, r))?;
-        }
-        let mass_per_length = rho * p.area + p.nsm;
-        let mut m = vec![vec![0.0; 12]; 12];
-        let mt = mass_per_length * l;
-        if coupled {
-            for (i, j, val) in [(0, 0, 2.0), (6, 6, 2.0), (0, 6, 1.0)] {
-                m[i][j] += mt * val / 6.0;
-                if i != j {
-                    m[j][i] += mt * val / 6.0;
-                }
+        let material = BarMaterial { e, g, rho };
+        let (k, m) = match wrt {
+            None => bar_local(&material, &BarSection::<f64>::of(p), l, &released, coupled)
+                .map_err(|r| NastranError::model(&what, r))?,
+            Some(dim) => {
+                let section = BarSection::<Dual<1>>::along(p, dim);
+                let (k, m) = bar_local(&material, &section, l, &released, coupled)
+                    .map_err(|r| NastranError::model(&what, r))?;
+                let d = |a: Vec<Vec<Dual<1>>>| -> Vec<Vec<f64>> {
+                    a.into_iter()
+                        .map(|r| r.into_iter().map(|v| v.d[0]).collect())
+                        .collect()
+                };
+                (d(k), d(m))
             }
-            for (dofs, sign) in [([1usize, 5, 7, 11], 1.0), ([2usize, 4, 8, 10], -1.0)] {
-                let s = sign * l;
-                let mb = [
-                    [156.0, 22.0 * s, 54.0, -13.0 * s],
-                    [22.0 * s, 4.0 * l * l, 13.0 * s, -3.0 * l * l],
-                    [54.0, 13.0 * s, 156.0, -22.0 * s],
-                    [-13.0 * s, -3.0 * l * l, -22.0 * s, 4.0 * l * l],
-                ];
-                for a in 0..4 {
-                    for bb in 0..4 {
-                        m[dofs[a]][dofs[bb]] += mt / 420.0 * mb[a][bb];
-                    }
-                }
-            }
-        } else {
-            for i in [0, 1, 2, 6, 7, 8] {
-                m[i][i] = 0.5 * mt;
-            }
-        }
+        };
         // element frame → basic at the ends → grids (offsets) → displacement frames
         let lambda = [ex, ey, ez];
         let mut t = vec![vec![0.0; 12]; 12];
@@ -832,8 +787,50 @@ impl Structure {
     /// t (membrane), t³ (bending) and NSM + ρt (mass) times fixed matrices; PARAM WTMASS
     /// applied to ∂M. With mass-normalized modes, ∂λᵢ/∂T = φᵢᵀ (∂K − λᵢ ∂M) φᵢ.
     pub fn shell_thickness_derivative(&self, b: &BulkData, pid: u32) -> R<(Mat<f64>, Mat<f64>)> {
+        if !b.pshells.contains_key(&pid) {
+            return Err(NastranError::model(
+                &format!("PSHELL {pid}"),
+                "is not defined: no thickness to differentiate".into(),
+            ));
+        }
+        let coupled = coupled_mass(b);
+        let mut d = self.zeroed();
+        for e in b.shells.values() {
+            if e.pid == pid && e.corner_t.iter().all(|c| c.is_none()) {
+                d.add_shell(b, e, coupled, ShellPart::ThicknessDerivative)?;
+            }
+        }
+        d.derivative_matrices(b)
+    }
+
+    /// ∂K/∂p and ∂M/∂p (g-set) of the bars and beams whose PBAR/PBEAM `pid` gives dimension
+    /// `dim` (A, I1, I2 or J): exact (the element matrices in forward-mode dual numbers, with
+    /// the shear flexibility and the pin condensation, which make them nonlinear in the
+    /// dimensions); PARAM WTMASS applied to ∂M.
+    pub fn bar_property_derivative(
+        &self,
+        b: &BulkData,
+        pid: u32,
+        dim: BarDimension,
+    ) -> R<(Mat<f64>, Mat<f64>)> {
+        if !b.bar_properties.contains_key(&pid) {
+            return Err(NastranError::model(
+                &format!("PBAR {pid}"),
+                "is not defined (no PBAR or PBEAM): no dimension to differentiate".into(),
+            ));
+        }
+        let coupled = coupled_mass(b);
+        let mut d = self.zeroed();
+        for bar in b.bars.values().filter(|bar| bar.pid == pid) {
+            d.add_bar_part(b, bar, coupled, Some(dim))?;
+        }
+        d.derivative_matrices(b)
+    }
+
+    /// This structure's grids and frames with zero matrices (to assemble derivatives into).
+    fn zeroed(&self) -> Structure {
         let n = self.k_gg.nrows();
-        let mut d = Structure {
+        Structure {
             grid_ids: self.grid_ids.clone(),
             index: self.index.clone(),
             position: self.position.clone(),
@@ -842,27 +839,20 @@ impl Structure {
             m_gg: Mat::zeros(n, n),
             dependent: BTreeMap::new(),
             frames: self.frames.clone(),
-        };
-        if !b.pshells.contains_key(&pid) {
-            return Err(NastranError::model(
-                &format!("PSHELL {pid}"),
-                "is not defined: no thickness to differentiate".into(),
-            ));
         }
-        let coupled = coupled_mass(b);
-        for e in b.shells.values() {
-            if e.pid == pid && e.corner_t.iter().all(|c| c.is_none()) {
-                d.add_shell(b, e, coupled, ShellPart::ThicknessDerivative)?;
-            }
-        }
+    }
+
+    /// The assembled derivative matrices, PARAM WTMASS applied to the mass.
+    fn derivative_matrices(mut self, b: &BulkData) -> R<(Mat<f64>, Mat<f64>)> {
         if let Some(w) = wtmass(b)? {
+            let n = self.m_gg.nrows();
             for j in 0..n {
                 for i in 0..n {
-                    d.m_gg[(i, j)] *= w;
+                    self.m_gg[(i, j)] *= w;
                 }
             }
         }
-        Ok((d.k_gg, d.m_gg))
+        Ok((self.k_gg, self.m_gg))
     }
 
     /// A scalar spring or mass between two grid components (or one and ground).
@@ -1349,10 +1339,10 @@ fn block_rotation(f: &Frame) -> [[f64; 6]; 6] {
 }
 
 /// Static condensation of the `released` rows and columns (they carry no force).
-fn condense(k: &mut [Vec<f64>], released: &[usize]) -> Result<(), String> {
+fn condense<T: ScalarOps>(k: &mut [Vec<T>], released: &[usize]) -> Result<(), String> {
     for &r in released {
         let p = k[r][r];
-        if !(p.abs() > 0.0) {
+        if !(p.re().abs() > 0.0) {
             // already free (a released component with no stiffness)
             continue;
         }
@@ -1360,19 +1350,16 @@ fn condense(k: &mut [Vec<f64>], released: &[usize]) -> Result<(), String> {
         let row = k[r].clone();
         for i in 0..n {
             let f = k[i][r] / p;
-            if f == 0.0 {
-                continue;
-            }
             for j in 0..n {
                 k[i][j] -= f * row[j];
             }
         }
         for i in 0..n {
-            k[i][r] = 0.0;
-            k[r][i] = 0.0;
+            k[i][r] = T::cst(0.0);
+            k[r][i] = T::cst(0.0);
         }
     }
-    if k.iter().flatten().any(|v| !v.is_finite()) {
+    if k.iter().flatten().any(|v| !v.re().is_finite()) {
         return Err("its pin flags leave a singular element".into());
     }
     Ok(())
@@ -1717,4 +1704,177 @@ mod tests {
             }
         }
     }
+}
+
+/// A dimension of a PBAR/PBEAM section that can be a design variable.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BarDimension {
+    Area,
+    I1,
+    I2,
+    J,
+}
+
+impl BarDimension {
+    /// The dimension by its PBAR field name (A, I1, I2, J), for DVPREL1-like input.
+    pub fn from_field(name: &str) -> Option<Self> {
+        match name.to_ascii_uppercase().as_str() {
+            "A" => Some(Self::Area),
+            "I1" => Some(Self::I1),
+            "I2" => Some(Self::I2),
+            "J" => Some(Self::J),
+            _ => None,
+        }
+    }
+}
+
+/// The material constants a bar uses (MAT1).
+struct BarMaterial {
+    e: f64,
+    g: f64,
+    rho: f64,
+}
+
+/// A bar section's dimensions as scalars (values, or duals along one dimension) and its fixed
+/// data.
+struct BarSection<T> {
+    area: T,
+    i1: T,
+    i2: T,
+    j: T,
+    nsm: f64,
+    k1: Option<f64>,
+    k2: Option<f64>,
+}
+
+impl BarSection<f64> {
+    fn of(p: &super::bulk::BarProperty) -> Self {
+        Self {
+            area: p.area,
+            i1: p.i1,
+            i2: p.i2,
+            j: p.j,
+            nsm: p.nsm,
+            k1: p.k1,
+            k2: p.k2,
+        }
+    }
+}
+
+impl BarSection<Dual<1>> {
+    /// The section with a unit derivative along `dim`.
+    fn along(p: &super::bulk::BarProperty, dim: BarDimension) -> Self {
+        let v = |x: f64, d: BarDimension| Dual::new(x, [if d == dim { 1.0 } else { 0.0 }]);
+        Self {
+            area: v(p.area, BarDimension::Area),
+            i1: v(p.i1, BarDimension::I1),
+            i2: v(p.i2, BarDimension::I2),
+            j: v(p.j, BarDimension::J),
+            nsm: p.nsm,
+            k1: p.k1,
+            k2: p.k2,
+        }
+    }
+}
+
+/// An element's stiffness and mass, row by row.
+type ElementMatrices<T> = (Vec<Vec<T>>, Vec<Vec<T>>);
+
+/// A bar's stiffness and mass in its element frame, dofs [u v w θx θy θz] at A then B: axial
+/// EA/L, torsion GJ/L, bending in plane 1 (x–y: v, θz) with I1 and in plane 2 (x–z: w, θy) with
+/// I2, each with the shear flexibility φ = 12EI/(GK A L²) where PBAR gives K; the pin flags'
+/// components condensed out; lumped (half the mass at each end) or consistent mass.
+fn bar_local<T: ScalarOps>(
+    mat: &BarMaterial,
+    p: &BarSection<T>,
+    l: f64,
+    released: &[usize],
+    coupled: bool,
+) -> Result<ElementMatrices<T>, String> {
+    let (e, g, rho) = (mat.e, mat.g, mat.rho);
+    let zero = T::cst(0.0);
+    let mut k = vec![vec![zero; 12]; 12];
+    let ea = p.area * e / l;
+    let gj = p.j * g / l;
+    for (i, j, val) in [
+        (0, 0, ea),
+        (6, 6, ea),
+        (0, 6, -ea),
+        (3, 3, gj),
+        (9, 9, gj),
+        (3, 9, -gj),
+    ] {
+        k[i][j] += val;
+        if i != j {
+            k[j][i] += val;
+        }
+    }
+    for (inertia, kf, dofs, sign) in [
+        (p.i1, p.k1, [1usize, 5, 7, 11], 1.0),
+        (p.i2, p.k2, [2usize, 4, 8, 10], -1.0),
+    ] {
+        let phi = match kf {
+            Some(kf) if kf > 0.0 && g > 0.0 && p.area.re() > 0.0 => {
+                inertia * (12.0 * e) / (p.area * (g * kf) * l * l)
+            }
+            _ => zero,
+        };
+        let c = inertia * e / ((phi + 1.0) * (l * l * l));
+        let s = sign * l;
+        let cst = T::cst;
+        let kb = [
+            [cst(12.0), cst(6.0 * s), cst(-12.0), cst(6.0 * s)],
+            [
+                cst(6.0 * s),
+                (phi + 4.0) * l * l,
+                cst(-6.0 * s),
+                (-phi + 2.0) * l * l,
+            ],
+            [cst(-12.0), cst(-6.0 * s), cst(12.0), cst(-6.0 * s)],
+            [
+                cst(6.0 * s),
+                (-phi + 2.0) * l * l,
+                cst(-6.0 * s),
+                (phi + 4.0) * l * l,
+            ],
+        ];
+        for a in 0..4 {
+            for bb in 0..4 {
+                k[dofs[a]][dofs[bb]] += c * kb[a][bb];
+            }
+        }
+    }
+    if !released.is_empty() {
+        condense(&mut k, released)?;
+    }
+    let mass_per_length = p.area * rho + p.nsm;
+    let mut m = vec![vec![zero; 12]; 12];
+    let mt = mass_per_length * l;
+    if coupled {
+        for (i, j, val) in [(0, 0, 2.0), (6, 6, 2.0), (0, 6, 1.0)] {
+            m[i][j] += mt * val / 6.0;
+            if i != j {
+                m[j][i] += mt * val / 6.0;
+            }
+        }
+        for (dofs, sign) in [([1usize, 5, 7, 11], 1.0), ([2usize, 4, 8, 10], -1.0)] {
+            let s = sign * l;
+            let mb = [
+                [156.0, 22.0 * s, 54.0, -13.0 * s],
+                [22.0 * s, 4.0 * l * l, 13.0 * s, -3.0 * l * l],
+                [54.0, 13.0 * s, 156.0, -22.0 * s],
+                [-13.0 * s, -3.0 * l * l, -22.0 * s, 4.0 * l * l],
+            ];
+            for a in 0..4 {
+                for bb in 0..4 {
+                    m[dofs[a]][dofs[bb]] += mt / 420.0 * mb[a][bb];
+                }
+            }
+        }
+    } else {
+        for i in [0, 1, 2, 6, 7, 8] {
+            m[i][i] = mt * 0.5;
+        }
+    }
+    Ok((k, m))
 }
