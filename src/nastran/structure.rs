@@ -1878,3 +1878,109 @@ fn bar_local<T: ScalarOps>(
     }
     Ok((k, m))
 }
+
+/// Exact derivatives of mass-normalized real modes along one design direction (∂K, ∂M in the g-set, e.g. from
+/// [`Structure::shell_thickness_derivative`] or [`Structure::bar_property_derivative`]) for the
+/// modes `which` of `modes` (solved by [`real_modes`] with the same constraints): per mode, ∂λ
+/// and ∂φ in the g-set. ∂λ = φᵀ(∂K − λ∂M)φ; ∂φ by Nelson's method on the a-set: (K − λM) v =
+/// −(∂K − λ∂M)φ + ∂λ Mφ with the row and column of φ's largest entry removed (v zero there),
+/// then ∂φ = v − (φᵀMv + ½ φᵀ∂Mφ) φ, which keeps φᵀMφ = 1. Dense: O(n_a³) a mode. A repeated
+/// eigenvalue (the reduced matrix singular) is refused: its modes have no derivative of their
+/// own.
+pub fn mode_derivatives(
+    s: &Structure,
+    spc: &BTreeSet<usize>,
+    modes: &RealModes,
+    (dk_g, dm_g): (&Mat<f64>, &Mat<f64>),
+    which: &[usize],
+) -> R<Vec<(f64, Vec<f64>)>> {
+    use faer::prelude::Solve;
+    let (t, _) = s.reduction(spc)?;
+    let sym = |a: Mat<f64>| {
+        let n = a.nrows();
+        Mat::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]))
+    };
+    let k = sym(t.transpose() * &s.k_gg * &t);
+    let m = sym(t.transpose() * &s.m_gg * &t);
+    let dk = sym(t.transpose() * dk_g * &t);
+    let dm = sym(t.transpose() * dm_g * &t);
+    let n = k.nrows();
+    which
+        .iter()
+        .map(|&i| {
+            let lambda = modes.lambda[i];
+            // a root repeated within the solution's accuracy (the dense solve finds every root)
+            if let Some(j) = (0..modes.lambda.len()).find(|&j| {
+                j != i && (modes.lambda[j] - lambda).abs() <= 1e-8 * lambda.abs().max(f64::MIN_POSITIVE)
+            }) {
+                return Err(NastranError::model(
+                    &format!("mode {}", i + 1),
+                    format!(
+                        "its eigenvalue {lambda:.6e} is repeated (mode {} has the same to 1e-8): a repeated root has no derivative of its own mode shape (the pair's shapes mix under any change); derive a quantity of the pair (the sum of their responses) or break the symmetry",
+                        j + 1
+                    ),
+                ));
+            }
+            let phi = modes.phi_a.col(i);
+            let times = |a: &Mat<f64>, v: &[f64]| -> Vec<f64> {
+                (0..n)
+                    .map(|r| (0..n).map(|c| a[(r, c)] * v[c]).sum())
+                    .collect()
+            };
+            let phi_v: Vec<f64> = phi.iter().copied().collect();
+            let dk_phi = times(&dk, &phi_v);
+            let dm_phi = times(&dm, &phi_v);
+            let m_phi = times(&m, &phi_v);
+            let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+            if !((dot(&phi_v, &m_phi) - 1.0).abs() < 1e-8) {
+                return Err(NastranError::model(
+                    &format!("mode {}", i + 1),
+                    "is not mass-normalized (EIGR/EIGRL NORM = MAX): its derivative is taken of mass-normalized modes; use NORM = MASS".into(),
+                ));
+            }
+            let d_lambda = dot(&phi_v, &dk_phi) - lambda * dot(&phi_v, &dm_phi);
+            let pivot = (0..n)
+                .max_by(|&a, &b| phi_v[a].abs().total_cmp(&phi_v[b].abs()))
+                .expect("an a-set has components");
+            let full = |r: usize| if r < pivot { r } else { r + 1 };
+            let a = Mat::<f64>::from_fn(n - 1, n - 1, |r, c| {
+                k[(full(r), full(c))] - lambda * m[(full(r), full(c))]
+            });
+            let rhs = Mat::<f64>::from_fn(n - 1, 1, |r, _| {
+                let r = full(r);
+                -(dk_phi[r] - lambda * dm_phi[r]) + d_lambda * m_phi[r]
+            });
+            let v_red = a.full_piv_lu().solve(&rhs);
+            let mut v = vec![0.0; n];
+            for r in 0..n - 1 {
+                v[full(r)] = v_red[(r, 0)];
+            }
+            // a repeated eigenvalue leaves the reduced matrix singular: the solve is not finite
+            // or does not satisfy its equations
+            let residual = (0..n - 1)
+                .map(|r| {
+                    let row: f64 = (0..n - 1).map(|c| a[(r, c)] * v_red[(c, 0)]).sum();
+                    (row - rhs[(r, 0)]).abs()
+                })
+                .fold(0.0f64, f64::max);
+            let rhs_n = (0..n - 1).map(|r| rhs[(r, 0)].abs()).fold(0.0f64, f64::max);
+            let scale = (0..n).map(|r| k[(r, r)].abs()).fold(0.0f64, f64::max);
+            let v_n = v.iter().map(|x| x.abs()).fold(0.0f64, f64::max);
+            if v.iter().any(|x| !x.is_finite()) || residual > 1e-8 * (rhs_n + scale * v_n) {
+                return Err(NastranError::model(
+                    &format!("mode {}", i + 1),
+                    format!(
+                        "its eigenvalue {lambda:.6e} is nearly repeated: K − λM without the pivot's row and column is singular to the solution's accuracy"
+                    ),
+                ));
+            }
+            let c = -(dot(&m_phi, &v) + 0.5 * dot(&phi_v, &dm_phi));
+            let d_phi_a: Vec<f64> = v.iter().zip(&phi_v).map(|(x, p)| x + c * p).collect();
+            let ng = t.nrows();
+            let d_phi_g = (0..ng)
+                .map(|r| (0..n).map(|q| t[(r, q)] * d_phi_a[q]).sum())
+                .collect();
+            Ok((d_lambda, d_phi_g))
+        })
+        .collect()
+}
