@@ -117,104 +117,18 @@ pub(crate) fn discrete_results(
         } => {
             let amp = |h: f64| amplitude.at(h);
             let r = tuned_search(&p, &s, *range_m, *points, &amp, velocity).with_context(what)?;
-            results.profile = "one_minus_cosine".into();
             results.amplitude = amplitude.words();
-            results.wrap_max = r.wrap_max;
-            results.truncated_max = r.truncated_max;
-            results.envelope = r
-                .envelope
-                .iter()
-                .map(|e| EnvelopeRow {
-                    gradient_m: e.gradient,
-                    gradient_ft: e.gradient / crate::gust::discrete::profile::FOOT,
-                    amplitude_m_s: e.amplitude,
-                    refined: e.refined,
-                    max: e.peaks.iter().map(|p| p.0.value).collect(),
-                    t_max_s: e.peaks.iter().map(|p| p.0.time).collect(),
-                    min: e.peaks.iter().map(|p| p.1.value).collect(),
-                    t_min_s: e.peaks.iter().map(|p| p.1.time).collect(),
-                })
-                .collect();
-            let ft = |h: f64| h / crate::gust::discrete::profile::FOOT;
-            for (y, (hi, lo)) in r.critical.iter().enumerate() {
-                let o = &outputs[y];
-                results.critical.push(CriticalRow {
-                    output: o.name.clone(),
-                    unit: o.unit.clone(),
-                    max: hi.peak.value,
-                    t_max_s: hi.peak.time,
-                    gradient_max_ft: Some(ft(hi.gradient)),
-                    min: lo.peak.value,
-                    t_min_s: lo.peak.time,
-                    gradient_min_ft: Some(ft(lo.gradient)),
-                });
-                let (hmax, hmin) = &r.histories[y];
-                full.push((
-                    o.name.clone(),
-                    vec![
-                        (
-                            format!("at H = {:.1} ft (max)", ft(hi.gradient)),
-                            hmax.clone(),
-                        ),
-                        (
-                            format!("at H = {:.1} ft (min)", ft(lo.gradient)),
-                            hmin.clone(),
-                        ),
-                    ],
-                ));
-                for (gust_name, g, h) in [("max", hi.gradient, hmax), ("min", lo.gradient, hmin)] {
-                    let (t, v) = decimate(&r.response.grid.time, h);
-                    results.histories.push(HistoryRow {
-                        output: o.name.clone(),
-                        unit: o.unit.clone(),
-                        gust: gust_name.into(),
-                        gradient_ft: Some(ft(g)),
-                        time_s: t,
-                        value: v,
-                    });
-                }
-            }
-            r.response.grid
+            tuned_results(r, &outputs, &mut results, &mut full)
         }
         DiscreteCase::Tabulated(profile) => {
             let (r, _) = crate::gust::discrete::transient(&p, std::slice::from_ref(profile), &s)
                 .with_context(what)?;
             let (ts, te) = profile.support();
-            results.profile = "tabulated".into();
             results.amplitude = format!(
                 "tabulated w_g(t) from {ts} s to {te} s, peak {:.4} m/s",
                 profile.peak()
             );
-            let pr = &r.profiles[0];
-            results.wrap_max = pr.wrap.iter().copied().fold(0.0, f64::max);
-            results.truncated_max = pr.truncated;
-            for (y, o) in outputs.iter().enumerate() {
-                let (hi, lo) = pr.peaks[y];
-                results.critical.push(CriticalRow {
-                    output: o.name.clone(),
-                    unit: o.unit.clone(),
-                    max: hi.value,
-                    t_max_s: hi.time,
-                    gradient_max_ft: None,
-                    min: lo.value,
-                    t_min_s: lo.time,
-                    gradient_min_ft: None,
-                });
-                let (t, v) = decimate(&r.grid.time, &pr.histories[y]);
-                results.histories.push(HistoryRow {
-                    output: o.name.clone(),
-                    unit: o.unit.clone(),
-                    gust: "profile".into(),
-                    gradient_ft: None,
-                    time_s: t,
-                    value: v,
-                });
-                full.push((
-                    o.name.clone(),
-                    vec![("profile".into(), pr.histories[y].clone())],
-                ));
-            }
-            r.grid
+            tabulated_results(r, &outputs, &mut results, &mut full)
         }
     };
     results.span_s = time.span;
@@ -223,8 +137,131 @@ pub(crate) fn discrete_results(
     results.n_time = time.time.len();
     // CSV files: lengths in the study's unit, every other quantity in SI
     let unit = study.spec.length_unit;
-    for (name, columns) in &full {
-        let si = &outputs
+    write_csv_files(dir, &results, &full, &time, unit)?;
+    results.time_s = t0.elapsed().as_secs_f64();
+    print_critical(&results, unit);
+    Ok(Some(results))
+}
+
+/// The tuned 1-cos search's results: the envelope over H, each output's critical gusts and
+/// their histories (decimated for the report, whole in `full` for the CSV files); its grid.
+fn tuned_results(
+    r: crate::gust::discrete::TunedResult,
+    outputs: &[DiscreteOutput],
+    results: &mut DiscreteGustResults,
+    full: &mut Vec<(String, Vec<Column>)>,
+) -> crate::gust::discrete::TimeGrid {
+    results.profile = "one_minus_cosine".into();
+    results.wrap_max = r.wrap_max;
+    results.truncated_max = r.truncated_max;
+    results.envelope = r
+        .envelope
+        .iter()
+        .map(|e| EnvelopeRow {
+            gradient_m: e.gradient,
+            gradient_ft: e.gradient / crate::gust::discrete::profile::FOOT,
+            amplitude_m_s: e.amplitude,
+            refined: e.refined,
+            max: e.peaks.iter().map(|p| p.0.value).collect(),
+            t_max_s: e.peaks.iter().map(|p| p.0.time).collect(),
+            min: e.peaks.iter().map(|p| p.1.value).collect(),
+            t_min_s: e.peaks.iter().map(|p| p.1.time).collect(),
+        })
+        .collect();
+    let ft = |h: f64| h / crate::gust::discrete::profile::FOOT;
+    for (y, (hi, lo)) in r.critical.iter().enumerate() {
+        let o = &outputs[y];
+        results.critical.push(CriticalRow {
+            output: o.name.clone(),
+            unit: o.unit.clone(),
+            max: hi.peak.value,
+            t_max_s: hi.peak.time,
+            gradient_max_ft: Some(ft(hi.gradient)),
+            min: lo.peak.value,
+            t_min_s: lo.peak.time,
+            gradient_min_ft: Some(ft(lo.gradient)),
+        });
+        let (hmax, hmin) = &r.histories[y];
+        full.push((
+            o.name.clone(),
+            vec![
+                (
+                    format!("at H = {:.1} ft (max)", ft(hi.gradient)),
+                    hmax.clone(),
+                ),
+                (
+                    format!("at H = {:.1} ft (min)", ft(lo.gradient)),
+                    hmin.clone(),
+                ),
+            ],
+        ));
+        for (gust_name, g, h) in [("max", hi.gradient, hmax), ("min", lo.gradient, hmin)] {
+            let (t, v) = decimate(&r.response.grid.time, h);
+            results.histories.push(HistoryRow {
+                output: o.name.clone(),
+                unit: o.unit.clone(),
+                gust: gust_name.into(),
+                gradient_ft: Some(ft(g)),
+                time_s: t,
+                value: v,
+            });
+        }
+    }
+    r.response.grid
+}
+
+/// A tabulated profile's results: each output's extremes and history; its grid.
+fn tabulated_results(
+    r: crate::gust::discrete::TransientResponse,
+    outputs: &[DiscreteOutput],
+    results: &mut DiscreteGustResults,
+    full: &mut Vec<(String, Vec<Column>)>,
+) -> crate::gust::discrete::TimeGrid {
+    results.profile = "tabulated".into();
+    let pr = &r.profiles[0];
+    results.wrap_max = pr.wrap.iter().copied().fold(0.0, f64::max);
+    results.truncated_max = pr.truncated;
+    for (y, o) in outputs.iter().enumerate() {
+        let (hi, lo) = pr.peaks[y];
+        results.critical.push(CriticalRow {
+            output: o.name.clone(),
+            unit: o.unit.clone(),
+            max: hi.value,
+            t_max_s: hi.time,
+            gradient_max_ft: None,
+            min: lo.value,
+            t_min_s: lo.time,
+            gradient_min_ft: None,
+        });
+        let (t, v) = decimate(&r.grid.time, &pr.histories[y]);
+        results.histories.push(HistoryRow {
+            output: o.name.clone(),
+            unit: o.unit.clone(),
+            gust: "profile".into(),
+            gradient_ft: None,
+            time_s: t,
+            value: v,
+        });
+        full.push((
+            o.name.clone(),
+            vec![("profile".into(), pr.histories[y].clone())],
+        ));
+    }
+    r.grid
+}
+
+/// Writes each output's whole histories (`discrete_gust_<output>.csv`, lengths in the study's
+/// unit) and, for a tuned search, the envelope over H.
+fn write_csv_files(
+    dir: &Path,
+    results: &DiscreteGustResults,
+    full: &[(String, Vec<Column>)],
+    time: &crate::gust::discrete::TimeGrid,
+    unit: crate::units::LengthUnit,
+) -> Result<()> {
+    for (name, columns) in full {
+        let si = &results
+            .outputs
             .iter()
             .find(|o| &o.name == name)
             .expect("own output")
@@ -250,10 +287,14 @@ pub(crate) fn discrete_results(
     if results.profile != "tabulated" {
         write_atomic(
             &dir.join("discrete_gust_envelope.csv"),
-            envelope_csv(&results, unit).as_bytes(),
+            envelope_csv(results, unit).as_bytes(),
         )?;
     }
-    results.time_s = t0.elapsed().as_secs_f64();
+    Ok(())
+}
+
+/// One console line an output: its extremes, when and (a tuned search) at which H.
+fn print_critical(results: &DiscreteGustResults, unit: crate::units::LengthUnit) {
     for c in &results.critical {
         let (mx, u) = unit.display(c.max, &c.unit, 1);
         let (mn, _) = unit.display(c.min, &c.unit, 1);
@@ -269,5 +310,4 @@ pub(crate) fn discrete_results(
             at(c.gradient_min_ft)
         );
     }
-    Ok(Some(results))
 }
