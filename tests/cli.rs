@@ -1401,6 +1401,83 @@ fn discrete_gust_tuned_search_is_reported() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A tabulated gust profile through `gustkit run`: the 1-cos gust of H = 100 ft and 10 m/s
+/// written as a table of 801 times over its length 2H/V gives the tuned search's peaks at that
+/// one gradient (the same gust, placed by the run) to the table's linear interpolation,
+/// 1e-4 of each peak (measured 3.7e-6); its history CSV has the tabulated column, and no
+/// envelope file is written.
+#[test]
+fn tabulated_profile_matches_the_tuned_gust() {
+    let dir = common::scratch("cli", "tabulated");
+    let reports = dir.join("reports");
+    let run = |name: &str, section: serde_json::Value| -> serde_json::Value {
+        let file = minimal_with_discrete(&dir, name, section);
+        let o = gustkit()
+            .args(["run", file.to_str().unwrap(), "--reports"])
+            .arg(&reports)
+            .output()
+            .unwrap();
+        assert_success(&o);
+        serde_json::from_str(
+            &std::fs::read_to_string(reports.join(name).join("results.json")).unwrap(),
+        )
+        .unwrap()
+    };
+    let (h_ft, u, v) = (100.0, 10.0, 170.0);
+    let h = h_ft * 0.3048;
+    let tuned = run(
+        "tuned_one",
+        serde_json::json!({"amplitude": {"u_ds_m_s": u}, "gradient_ft": [h_ft, h_ft], "gradient_points": 1}),
+    );
+    let n = 800;
+    let length_s = 2.0 * h / v;
+    let times: Vec<f64> = (0..=n).map(|i| length_s * i as f64 / n as f64).collect();
+    let w: Vec<f64> = times
+        .iter()
+        .map(|t| 0.5 * u * (1.0 - (std::f64::consts::PI * v * t / h).cos()))
+        .collect();
+    let table = run(
+        "tabulated_one",
+        serde_json::json!({"profile": "tabulated", "table": {"time_s": times, "velocity_m_s": w}}),
+    );
+    let (a, b) = (&tuned["discrete_gust"], &table["discrete_gust"]);
+    assert_eq!(b["profile"], "tabulated");
+    let (ca, cb) = (
+        a["critical"].as_array().unwrap(),
+        b["critical"].as_array().unwrap(),
+    );
+    assert_eq!(ca.len(), cb.len());
+    for (x, y) in ca.iter().zip(cb) {
+        for key in ["max", "min"] {
+            let (p, q) = (x[key].as_f64().unwrap(), y[key].as_f64().unwrap());
+            let scale = x["max"]
+                .as_f64()
+                .unwrap()
+                .abs()
+                .max(x["min"].as_f64().unwrap().abs());
+            eprintln!("{} {key}: {:.1e}", x["output"], (p - q).abs() / scale);
+            assert!(
+                (p - q).abs() <= 1e-4 * scale,
+                "{} {key}: tuned {p}, tabulated {q}",
+                x["output"]
+            );
+        }
+        assert!(y["gradient_max_ft"].is_null());
+    }
+    let folder = reports.join("tabulated_one");
+    assert!(!folder.join("discrete_gust_envelope.csv").exists());
+    let name = cb[0]["output"].as_str().unwrap();
+    let csv = std::fs::read_to_string(folder.join(format!("discrete_gust_{name}.csv"))).unwrap();
+    assert!(
+        csv.lines()
+            .next()
+            .unwrap()
+            .contains(&format!("{name} profile")),
+        "{csv:.200}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// An optimization with a discrete gust peak limit (issue 30) on the flagship problem made
 /// small (2 modes, 5 × 8 boxes, five 1-cos gusts of 10 m/s): |tip_te_w| ≤ 1.5 in, below what the
 /// RMS-constrained optimum reaches (1.74 in), so the peak limit decides the design: the initial
