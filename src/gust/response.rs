@@ -622,6 +622,70 @@ fn transfer_vjp(
     })
 }
 
+/// The tangent of η at one frequency (spline weights `w`, factorization `lu` of A(ω)) along
+/// perturbations of the GAF table and of ω_n² (the damping ratio fixed): from A η = q Q_gs,
+/// dη = A⁻¹ (q dQ_gs + q dQ_ss η − (1 + i ω ζ/ω_n) dλ η), the last term the derivative of
+/// ω_n² + 2iζω_nω along dλ = d(ω_n²).
+fn eta_tangent(
+    p: &GustProblem,
+    w: &[f64],
+    omega: f64,
+    eta: &[c64],
+    lu: &SmallLu,
+    d_table: &GafTable,
+    d_lambda: &[f64],
+) -> Vec<c64> {
+    let nm = p.omega_n.len();
+    let interp =
+        |f: &dyn Fn(usize) -> c64| -> c64 { w.iter().enumerate().map(|(i, wi)| f(i) * *wi).sum() };
+    let rhs: Vec<c64> = (0..nm)
+        .map(|m| {
+            let mut v = interp(&|i| d_table.q_gs[i][m]) * p.q_inf;
+            for n in 0..nm {
+                v += interp(&|i| d_table.q_ss[i][m][n]) * p.q_inf * eta[n];
+            }
+            let wn = p.omega_n[m];
+            v - c64::new(1.0, omega * p.damping_ratio / wn) * d_lambda[m] * eta[m]
+        })
+        .collect();
+    lu.solve(&rhs)
+}
+
+impl FrequencyResponse {
+    /// Forward mode of η(ω_j) along perturbations of the GAF table and of ω_n² (see
+    /// [`eta_tangent`]): for a caller that integrates the response its own way (a Nastran
+    /// model's RMS over its FREQ list), one vector a grid frequency.
+    pub fn eta_jvp(
+        &self,
+        p: &GustProblem,
+        d_table: &GafTable,
+        d_lambda: &[f64],
+    ) -> Result<Vec<Vec<c64>>, GustError> {
+        let weights = p.check()?;
+        if d_lambda.len() != p.omega_n.len() || d_table.n_modes() != p.omega_n.len() {
+            return Err(GustError::Input(
+                "tangents: one dλ a mode and a GAF table of the problem's modes".into(),
+            ));
+        }
+        Ok(p.grid
+            .omega
+            .iter()
+            .enumerate()
+            .map(|(j, &omega)| {
+                eta_tangent(
+                    p,
+                    &weights.weights[j],
+                    omega,
+                    &self.eta[j],
+                    &self.lus[j],
+                    d_table,
+                    d_lambda,
+                )
+            })
+            .collect())
+    }
+}
+
 /// Forward mode of the RMS values along perturbations of the GAF table, of ω_n², of S and of the
 /// residual rows (where the problem has them).
 pub fn rms_jvp(
@@ -638,22 +702,8 @@ pub fn rms_jvp(
     let mut row = vec![c64::new(0.0, 0.0); nm];
     for (j, &omega) in p.grid.omega.iter().enumerate() {
         let w = &weights.weights[j];
-        let interp = |f: &dyn Fn(usize) -> c64| -> c64 {
-            w.iter().enumerate().map(|(i, wi)| f(i) * *wi).sum()
-        };
         let eta = &r.eta[j];
-        // dA η and q dQ_gs
-        let rhs: Vec<c64> = (0..nm)
-            .map(|m| {
-                let mut v = interp(&|i| d_table.q_gs[i][m]) * p.q_inf;
-                for n in 0..nm {
-                    v += interp(&|i| d_table.q_ss[i][m][n]) * p.q_inf * eta[n];
-                }
-                let wn = p.omega_n[m];
-                v - c64::new(1.0, omega * p.damping_ratio / wn) * d_lambda[m] * eta[m]
-            })
-            .collect();
-        let deta = r.lus[j].solve(&rhs);
+        let deta = eta_tangent(p, w, omega, eta, &r.lus[j], d_table, d_lambda);
         let phi = p.turbulence.psd(omega, p.velocity);
         for y in 0..p.outputs.len() {
             p.output_row(w, y, &mut row);

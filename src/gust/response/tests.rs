@@ -419,3 +419,63 @@ fn response_tail_bound_holds_beyond_the_grid() {
     let e = solve(&close).unwrap_err();
     assert!(e.to_string().contains("the gust variance"), "{e}");
 }
+
+/// The forward mode of η (`FrequencyResponse::eta_jvp`) along a random direction of the GAF
+/// table and of ω_n² against central differences of η itself (step 1e-6, each perturbed
+/// problem solved anew) at every grid frequency: largest error below 1e-7 of the largest |dη|
+/// (measured 2.3e-10; truncation ≈ 1e-12 relative, round-off ≈ 1e-16 / 1e-6).
+#[test]
+fn eta_jvp_matches_differences() {
+    let (table, wn) = problem_parts();
+    let p = problem(&table, &wn, 120, vec![vec![1.0, 0.0, 0.0]]);
+    let fr = frequency_response(&p).unwrap();
+    let mut dt = table.clone();
+    let rv = rand_vec(2 * table.k.len() * 12, 21);
+    let mut it = rv.chunks(2).map(|c| C::new(c[0], c[1]));
+    for ik in 0..table.k.len() {
+        for m in 0..3 {
+            for n in 0..3 {
+                dt.q_ss[ik][m][n] = it.next().unwrap() * 0.3;
+            }
+            dt.q_gs[ik][m] = it.next().unwrap();
+        }
+    }
+    let dl: Vec<f64> = rand_vec(3, 22).iter().map(|v| v * 400.0).collect();
+    let d_eta = fr.eta_jvp(&p, &dt, &dl).unwrap();
+    let eta_at = |s: f64| {
+        let mut t = table.clone();
+        for ik in 0..t.k.len() {
+            for m in 0..3 {
+                for n in 0..3 {
+                    t.q_ss[ik][m][n] += dt.q_ss[ik][m][n] * s;
+                }
+                t.q_gs[ik][m] += dt.q_gs[ik][m] * s;
+            }
+        }
+        let omega_n: Vec<f64> = wn
+            .iter()
+            .zip(&dl)
+            .map(|(w, d)| (w * w + s * d).sqrt())
+            .collect();
+        let pp = GustProblem {
+            table: &t,
+            omega_n,
+            ..p.clone()
+        };
+        frequency_response(&pp).unwrap().eta
+    };
+    let h = 1e-6;
+    let (up, down) = (eta_at(h), eta_at(-h));
+    let scale = d_eta.iter().flatten().fold(0.0f64, |m, v| m.max(v.norm()));
+    let mut worst = 0.0f64;
+    for j in 0..d_eta.len() {
+        for m in 0..3 {
+            let fd = (up[j][m] - down[j][m]) / (2.0 * h);
+            worst = worst.max((d_eta[j][m] - fd).norm() / scale);
+        }
+    }
+    println!("eta_jvp: largest error {worst:.2e} of max |dη| {scale:.3e}");
+    assert!(worst < 1e-7, "{worst}");
+    // the wrong sizes are refused
+    assert!(fr.eta_jvp(&p, &dt, &dl[..2]).is_err());
+}
