@@ -100,6 +100,26 @@ fn problem<'a>(
     }
 }
 
+/// The three-mode table and natural frequencies moved by s along (dt, dλ): Q + s dQ and
+/// ω_n = √(ω_n² + s dλ).
+fn moved(table: &GafTable, wn: &[f64], dt: &GafTable, dl: &[f64], s: f64) -> (GafTable, Vec<f64>) {
+    let mut t = table.clone();
+    for ik in 0..t.k.len() {
+        for m in 0..3 {
+            for n in 0..3 {
+                t.q_ss[ik][m][n] += dt.q_ss[ik][m][n] * s;
+            }
+            t.q_gs[ik][m] += dt.q_gs[ik][m] * s;
+        }
+    }
+    let omega_n = wn
+        .iter()
+        .zip(dl)
+        .map(|(w, d)| (w * w + s * d).sqrt())
+        .collect();
+    (t, omega_n)
+}
+
 /// Dot-product test of the RMS reverse mode against its forward mode, in all inputs at once
 /// (GAF table, ω_n², S vectors).
 #[test]
@@ -145,20 +165,7 @@ fn rms_vjp_dot_product_test() {
     // and the forward mode against a finite difference of the RMS along the same direction
     let h = 1e-6;
     let shifted = |s: f64| {
-        let mut t = table.clone();
-        for ik in 0..t.k.len() {
-            for m in 0..3 {
-                for n in 0..3 {
-                    t.q_ss[ik][m][n] += dt.q_ss[ik][m][n] * s;
-                }
-                t.q_gs[ik][m] += dt.q_gs[ik][m] * s;
-            }
-        }
-        let wn2: Vec<f64> = wn
-            .iter()
-            .zip(&dl)
-            .map(|(w, d)| (w * w + s * d).sqrt())
-            .collect();
+        let (t, wn2) = moved(&table, &wn, &dt, &dl, s);
         let outs: Vec<Vec<f64>> = p
             .outputs
             .iter()
@@ -443,20 +450,7 @@ fn eta_jvp_matches_differences() {
     let dl: Vec<f64> = rand_vec(3, 22).iter().map(|v| v * 400.0).collect();
     let d_eta = fr.eta_jvp(&p, &dt, &dl).unwrap();
     let eta_at = |s: f64| {
-        let mut t = table.clone();
-        for ik in 0..t.k.len() {
-            for m in 0..3 {
-                for n in 0..3 {
-                    t.q_ss[ik][m][n] += dt.q_ss[ik][m][n] * s;
-                }
-                t.q_gs[ik][m] += dt.q_gs[ik][m] * s;
-            }
-        }
-        let omega_n: Vec<f64> = wn
-            .iter()
-            .zip(&dl)
-            .map(|(w, d)| (w * w + s * d).sqrt())
-            .collect();
+        let (t, omega_n) = moved(&table, &wn, &dt, &dl, s);
         let pp = GustProblem {
             table: &t,
             omega_n,
