@@ -1422,3 +1422,163 @@ fn mode_shape_derivatives_match_differences() {
         "{e}"
     );
 }
+
+/// A straight wing of 8 CBARs along y (2 m, clamped at grid 1, elastic axis at 40 % chord), a
+/// CONM2 aft of the axis with pitch inertia at each free grid (bending–torsion modes), under
+/// one CAERO1 of 4 × 4 boxes splined by SPLINE2, with a random gust: SOL 146 with GUST, RLOAD1
+/// (flat TC table), FREQ1 (0.1–19.85 Hz), RANDPS/TABRND1 (flat) and a flat SDAMP of 2 %.
+fn bar_wing_gust_deck() -> String {
+    let mut d = String::from(
+        "SOL 146\nCEND\nSPC = 1\nMETHOD = 1\nFREQ = 40\nRANDOM = 31\nGUST = 32\nSDAMP = 20\nBEGIN BULK\n",
+    );
+    d.push_str("EIGRL,1,,,8\nMAT1,1,7.0e10,,0.3,2700.\n");
+    d.push_str("PBAR,1,1,1.2e-3,4.0e-7,6.0e-8,9.0e-8,0.6\n");
+    for i in 0..9 {
+        d.push_str(&format!("GRID,{},,0.,{},0.\n", i + 1, 0.25 * i as f64));
+    }
+    for i in 0..8 {
+        d.push_str(&format!("CBAR,{},1,{},{},1.,0.,0.\n", i + 1, i + 1, i + 2));
+        // a mass aft of the elastic axis with pitch inertia (torsion modes, coupled to bending)
+        d.push_str(&format!(
+            "CONM2,{},{},,0.2,0.05,0.,0.,+C{i}\n+C{i},0.,,2.0e-3\n",
+            101 + i,
+            i + 2
+        ));
+    }
+    d.push_str("SPC1,1,123456,1\n");
+    d.push_str("AERO,0,170.,0.5,0.4\nPARAM,MACH,0.5\n");
+    d.push_str("CAERO1,1001,1000,,4,4,,,1,+CA\n+CA,-0.2,0.,0.,0.5,-0.2,2.,0.,0.5\nPAERO1,1000\n");
+    d.push_str("SPLINE2,100,1001,1001,1016,10,0.,1.,,+SP\n+SP,0.,0.\nSET1,10,1,THRU,9\n");
+    d.push_str("MKAERO1,0.5,,,,,,,,+MK\n+MK,0.01,0.1,0.5,1.0\n");
+    d.push_str("GUST,32,33,0.01,0.,170.\nRLOAD1,33,34,,,35\nDAREA,34,1,3,1.\n");
+    d.push_str("TABLED1,35,,,,,,,,+TB\n+TB,0.,1.,1000.,1.,ENDT\n");
+    d.push_str("FREQ1,40,0.1,0.25,79\nRANDPS,31,1,1,1.,,36\n");
+    d.push_str("TABRND1,36,,,,,,,,+TR\n+TR,0.,1.,1000.,1.,ENDT\n");
+    d.push_str("TABDMP1,20,CRIT,,,,,,,+TD\n+TD,0.,0.02,1000.,0.02,ENDT\n");
+    d.push_str("ENDDATA\n");
+    d
+}
+
+/// The exact derivatives of a Nastran model's random gust response along a property
+/// (`random::random_response_derivative`: mode derivatives → the GAF table's tangent from the
+/// table of [φ | ∂φ] → dη → the rows' and the spectral moments' tangents) against central
+/// differences of `random_response` (step 1e-5 p): the tip's displacement and acceleration,
+/// the root's constraint moment and the first modal coordinate, RMS and N0, along PBAR's A, I2
+/// and J, both k interpolations: p |d − difference| / value below 1e-6 (measured ≤ 1.0e-8).
+/// An SDAMP table with a slope at a mode's frequency is refused (the modal damping is held
+/// fixed).
+#[test]
+fn random_gust_derivatives_match_differences() {
+    use gustkit::nastran::random::{
+        random_response, random_response_derivative, KInterpolation, ModeDirection, Quantity,
+    };
+    use gustkit::nastran::structure::{constrained, mode_derivatives, subcase_modes, BarDimension};
+    let dir = common::scratch("nastran", "gust-derivatives");
+    let path = dir.join("bar_wing.bdf");
+    std::fs::write(&path, bar_wing_gust_deck()).unwrap();
+    let input = Input::read(&path).unwrap();
+    let mut b = BulkData::from_cards(&input.deck.bulk).unwrap();
+    let sub = input.case_control.subcase(1).unwrap();
+    let requests = [
+        (9, 3, Quantity::Displacement),
+        (9, 3, Quantity::Acceleration),
+        (1, 4, Quantity::SpcForce),
+        (1, 0, Quantity::Mode),
+    ];
+    let k: Vec<f64> = (0..=40).map(|i| 0.2 * i as f64 / 40.0).collect();
+    let mut worst = 0.0f64;
+    for (name, how) in [
+        ("dense", KInterpolation::Dense(k.clone())),
+        ("MKAERO", KInterpolation::LinearOnMkaero(k.clone())),
+    ] {
+        for dim in [BarDimension::Area, BarDimension::I2, BarDimension::J] {
+            let (s, modes) = subcase_modes(&b, &sub).unwrap();
+            let spc = constrained(&s, &b, sub.selections.get("SPC").copied()).unwrap();
+            let (dk, dm) = s.bar_property_derivative(&b, 1, dim).unwrap();
+            let all: Vec<usize> = (0..modes.lambda.len()).collect();
+            let d = mode_derivatives(&s, &spc, &modes, (&dk, &dm), &all).unwrap();
+            let ng = modes.phi_g.nrows();
+            let direction = ModeDirection {
+                d_lambda: d.iter().map(|x| x.0).collect(),
+                d_phi_g: faer::Mat::from_fn(ng, d.len(), |i, c| d[c].1[i]),
+                dk: &dk,
+                dm: &dm,
+            };
+            let exact =
+                random_response_derivative(&b, &sub, &s, &modes, &requests, &how, &direction)
+                    .unwrap();
+            let get = |p: &gustkit::nastran::bulk::BarProperty| match dim {
+                BarDimension::Area => p.area,
+                BarDimension::I2 => p.i2,
+                BarDimension::J => p.j,
+                BarDimension::I1 => p.i1,
+            };
+            let p0 = get(&b.bar_properties[&1]);
+            let h = 1e-5 * p0;
+            let mut at = |v: f64| {
+                let p = b.bar_properties.get_mut(&1).unwrap();
+                match dim {
+                    BarDimension::Area => p.area = v,
+                    BarDimension::I2 => p.i2 = v,
+                    BarDimension::J => p.j = v,
+                    BarDimension::I1 => p.i1 = v,
+                }
+                let (s, modes) = subcase_modes(&b, &sub).unwrap();
+                random_response(&b, &sub, &s, &modes, &requests, &how)
+                    .unwrap()
+                    .0
+            };
+            let (up, down) = (at(p0 + h), at(p0 - h));
+            at(p0);
+            for (y, e) in exact.iter().enumerate() {
+                let fd_rms = (up[y].rms - down[y].rms) / (2.0 * h);
+                let fd_n0 = (up[y].n0_hz - down[y].n0_hz) / (2.0 * h);
+                // as log-derivatives p d/dp relative to the value
+                let err_rms = p0 * (e.d_rms - fd_rms).abs() / e.rms;
+                let err_n0 = p0 * (e.d_n0_hz - fd_n0).abs() / e.n0_hz;
+                eprintln!(
+                    "{name} {dim:?} {}: p dRMS/dp / RMS {:.6e} (fd {:.6e}, err {err_rms:.1e}); p dN0/dp / N0 {:.6e} (err {err_n0:.1e})",
+                    e.label,
+                    p0 * e.d_rms / e.rms,
+                    p0 * fd_rms / e.rms,
+                    p0 * e.d_n0_hz / e.n0_hz,
+                );
+                worst = worst.max(err_rms).max(err_n0);
+                assert!(
+                    err_rms < 1e-6 && err_n0 < 1e-6,
+                    "{dim:?} {}: {err_rms} {err_n0}",
+                    e.label
+                );
+            }
+        }
+    }
+    eprintln!("largest error {worst:.1e}");
+    let sloped =
+        bar_wing_gust_deck().replace("+TD,0.,0.02,1000.,0.02,ENDT", "+TD,0.,0.01,1000.,0.05,ENDT");
+    let path = dir.join("sloped.bdf");
+    std::fs::write(&path, sloped).unwrap();
+    let input = Input::read(&path).unwrap();
+    let b = BulkData::from_cards(&input.deck.bulk).unwrap();
+    let sub = input.case_control.subcase(1).unwrap();
+    let (s, modes) = subcase_modes(&b, &sub).unwrap();
+    let (dk, dm) = s.bar_property_derivative(&b, 1, BarDimension::I2).unwrap();
+    let direction = ModeDirection {
+        d_lambda: vec![0.0; modes.lambda.len()],
+        d_phi_g: faer::Mat::zeros(modes.phi_g.nrows(), modes.lambda.len()),
+        dk: &dk,
+        dm: &dm,
+    };
+    let e = random_response_derivative(
+        &b,
+        &sub,
+        &s,
+        &modes,
+        &requests,
+        &KInterpolation::Dense(k),
+        &direction,
+    )
+    .unwrap_err();
+    // (the response itself reads one damping value over the modes; the derivative also
+    // refuses a slope at a mode's frequency)
+    assert!(e.to_string().contains("SDAMP"), "{e}");
+}

@@ -49,6 +49,46 @@ pub fn spectral_moments(freqs: &[f64], psd: &[f64]) -> (f64, f64) {
     (m0, m2)
 }
 
+/// The gust's input spectrum of a RANDOM set: RANDPS's X times its TABRND1 (1 without one).
+struct GustSpectrum<'a> {
+    x: f64,
+    table: Option<&'a super::bulk::Table>,
+}
+
+impl GustSpectrum<'_> {
+    /// The input PSD at frequency f (Hz).
+    fn at(&self, f: f64) -> f64 {
+        self.x * self.table.map_or(1.0, |t| table_value(t, f))
+    }
+}
+
+/// The RANDPS of RANDOM set `random_id` (exactly one) and its TABRND1.
+fn gust_spectrum(b: &BulkData, random_id: u32) -> R<GustSpectrum<'_>> {
+    let psd = b
+        .randps
+        .iter()
+        .filter(|r| r.sid == random_id)
+        .collect::<Vec<_>>();
+    let [psd] = psd.as_slice() else {
+        return Err(NastranError::model(
+            &format!("RANDOM = {random_id}"),
+            format!("needs one RANDPS (found {})", psd.len()),
+        ));
+    };
+    let table = psd
+        .tid
+        .map(|t| {
+            b.tables.get(&t).ok_or_else(|| {
+                NastranError::model(
+                    &format!("RANDPS {random_id}"),
+                    format!("refers to TABRND1 {t}, which the model does not define"),
+                )
+            })
+        })
+        .transpose()?;
+    Ok(GustSpectrum { x: psd.x, table })
+}
+
 /// The random response of `requests` ((grid, component 1–6, quantity)) for subcase `sub`,
 /// whose structure `s` and modes (`subcase_modes`) the caller has solved once; with the
 /// warnings of the reading.
@@ -66,28 +106,7 @@ pub fn random_response(
             "selects no RANDOM: a random gust response needs GUST, FREQUENCY and RANDOM".into(),
         )
     })?;
-    let psd = b
-        .randps
-        .iter()
-        .filter(|r| r.sid == random_id)
-        .collect::<Vec<_>>();
-    let [psd] = psd.as_slice() else {
-        return Err(NastranError::model(
-            &format!("RANDOM = {random_id}"),
-            format!("needs one RANDPS (found {})", psd.len()),
-        ));
-    };
-    let psd_table = psd
-        .tid
-        .map(|t| {
-            b.tables.get(&t).ok_or_else(|| {
-                NastranError::model(
-                    &format!("RANDPS {random_id}"),
-                    format!("refers to TABRND1 {t}, which the model does not define"),
-                )
-            })
-        })
-        .transpose()?;
+    let input = gust_spectrum(b, random_id)?;
     let response = gust_frequency_response(b, sub, s, modes, interpolation)?;
     let rows = response.rows(b, sub, s, modes, requests)?;
     let freqs = &response.frequencies_hz;
@@ -98,7 +117,7 @@ pub fn random_response(
                 .output(row)
                 .iter()
                 .zip(freqs)
-                .map(|(y, &f)| y.norm_sqr() * psd.x * psd_table.map_or(1.0, |t| table_value(t, f)))
+                .map(|(y, &f)| y.norm_sqr() * input.at(f))
                 .collect();
             let (m0, m2) = spectral_moments(freqs, &psd_values);
             RandomRow {
@@ -111,6 +130,179 @@ pub fn random_response(
         })
         .collect();
     Ok((out, response.warnings))
+}
+
+/// A design direction of the modes: ∂λ and ∂φ (g-set, one column a mode, as
+/// [`super::structure::mode_derivatives`] gives them) and the ∂K, ∂M they come from (the
+/// constraint forces' rows need them).
+pub struct ModeDirection<'a> {
+    pub d_lambda: Vec<f64>,
+    pub d_phi_g: faer::Mat<f64>,
+    pub dk: &'a faer::Mat<f64>,
+    pub dm: &'a faer::Mat<f64>,
+}
+
+/// One output's random response and its derivative along a [`ModeDirection`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct RandomDerivative {
+    pub label: String,
+    pub rms: f64,
+    pub n0_hz: f64,
+    pub d_rms: f64,
+    pub d_n0_hz: f64,
+}
+
+/// The derivatives of the RMS and N0 of `requests` along a design direction of the modes
+/// (exact, forward mode): the GAF table's tangent from one table of the 2n shapes [φ | ∂φ]
+/// (the DLM's GAFs are bilinear in the projecting and the moving shape, so
+/// dQ_ss[m][n] = Q[n+m][n] + Q[m][n+n] and dQ_gs[m] = Q_gs[n+m]), dη from the modal problem's
+/// factorizations, the rows' tangents (φ rows; the constraint forces' add ∂K φ and ∂M φ), and
+/// the spectral moments' (linear in the PSD): dRMS = dm₀/(2 RMS), dN0 = (dm₂/m₀ − m₂ dm₀/m₀²)
+/// /(2 N0). The modal damping is held fixed: an SDAMP table that is not flat at a retained
+/// mode's frequency is refused, as are monitor points (their aerodynamic part) for now.
+#[allow(clippy::too_many_arguments)]
+pub fn random_response_derivative(
+    b: &BulkData,
+    sub: &Subcase,
+    s: &Structure,
+    modes: &RealModes,
+    requests: &[(u32, u8, Quantity)],
+    interpolation: &KInterpolation,
+    direction: &ModeDirection,
+) -> R<Vec<RandomDerivative>> {
+    use faer::c64;
+    let random_id = sub.selections.get("RANDOM").copied().ok_or_else(|| {
+        NastranError::model(
+            "case control",
+            "selects no RANDOM: a random gust response needs GUST, FREQUENCY and RANDOM".into(),
+        )
+    })?;
+    let input = gust_spectrum(b, random_id)?;
+    let sol = super::response::gust_frequency_solution(b, sub, s, modes, interpolation)?;
+    let n = sol.response.n_modes;
+    if direction.d_lambda.len() < n || direction.d_phi_g.ncols() < n {
+        return Err(NastranError::model(
+            "design direction",
+            format!(
+                "gives {} mode derivatives; the response keeps {n} modes",
+                direction.d_lambda.len().min(direction.d_phi_g.ncols())
+            ),
+        ));
+    }
+    if let Some(id) = sub.selections.get("SDAMPING") {
+        if let Some(t) = b.tables.get(id) {
+            for f in &modes.freq_hz()[..n] {
+                let v = table_value(t, *f);
+                let flat = [0.999_999, 1.000_001]
+                    .iter()
+                    .all(|c| (table_value(t, f * c) - v).abs() <= 1e-12 * v.abs());
+                if !flat {
+                    return Err(NastranError::model(
+                        &format!("SDAMP = {id}"),
+                        format!("its damping changes with frequency at {f:.4} Hz (a retained mode's): the derivative holds the modal damping fixed; give a table flat over the modes' frequencies"),
+                    ));
+                }
+            }
+        }
+    }
+    // the rows and their tangents
+    let rows = super::response::output_rows(b, sub, s, modes, n, requests)?;
+    let moved = RealModes {
+        phi_g: direction.d_phi_g.clone(),
+        ..modes.clone()
+    };
+    let mut d_rows = super::response::output_rows(b, sub, s, &moved, n, requests)?;
+    for (r, &(grid, comp, quantity)) in d_rows.iter_mut().zip(requests) {
+        match quantity {
+            Quantity::Mode => {
+                r.k_row.iter_mut().for_each(|v| *v = 0.0);
+            }
+            Quantity::SpcForce => {
+                let dof = s.dof(grid, comp).expect("output_rows checked the grid");
+                let ng = s.k_gg.nrows();
+                for m in 0..n {
+                    r.k_row[m] += (0..ng)
+                        .map(|j| direction.dk[(dof, j)] * modes.phi_g[(j, m)])
+                        .sum::<f64>();
+                    r.m_row[m] += (0..ng)
+                        .map(|j| direction.dm[(dof, j)] * modes.phi_g[(j, m)])
+                        .sum::<f64>();
+                }
+            }
+            _ => {}
+        }
+    }
+    // the GAF table's tangent from the table of [φ | ∂φ]
+    let ng = modes.phi_g.nrows();
+    let both = RealModes {
+        phi_g: faer::Mat::from_fn(ng, 2 * n, |i, c| {
+            if c < n {
+                modes.phi_g[(i, c)]
+            } else {
+                direction.d_phi_g[(i, c - n)]
+            }
+        }),
+        ..modes.clone()
+    };
+    let ms2 = super::aero::modal_surface(&sol.surf, &sol.rows, &both, 2 * n);
+    let t2 = sol.gafs_of(b, &ms2)?;
+    let mut d_table = t2.clone();
+    for i in 0..t2.k.len() {
+        d_table.q_ss[i] = (0..n)
+            .map(|m| {
+                (0..n)
+                    .map(|c| t2.q_ss[i][n + m][c] + t2.q_ss[i][m][n + c])
+                    .collect()
+            })
+            .collect();
+        d_table.q_gs[i] = (0..n).map(|m| t2.q_gs[i][n + m]).collect();
+    }
+    let d_eta = sol.eta_jvp(&d_table, &direction.d_lambda[..n])?;
+    let r = &sol.response;
+    let freqs = &r.frequencies_hz;
+    let mut grid_index = vec![None; freqs.len()];
+    for (j, &i) in sol.live.iter().enumerate() {
+        grid_index[i] = Some(j);
+    }
+    rows.iter()
+        .zip(&d_rows)
+        .map(|(row, d_row)| {
+            let (mut psd, mut d_psd) = (vec![0.0; freqs.len()], vec![0.0; freqs.len()]);
+            for (i, &f) in freqs.iter().enumerate() {
+                let (Some(eta), Some(j)) = (&r.eta[i], grid_index[i]) else {
+                    continue;
+                };
+                let w2 = (2.0 * std::f64::consts::PI * f).powi(2);
+                let mut y = c64::new(0.0, 0.0);
+                let mut dy = c64::new(0.0, 0.0);
+                for m in 0..n {
+                    let c = row.k_row[m] - w2 * row.m_row[m];
+                    let dc = d_row.k_row[m] - w2 * d_row.m_row[m];
+                    y += eta[m] * c;
+                    dy += d_eta[j][m] * c + eta[m] * dc;
+                }
+                let (y, dy) = (y * r.load[i], dy * r.load[i]);
+                let x = input.at(f);
+                psd[i] = y.norm_sqr() * x;
+                d_psd[i] = 2.0 * (y.conj() * dy).re * x;
+            }
+            let (m0, m2) = spectral_moments(freqs, &psd);
+            let (dm0, dm2) = spectral_moments(freqs, &d_psd);
+            let rms = m0.sqrt();
+            let n0 = if m0 > 0.0 { (m2 / m0).sqrt() } else { 0.0 };
+            Ok(RandomDerivative {
+                label: row.label.clone(),
+                rms,
+                n0_hz: n0,
+                d_rms: if rms > 0.0 { dm0 / (2.0 * rms) } else { 0.0 },
+                d_n0_hz: if n0 > 0.0 {
+                    (dm2 / m0 - m2 * dm0 / (m0 * m0)) / (2.0 * n0)
+                } else {
+                    0.0
+                },
+            })
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -221,6 +221,135 @@ pub fn gust_frequency_response(
     modes: &RealModes,
     interpolation: &KInterpolation,
 ) -> R<GustFrequencyResponse> {
+    Ok(gust_frequency_solution(b, sub, s, modes, interpolation)?.response)
+}
+
+/// What [`gust_frequency_response`] solved, kept for the response's derivatives: the lifting
+/// surfaces and their spline rows, the GAF table and the modal problem with its factorizations.
+pub struct GustSolution {
+    pub response: GustFrequencyResponse,
+    pub surf: super::aero::LiftingSurfaces,
+    pub rows: super::spline::SplineRows,
+    flight: FlightCondition,
+    mach: f64,
+    interpolation: KInterpolation,
+    table: gustkit_core::GafTable,
+    omega_n: Vec<f64>,
+    zeta: f64,
+    velocity: f64,
+    grid: crate::gust::FrequencyGrid,
+    /// The FREQ list's indices of the grid's frequencies (those with a load).
+    pub live: Vec<usize>,
+    fr: crate::gust::response::FrequencyResponse,
+}
+
+impl GustSolution {
+    /// The modal problem solved (Eq. 16 on the FREQ list's loaded frequencies).
+    pub fn problem(&self) -> crate::gust::GustProblem<'_> {
+        crate::gust::GustProblem {
+            grid: self.grid.clone(),
+            max_tail: 1.0,
+            ..crate::gust::GustProblem::for_transient(
+                self.omega_n.clone(),
+                self.zeta,
+                &self.table,
+                self.response.q,
+                self.velocity,
+                vec![vec![0.0; self.response.n_modes]],
+            )
+        }
+    }
+
+    /// The GAF table of any modal surface of this model on the solution's reduced frequencies
+    /// (the same k interpolation).
+    pub fn gafs_of(
+        &self,
+        b: &BulkData,
+        ms: &gustkit_core::ModalSurface,
+    ) -> R<gustkit_core::GafTable> {
+        gaf_table(
+            b,
+            &self.surf,
+            &self.flight,
+            ms,
+            &self.interpolation,
+            self.mach,
+        )
+    }
+
+    /// The forward mode of η at the grid's frequencies along the GAF table and ω_n².
+    pub fn eta_jvp(&self, d_table: &gustkit_core::GafTable, d_lambda: &[f64]) -> R<Vec<Vec<c64>>> {
+        self.fr
+            .eta_jvp(&self.problem(), d_table, d_lambda)
+            .map_err(|e| NastranError::model("frequency response", e.to_string()))
+    }
+}
+
+/// The GAF table of modal surface `ms` on the reduced frequencies of `interpolation`: the DLM
+/// there (dense), or at MKAERO's k at `mach` and linear in k between them.
+fn gaf_table(
+    b: &BulkData,
+    surf: &super::aero::LiftingSurfaces,
+    flight: &FlightCondition,
+    ms: &gustkit_core::ModalSurface,
+    interpolation: &KInterpolation,
+    mach: f64,
+) -> R<gustkit_core::GafTable> {
+    let dlm_error = |e: gustkit_core::AeroError| NastranError::model("DLM", e.to_string());
+    Ok(match interpolation {
+        KInterpolation::Dense(k) => surf.dlm.gafs(flight, ms, k).map_err(dlm_error)?,
+        KInterpolation::LinearOnMkaero(k) => {
+            let mut ks: Vec<f64> = b
+                .mkaero
+                .iter()
+                .filter(|m| (m.0 - mach).abs() < 1e-9)
+                .map(|m| m.1)
+                .collect();
+            ks.sort_by(f64::total_cmp);
+            ks.dedup();
+            if ks.is_empty() {
+                return Err(NastranError::model(
+                    "MKAERO1",
+                    format!("has no reduced frequency at Mach {mach}"),
+                ));
+            }
+            let coarse = surf.dlm.gafs(flight, ms, &ks).map_err(dlm_error)?;
+            let mut t = surf.dlm.gafs(flight, ms, k).map_err(dlm_error)?;
+            for (i, &kk) in k.iter().enumerate() {
+                let seg = ks.windows(2).position(|w| kk >= w[0] && kk <= w[1]);
+                let last = ks.len() - 1;
+                let (a, bb, u) = match seg {
+                    Some(j) => (j, j + 1, (kk - ks[j]) / (ks[j + 1] - ks[j])),
+                    // beyond the ends: the end segments' lines, extrapolated
+                    None if ks.len() == 1 => (0, 0, 0.0),
+                    None if kk < ks[0] => (0, 1, (kk - ks[0]) / (ks[1] - ks[0])),
+                    None => (
+                        last - 1,
+                        last,
+                        (kk - ks[last - 1]) / (ks[last] - ks[last - 1]),
+                    ),
+                };
+                let mix = |x: c64, y: c64| x * (1.0 - u) + y * u;
+                for r in 0..t.q_ss[i].len() {
+                    for c in 0..t.q_ss[i][r].len() {
+                        t.q_ss[i][r][c] = mix(coarse.q_ss[a][r][c], coarse.q_ss[bb][r][c]);
+                    }
+                    t.q_gs[i][r] = mix(coarse.q_gs[a][r], coarse.q_gs[bb][r]);
+                }
+            }
+            t
+        }
+    })
+}
+
+/// [`gust_frequency_response`] with what it solved kept ([`GustSolution`]).
+pub fn gust_frequency_solution(
+    b: &BulkData,
+    sub: &Subcase,
+    s: &Structure,
+    modes: &RealModes,
+    interpolation: &KInterpolation,
+) -> R<GustSolution> {
     let sel = |name: &str| -> R<u32> {
         sub.selections.get(name).copied().ok_or_else(|| {
             NastranError::model(
@@ -385,50 +514,7 @@ pub fn gust_frequency_response(
         x_ref: gust.x0,
     };
     let dlm_error = |e: gustkit_core::AeroError| NastranError::model("DLM", e.to_string());
-    let table_gaf = match interpolation {
-        KInterpolation::Dense(k) => surf.dlm.gafs(&flight, &ms, k).map_err(dlm_error)?,
-        KInterpolation::LinearOnMkaero(k) => {
-            let mut ks: Vec<f64> = b
-                .mkaero
-                .iter()
-                .filter(|m| (m.0 - mach).abs() < 1e-9)
-                .map(|m| m.1)
-                .collect();
-            ks.sort_by(f64::total_cmp);
-            ks.dedup();
-            if ks.is_empty() {
-                return Err(NastranError::model(
-                    "MKAERO1",
-                    format!("has no reduced frequency at Mach {mach}"),
-                ));
-            }
-            let coarse = surf.dlm.gafs(&flight, &ms, &ks).map_err(dlm_error)?;
-            let mut t = surf.dlm.gafs(&flight, &ms, k).map_err(dlm_error)?;
-            for (i, &kk) in k.iter().enumerate() {
-                let seg = ks.windows(2).position(|w| kk >= w[0] && kk <= w[1]);
-                let last = ks.len() - 1;
-                let (a, bb, u) = match seg {
-                    Some(j) => (j, j + 1, (kk - ks[j]) / (ks[j + 1] - ks[j])),
-                    // beyond the ends: the end segments' lines, extrapolated
-                    None if ks.len() == 1 => (0, 0, 0.0),
-                    None if kk < ks[0] => (0, 1, (kk - ks[0]) / (ks[1] - ks[0])),
-                    None => (
-                        last - 1,
-                        last,
-                        (kk - ks[last - 1]) / (ks[last] - ks[last - 1]),
-                    ),
-                };
-                let mix = |x: c64, y: c64| x * (1.0 - u) + y * u;
-                for r in 0..t.q_ss[i].len() {
-                    for c in 0..t.q_ss[i][r].len() {
-                        t.q_ss[i][r][c] = mix(coarse.q_ss[a][r][c], coarse.q_ss[bb][r][c]);
-                    }
-                    t.q_gs[i][r] = mix(coarse.q_gs[a][r], coarse.q_gs[bb][r]);
-                }
-            }
-            t
-        }
-    };
+    let table_gaf = gaf_table(b, &surf, &flight, &ms, interpolation, mach)?;
     let omega_n: Vec<f64> = modes.lambda[..n_modes]
         .iter()
         .map(|l| l.max(0.0).sqrt())
@@ -472,11 +558,11 @@ pub fn gust_frequency_response(
             vec![vec![0.0; n_modes]],
         )
     };
-    let response = crate::gust::response::frequency_response(&problem)
+    let fr = crate::gust::response::frequency_response(&problem)
         .map_err(|e| NastranError::model("frequency response", e.to_string()))?;
     let mut eta = vec![None; freqs.len()];
-    for (e, &i) in response.eta.into_iter().zip(&live) {
-        eta[i] = Some(e);
+    for (e, &i) in fr.eta.iter().zip(&live) {
+        eta[i] = Some(e.clone());
     }
     // monitor points: the boxes' forces at each loaded frequency's k, the rows of the stations
     let mut box_forces = vec![None; freqs.len()];
@@ -492,15 +578,33 @@ pub fn gust_frequency_response(
         }
         monitors = monitor_rows(b, s, modes, n_modes, &rows, surf.box_ids.len())?;
     }
-    Ok(GustFrequencyResponse {
-        frequencies_hz: freqs,
-        load: alpha,
-        eta,
-        n_modes,
-        q,
-        box_forces,
-        monitor_rows: monitors,
-        warnings,
+    let grid = problem.grid.clone();
+    let omega_n = problem.omega_n.clone();
+    let zeta = problem.damping_ratio;
+    drop(problem);
+    Ok(GustSolution {
+        response: GustFrequencyResponse {
+            frequencies_hz: freqs,
+            load: alpha,
+            eta,
+            n_modes,
+            q,
+            box_forces,
+            monitor_rows: monitors,
+            warnings,
+        },
+        surf,
+        rows,
+        flight,
+        mach,
+        interpolation: interpolation.clone(),
+        table: table_gaf,
+        omega_n,
+        zeta,
+        velocity,
+        grid,
+        live,
+        fr,
     })
 }
 
