@@ -62,8 +62,14 @@ impl GustSpectrum<'_> {
     }
 }
 
-/// The RANDPS of RANDOM set `random_id` (exactly one) and its TABRND1.
-fn gust_spectrum(b: &BulkData, random_id: u32) -> R<GustSpectrum<'_>> {
+/// The RANDPS of the subcase's RANDOM set (exactly one) and its TABRND1.
+fn gust_spectrum<'a>(b: &'a BulkData, sub: &Subcase) -> R<GustSpectrum<'a>> {
+    let random_id = sub.selections.get("RANDOM").copied().ok_or_else(|| {
+        NastranError::model(
+            "case control",
+            "selects no RANDOM: a random gust response needs GUST, FREQUENCY and RANDOM".into(),
+        )
+    })?;
     let psd = b
         .randps
         .iter()
@@ -100,13 +106,7 @@ pub fn random_response(
     requests: &[(u32, u8, Quantity)],
     interpolation: &KInterpolation,
 ) -> R<(Vec<RandomRow>, Vec<String>)> {
-    let random_id = sub.selections.get("RANDOM").copied().ok_or_else(|| {
-        NastranError::model(
-            "case control",
-            "selects no RANDOM: a random gust response needs GUST, FREQUENCY and RANDOM".into(),
-        )
-    })?;
-    let input = gust_spectrum(b, random_id)?;
+    let input = gust_spectrum(b, sub)?;
     let response = gust_frequency_response(b, sub, s, modes, interpolation)?;
     let rows = response.rows(b, sub, s, modes, requests)?;
     let freqs = &response.frequencies_hz;
@@ -171,13 +171,7 @@ pub fn random_response_derivative(
     direction: &ModeDirection,
 ) -> R<Vec<RandomDerivative>> {
     use faer::c64;
-    let random_id = sub.selections.get("RANDOM").copied().ok_or_else(|| {
-        NastranError::model(
-            "case control",
-            "selects no RANDOM: a random gust response needs GUST, FREQUENCY and RANDOM".into(),
-        )
-    })?;
-    let input = gust_spectrum(b, random_id)?;
+    let input = gust_spectrum(b, sub)?;
     let sol = super::response::gust_frequency_solution(b, sub, s, modes, interpolation)?;
     let n = sol.response.n_modes;
     if direction.d_lambda.len() < n || direction.d_phi_g.ncols() < n {
