@@ -246,18 +246,13 @@ pub struct GustSolution {
 impl GustSolution {
     /// The modal problem solved (Eq. 16 on the FREQ list's loaded frequencies).
     pub fn problem(&self) -> crate::gust::GustProblem<'_> {
-        crate::gust::GustProblem {
-            grid: self.grid.clone(),
-            max_tail: 1.0,
-            ..crate::gust::GustProblem::for_transient(
-                self.omega_n.clone(),
-                self.zeta,
-                &self.table,
-                self.response.q,
-                self.velocity,
-                vec![vec![0.0; self.response.n_modes]],
-            )
-        }
+        modal_problem(
+            self.omega_n.clone(),
+            self.zeta,
+            &self.table,
+            (self.response.q, self.velocity),
+            self.grid.clone(),
+        )
     }
 
     /// The GAF table of any modal surface of this model on the solution's reduced frequencies
@@ -282,6 +277,30 @@ impl GustSolution {
         self.fr
             .eta_jvp(&self.problem(), d_table, d_lambda)
             .map_err(|e| NastranError::model("frequency response", e.to_string()))
+    }
+}
+
+/// Eq. 16 on a grid of loaded frequencies: the modes' ω_n and damping ratio, the GAF table,
+/// (q, V); no outputs (the Nastran rows are applied to η by their own rule).
+fn modal_problem(
+    omega_n: Vec<f64>,
+    zeta: f64,
+    table: &gustkit_core::GafTable,
+    (q, velocity): (f64, f64),
+    grid: crate::gust::FrequencyGrid,
+) -> crate::gust::GustProblem<'_> {
+    let n_modes = omega_n.len();
+    crate::gust::GustProblem {
+        grid,
+        max_tail: 1.0,
+        ..crate::gust::GustProblem::for_transient(
+            omega_n,
+            zeta,
+            table,
+            q,
+            velocity,
+            vec![vec![0.0; n_modes]],
+        )
     }
 }
 
@@ -314,7 +333,9 @@ fn gaf_table(
                 ));
             }
             let coarse = surf.dlm.gafs(flight, ms, &ks).map_err(dlm_error)?;
-            let mut t = surf.dlm.gafs(flight, ms, k).map_err(dlm_error)?;
+            // every entry comes from the MKAERO table: no DLM solve at the fine k
+            gustkit_core::aero::check_reduced_frequencies(k).map_err(dlm_error)?;
+            let mut t = gustkit_core::GafTable::zeros(flight, k, ms.n_modes());
             for (i, &kk) in k.iter().enumerate() {
                 let seg = ks.windows(2).position(|w| kk >= w[0] && kk <= w[1]);
                 let last = ks.len() - 1;
@@ -546,18 +567,13 @@ pub fn gust_frequency_solution(
             .collect(),
         weights: vec![0.0; live.len()],
     };
-    let problem = crate::gust::GustProblem {
+    let problem = modal_problem(
+        omega_n,
+        zetas.first().copied().unwrap_or(0.0),
+        &table_gaf,
+        (q, velocity),
         grid,
-        max_tail: 1.0,
-        ..crate::gust::GustProblem::for_transient(
-            omega_n,
-            zetas.first().copied().unwrap_or(0.0),
-            &table_gaf,
-            q,
-            velocity,
-            vec![vec![0.0; n_modes]],
-        )
-    };
+    );
     let fr = crate::gust::response::frequency_response(&problem)
         .map_err(|e| NastranError::model("frequency response", e.to_string()))?;
     let mut eta = vec![None; freqs.len()];
@@ -578,10 +594,12 @@ pub fn gust_frequency_solution(
         }
         monitors = monitor_rows(b, s, modes, n_modes, &rows, surf.box_ids.len())?;
     }
-    let grid = problem.grid.clone();
-    let omega_n = problem.omega_n.clone();
-    let zeta = problem.damping_ratio;
-    drop(problem);
+    let crate::gust::GustProblem {
+        grid,
+        omega_n,
+        damping_ratio: zeta,
+        ..
+    } = problem;
     Ok(GustSolution {
         response: GustFrequencyResponse {
             frequencies_hz: freqs,
