@@ -153,7 +153,8 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
         }
         None => (None, None),
     };
-    if let Some(ev) = &gust_evaluation {
+    // the flutter analysis below writes the same design's artifacts from its own model
+    if let (Some(ev), None) = (&gust_evaluation, &study.spec.flutter) {
         write_artifacts(&dir, &ev.aero, &study)?;
     }
     let discrete_gust = match &gust_evaluation {
