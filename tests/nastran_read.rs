@@ -1324,7 +1324,7 @@ fn bar_dimension_derivatives_match_differences_and_homogeneity() {
 /// |∂φ| below 1e-6 (measured ≤ 4.2e-8, truncation); ∂λ equal to the quadratic form
 /// φᵀ(∂K − λ∂M)φ; the derivative keeps the mass normalization (φᵀM∂φ = −½φᵀ∂Mφ to 1e-12).
 /// A beam of round section (I1 = I2: its bending modes come in equal pairs) is refused with
-/// the mode and the reason.
+/// the mode and the reason, and so are modes scaled away from φᵀMφ = 1.
 #[test]
 fn mode_shape_derivatives_match_differences() {
     use gustkit::nastran::structure::{constrained, mode_derivatives, subcase_modes, BarDimension};
@@ -1421,6 +1421,13 @@ fn mode_shape_derivatives_match_differences() {
         e.to_string().contains("mode 1") && e.to_string().contains("repeated"),
         "{e}"
     );
+    // modes that are not mass-normalized (a caller's own scaling) are refused
+    let mut scaled = modes.clone();
+    for v in scaled.phi_a.col_mut(0).iter_mut() {
+        *v *= 2.0;
+    }
+    let e = mode_derivatives(&s, &spc, &scaled, (&dk, &dm), &[0]).unwrap_err();
+    assert!(e.to_string().contains("not mass-normalized"), "{e}");
 }
 
 /// A straight wing of 8 CBARs along y (2 m, clamped at grid 1, elastic axis at 40 % chord), a
@@ -1553,6 +1560,26 @@ fn random_gust_derivatives_match_differences() {
         }
     }
     eprintln!("largest error {worst:.1e}");
+    // a direction with fewer mode derivatives than the response keeps is refused
+    let (s, modes) = subcase_modes(&b, &sub).unwrap();
+    let (dk, dm) = s.bar_property_derivative(&b, 1, BarDimension::I2).unwrap();
+    let short = ModeDirection {
+        d_lambda: vec![0.0; 2],
+        d_phi_g: faer::Mat::zeros(modes.phi_g.nrows(), 2),
+        dk: &dk,
+        dm: &dm,
+    };
+    let e = random_response_derivative(
+        &b,
+        &sub,
+        &s,
+        &modes,
+        &requests,
+        &KInterpolation::Dense(k.clone()),
+        &short,
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("design direction"), "{e}");
     let sloped =
         bar_wing_gust_deck().replace("+TD,0.,0.02,1000.,0.02,ENDT", "+TD,0.,0.01,1000.,0.05,ENDT");
     let path = dir.join("sloped.bdf");

@@ -1879,9 +1879,10 @@ fn bar_local<T: ScalarOps>(
     Ok((k, m))
 }
 
-/// Exact derivatives of mass-normalized real modes along one design direction (∂K, ∂M in the g-set, e.g. from
-/// [`Structure::shell_thickness_derivative`] or [`Structure::bar_property_derivative`]) for the
-/// modes `which` of `modes` (solved by [`real_modes`] with the same constraints): per mode, ∂λ
+/// Exact derivatives of mass-normalized real modes (as [`real_modes`] gives them) along one
+/// design direction (∂K, ∂M in the g-set, e.g. from [`Structure::shell_thickness_derivative`]
+/// or [`Structure::bar_property_derivative`]) for the modes `which` of `modes` (solved by
+/// [`real_modes`] with the same constraints): per mode, ∂λ
 /// and ∂φ in the g-set. ∂λ = φᵀ(∂K − λ∂M)φ; ∂φ by Nelson's method on the a-set: (K − λM) v =
 /// −(∂K − λ∂M)φ + ∂λ Mφ with the row and column of φ's largest entry removed (v zero there),
 /// then ∂φ = v − (φᵀMv + ½ φᵀ∂Mφ) φ, which keeps φᵀMφ = 1. Dense: O(n_a³) a mode. A repeated
@@ -1909,18 +1910,6 @@ pub fn mode_derivatives(
         .iter()
         .map(|&i| {
             let lambda = modes.lambda[i];
-            // a root repeated within the solution's accuracy (the dense solve finds every root)
-            if let Some(j) = (0..modes.lambda.len()).find(|&j| {
-                j != i && (modes.lambda[j] - lambda).abs() <= 1e-8 * lambda.abs().max(f64::MIN_POSITIVE)
-            }) {
-                return Err(NastranError::model(
-                    &format!("mode {}", i + 1),
-                    format!(
-                        "its eigenvalue {lambda:.6e} is repeated (mode {} has the same to 1e-8): a repeated root has no derivative of its own mode shape (the pair's shapes mix under any change); derive a quantity of the pair (the sum of their responses) or break the symmetry",
-                        j + 1
-                    ),
-                ));
-            }
             let phi = modes.phi_a.col(i);
             let times = |a: &Mat<f64>, v: &[f64]| -> Vec<f64> {
                 (0..n)
@@ -1935,7 +1924,19 @@ pub fn mode_derivatives(
             if !((dot(&phi_v, &m_phi) - 1.0).abs() < 1e-8) {
                 return Err(NastranError::model(
                     &format!("mode {}", i + 1),
-                    "is not mass-normalized (EIGR/EIGRL NORM = MAX): its derivative is taken of mass-normalized modes; use NORM = MASS".into(),
+                    format!("is not mass-normalized (φᵀMφ = {:.6e}): the derivative is taken of the mass-normalized modes `real_modes` and `subcase_modes` give (whatever the EIGR/EIGRL NORM, which scales only the printed modal coordinates)", dot(&phi_v, &m_phi)),
+                ));
+            }
+            // a root repeated within the solution's accuracy (the dense solve finds every root)
+            if let Some(j) = (0..modes.lambda.len()).find(|&j| {
+                j != i && (modes.lambda[j] - lambda).abs() <= 1e-8 * lambda.abs().max(f64::MIN_POSITIVE)
+            }) {
+                return Err(NastranError::model(
+                    &format!("mode {}", i + 1),
+                    format!(
+                        "its eigenvalue {lambda:.6e} is repeated (mode {} has the same to 1e-8): a repeated root has no derivative of its own mode shape (the pair's shapes mix under any change); derive a quantity of the pair (the sum of their responses) or break the symmetry",
+                        j + 1
+                    ),
                 ));
             }
             let d_lambda = dot(&phi_v, &dk_phi) - lambda * dot(&phi_v, &dm_phi);
