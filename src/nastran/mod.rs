@@ -10,6 +10,7 @@ pub mod aero;
 pub mod bulk;
 pub mod case_control;
 pub mod deck;
+pub mod design;
 pub mod field;
 pub mod random;
 pub mod response;

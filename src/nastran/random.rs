@@ -170,19 +170,32 @@ pub fn random_response_derivative(
     interpolation: &KInterpolation,
     direction: &ModeDirection,
 ) -> R<Vec<RandomDerivative>> {
-    use faer::c64;
+    let mut all = random_response_derivatives(
+        b,
+        sub,
+        s,
+        modes,
+        requests,
+        interpolation,
+        std::slice::from_ref(direction),
+    )?;
+    Ok(all.remove(0))
+}
+
+/// [`random_response_derivative`] along several directions (one a design variable), the
+/// response, the output rows and the input spectrum solved once for all of them.
+pub fn random_response_derivatives(
+    b: &BulkData,
+    sub: &Subcase,
+    s: &Structure,
+    modes: &RealModes,
+    requests: &[(u32, u8, Quantity)],
+    interpolation: &KInterpolation,
+    directions: &[ModeDirection],
+) -> R<Vec<Vec<RandomDerivative>>> {
     let input = gust_spectrum(b, sub)?;
     let sol = super::response::gust_frequency_solution(b, sub, s, modes, interpolation)?;
     let n = sol.response.n_modes;
-    if direction.d_lambda.len() < n || direction.d_phi_g.ncols() < n {
-        return Err(NastranError::model(
-            "design direction",
-            format!(
-                "gives {} mode derivatives; the response keeps {n} modes",
-                direction.d_lambda.len().min(direction.d_phi_g.ncols())
-            ),
-        ));
-    }
     if let Some(id) = sub.selections.get("SDAMPING") {
         if let Some(t) = b.tables.get(id) {
             for f in &modes.freq_hz()[..n] {
@@ -199,8 +212,39 @@ pub fn random_response_derivative(
             }
         }
     }
-    // the rows and their tangents
     let rows = super::response::output_rows(b, sub, s, modes, n, requests)?;
+    directions
+        .iter()
+        .map(|d| derivative_along(b, sub, s, modes, requests, (&input, &sol, &rows), d))
+        .collect()
+}
+
+/// The derivatives of every output along one direction, from the solved response.
+fn derivative_along(
+    b: &BulkData,
+    sub: &Subcase,
+    s: &Structure,
+    modes: &RealModes,
+    requests: &[(u32, u8, Quantity)],
+    (input, sol, rows): (
+        &GustSpectrum,
+        &super::response::GustSolution,
+        &[super::response::OutputRow],
+    ),
+    direction: &ModeDirection,
+) -> R<Vec<RandomDerivative>> {
+    use faer::c64;
+    let n = sol.response.n_modes;
+    if direction.d_lambda.len() < n || direction.d_phi_g.ncols() < n {
+        return Err(NastranError::model(
+            "design direction",
+            format!(
+                "gives {} mode derivatives; the response keeps {n} modes",
+                direction.d_lambda.len().min(direction.d_phi_g.ncols())
+            ),
+        ));
+    }
+    // the rows' tangents
     let moved = RealModes {
         phi_g: direction.d_phi_g.clone(),
         ..modes.clone()

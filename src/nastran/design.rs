@@ -1,0 +1,404 @@
+//! Design variables on a Nastran model's properties, related the way SOL 200's DVPREL1 relates
+//! them (property = C0 + Σ COEFᵢ · xᵢ), and what an optimization of the model needs at a
+//! design: its structural mass, the random gust response of the outputs it constrains, and
+//! their exact derivatives with respect to every design variable.
+//!
+//! The derivatives are forward mode, one design variable at a time, sharing the design's
+//! response: per variable, ∂K and ∂M of the properties it moves (exact, `Structure::
+//! shell_thickness_derivative`, `Structure::bar_property_derivative`), Nelson's mode
+//! derivatives, and the response's tangent (`random::random_response_derivatives`). Its
+//! cost grows with the number of design variables, which suits the tens that sizing studies of
+//! a wing's properties use.
+
+use super::bulk::BulkData;
+use super::random::{
+    random_response, random_response_derivatives, KInterpolation, ModeDirection, Quantity,
+    RandomDerivative, RandomRow,
+};
+use super::structure::{
+    constrained, mode_derivatives, subcase_modes, BarDimension, RealModes, Structure,
+};
+use super::{NastranError, Subcase};
+use faer::Mat;
+
+type R<T> = Result<T, NastranError>;
+
+/// The property field a relation sets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PropertyField {
+    /// PSHELL's T.
+    ShellThickness,
+    /// PBAR's or PBEAM's A, I1, I2 or J.
+    Bar(BarDimension),
+}
+
+/// One DVPREL1-like relation: the field `field` of property `pid` is `c0 + Σ coef · x[dv]`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PropertyRelation {
+    /// The card as the user named it (PSHELL, PBAR or PBEAM).
+    pub card: String,
+    pub pid: u32,
+    /// The field's name as the user wrote it (T, A, I1, I2, J).
+    pub field_name: String,
+    pub field: PropertyField,
+    pub c0: f64,
+    /// (design variable index, coefficient).
+    pub terms: Vec<(usize, f64)>,
+}
+
+impl PropertyRelation {
+    /// A relation checked against the model: the card names a property of the model whose
+    /// kind has the field. The error names the card, the id and what the model has.
+    pub fn new(
+        b: &BulkData,
+        card: &str,
+        pid: u32,
+        field_name: &str,
+        c0: f64,
+        terms: Vec<(usize, f64)>,
+    ) -> R<Self> {
+        let card_up = card.to_ascii_uppercase();
+        let what = format!("{card_up} {pid}");
+        let field = match card_up.as_str() {
+            "PSHELL" => {
+                if !b.pshells.contains_key(&pid) {
+                    return Err(NastranError::model(
+                        &what,
+                        "is not a property of the model (no PSHELL has this id)".into(),
+                    ));
+                }
+                if !field_name.eq_ignore_ascii_case("T") {
+                    return Err(NastranError::model(
+                        &what,
+                        format!("field {field_name} cannot be a design variable: PSHELL's is T"),
+                    ));
+                }
+                PropertyField::ShellThickness
+            }
+            "PBAR" | "PBEAM" => {
+                if !b.bar_properties.contains_key(&pid) {
+                    return Err(NastranError::model(
+                        &what,
+                        "is not a property of the model (no PBAR or PBEAM has this id)".into(),
+                    ));
+                }
+                let dim = BarDimension::from_field(field_name).ok_or_else(|| {
+                    NastranError::model(
+                        &what,
+                        format!("field {field_name} cannot be a design variable: {card_up}'s are A, I1, I2 and J"),
+                    )
+                })?;
+                PropertyField::Bar(dim)
+            }
+            _ => {
+                return Err(NastranError::model(
+                    &what,
+                    "properties of PSHELL, PBAR and PBEAM cards can be design variables; this card cannot".into(),
+                ))
+            }
+        };
+        Ok(Self {
+            card: card_up,
+            pid,
+            field_name: field_name.to_ascii_uppercase(),
+            field,
+            c0,
+            terms,
+        })
+    }
+
+    /// `PBAR 3 A`.
+    pub fn label(&self) -> String {
+        format!("{} {} {}", self.card, self.pid, self.field_name)
+    }
+
+    /// The field's value at design `x`.
+    pub fn value(&self, x: &[f64]) -> f64 {
+        self.c0 + self.terms.iter().map(|&(i, c)| c * x[i]).sum::<f64>()
+    }
+
+    /// The field's value in the model.
+    pub fn current(&self, b: &BulkData) -> f64 {
+        match self.field {
+            PropertyField::ShellThickness => b.pshells[&self.pid].t,
+            PropertyField::Bar(dim) => {
+                let p = &b.bar_properties[&self.pid];
+                match dim {
+                    BarDimension::Area => p.area,
+                    BarDimension::I1 => p.i1,
+                    BarDimension::I2 => p.i2,
+                    BarDimension::J => p.j,
+                }
+            }
+        }
+    }
+
+    fn set(&self, b: &mut BulkData, v: f64) {
+        match self.field {
+            PropertyField::ShellThickness => {
+                if let Some(p) = b.pshells.get_mut(&self.pid) {
+                    p.t = v;
+                }
+            }
+            PropertyField::Bar(dim) => {
+                if let Some(p) = b.bar_properties.get_mut(&self.pid) {
+                    match dim {
+                        BarDimension::Area => p.area = v,
+                        BarDimension::I1 => p.i1 = v,
+                        BarDimension::I2 => p.i2 = v,
+                        BarDimension::J => p.j = v,
+                    }
+                }
+            }
+        }
+    }
+
+    /// ∂K/∂p and ∂M/∂p (g-set) of this field.
+    fn derivative(&self, s: &Structure, b: &BulkData) -> R<(Mat<f64>, Mat<f64>)> {
+        match self.field {
+            PropertyField::ShellThickness => s.shell_thickness_derivative(b, self.pid),
+            PropertyField::Bar(dim) => s.bar_property_derivative(b, self.pid, dim),
+        }
+    }
+}
+
+/// The model at design `x`: every related field set to its relation's value. A value that is
+/// not positive (a section or thickness the elements cannot have) is refused naming the field.
+pub fn apply(base: &BulkData, relations: &[PropertyRelation], x: &[f64]) -> R<BulkData> {
+    let mut b = base.clone();
+    for r in relations {
+        let v = r.value(x);
+        if !(v > 0.0 && v.is_finite()) {
+            return Err(NastranError::model(
+                &r.label(),
+                format!("is {v:.6e} at this design: the relation must keep it positive (check its C0, coefficients and the variables' bounds)"),
+            ));
+        }
+        r.set(&mut b, v);
+    }
+    Ok(b)
+}
+
+/// The structural mass in the model's mass unit (PARAM WTMASS applied, as in M): uᵀ M u for a
+/// rigid unit translation u along each basic axis, averaged over the three (they agree unless
+/// scalar masses act along one axis only), as Nastran's grid-point weight generator sums the
+/// translational masses.
+pub fn translational_mass(s: &Structure, m: &Mat<f64>) -> f64 {
+    let n = m.nrows();
+    let mut total = 0.0;
+    for axis in 0..3 {
+        let mut u = vec![0.0; n];
+        for (i, frame) in s.cd.iter().enumerate() {
+            for (c, a) in frame.axes.iter().enumerate() {
+                u[6 * i + c] = a[axis];
+            }
+        }
+        let mut quad = 0.0;
+        for (j, &uj) in u.iter().enumerate() {
+            if uj != 0.0 {
+                quad += uj * (0..n).map(|i| u[i] * m[(i, j)]).sum::<f64>();
+            }
+        }
+        total += quad;
+    }
+    total / 3.0
+}
+
+/// An output of the random response by Nastran's label (`9T3`, `9R1`, `ACCE 9T3`,
+/// `SPCF 11R3`, `MODE 2`) as a request (grid or mode, component, quantity).
+pub fn parse_output(label: &str) -> Option<(u32, u8, Quantity)> {
+    let t = label.trim();
+    let (quantity, rest) = if let Some(r) = t.strip_prefix("ACCE ") {
+        (Quantity::Acceleration, r.trim())
+    } else if let Some(r) = t.strip_prefix("SPCF ") {
+        (Quantity::SpcForce, r.trim())
+    } else if let Some(r) = t.strip_prefix("MODE ") {
+        return r
+            .trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|&m| m > 0)
+            .map(|m| (m, 0, Quantity::Mode));
+    } else {
+        (Quantity::Displacement, t)
+    };
+    let at = rest.find(['T', 'R'])?;
+    let grid: u32 = rest[..at].parse().ok()?;
+    let axis: u8 = rest[at + 1..]
+        .parse()
+        .ok()
+        .filter(|c| (1..=3).contains(c))?;
+    let comp = if &rest[at..=at] == "T" {
+        axis
+    } else {
+        axis + 3
+    };
+    Some((grid, comp, quantity))
+}
+
+/// What an optimization of a Nastran model evaluates: the base model, the subcase whose random
+/// gust response is constrained, the relations, the outputs and the modes kept.
+#[derive(Clone, Debug)]
+pub struct DesignModel {
+    pub base: BulkData,
+    pub sub: Subcase,
+    pub relations: Vec<PropertyRelation>,
+    /// The constrained outputs as requests, in the order of their labels.
+    pub requests: Vec<(u32, u8, Quantity)>,
+    pub interpolation: KInterpolation,
+    /// The number of design variables.
+    pub n_variables: usize,
+    /// The modes the response keeps at every design: those the subcase's METHOD (and PARAM
+    /// LMODES) keep at the initial design, so the response is one smooth function of the
+    /// design (a mode entering the METHOD's range would make it jump).
+    pub n_modes: usize,
+}
+
+/// The model analysed at one design.
+#[derive(Clone, Debug)]
+pub struct DesignPoint {
+    pub x: Vec<f64>,
+    pub bulk: BulkData,
+    pub structure: Structure,
+    pub modes: RealModes,
+    pub mass: f64,
+    /// The random response of the constrained outputs (the requests' order).
+    pub rows: Vec<RandomRow>,
+    /// What the response noticed (one line each).
+    pub warnings: Vec<String>,
+}
+
+/// The derivatives of a design's mass and responses, one entry a design variable.
+#[derive(Clone, Debug)]
+pub struct DesignGradients {
+    pub mass: Vec<f64>,
+    /// `[variable][output]`.
+    pub outputs: Vec<Vec<RandomDerivative>>,
+}
+
+impl DesignModel {
+    /// The model at `x` with its modes (the lowest `n_modes`), mass and response.
+    pub fn analyse(&self, x: &[f64]) -> R<DesignPoint> {
+        let bulk = apply(&self.base, &self.relations, x)?;
+        let (structure, mut modes) = subcase_modes(&bulk, &self.sub)?;
+        if modes.lambda.len() < self.n_modes {
+            return Err(NastranError::model(
+                "METHOD",
+                format!(
+                    "finds {} modes at this design; the optimization keeps the {} found at the initial design: widen the EIGR/EIGRL's frequency range or give ND",
+                    modes.lambda.len(),
+                    self.n_modes
+                ),
+            ));
+        }
+        truncate(&mut modes, self.n_modes);
+        let mass = translational_mass(&structure, &structure.m_gg);
+        let (mut all, warnings) = random_response(
+            &bulk,
+            &self.sub,
+            &structure,
+            &modes,
+            &self.requests,
+            &self.interpolation,
+        )?;
+        all.truncate(self.requests.len());
+        Ok(DesignPoint {
+            x: x.to_vec(),
+            bulk,
+            structure,
+            modes,
+            mass,
+            rows: all,
+            warnings,
+        })
+    }
+
+    /// Exact derivatives of the mass and of every output's RMS and N0 at an analysed design,
+    /// with respect to each design variable.
+    pub fn gradients(&self, p: &DesignPoint) -> R<DesignGradients> {
+        let s = &p.structure;
+        let spc = constrained(s, &p.bulk, self.sub.selections.get("SPC").copied())?;
+        let ng = s.k_gg.nrows();
+        // ∂K, ∂M of every related field, once
+        let parts: Vec<(Mat<f64>, Mat<f64>)> = self
+            .relations
+            .iter()
+            .map(|r| r.derivative(s, &p.bulk))
+            .collect::<R<_>>()?;
+        let mut dks = Vec::with_capacity(self.n_variables);
+        for v in 0..self.n_variables {
+            let (mut dk, mut dm) = (Mat::<f64>::zeros(ng, ng), Mat::<f64>::zeros(ng, ng));
+            for (r, (pk, pm)) in self.relations.iter().zip(&parts) {
+                for &(_, c) in r.terms.iter().filter(|t| t.0 == v) {
+                    dk += faer::Scale(c) * pk;
+                    dm += faer::Scale(c) * pm;
+                }
+            }
+            dks.push((dk, dm));
+        }
+        let which: Vec<usize> = (0..self.n_modes).collect();
+        let mut d_lambda = Vec::with_capacity(self.n_variables);
+        let mut d_phi = Vec::with_capacity(self.n_variables);
+        for (dk, dm) in &dks {
+            let d = mode_derivatives(s, &spc, &p.modes, (dk, dm), &which)?;
+            d_lambda.push(d.iter().map(|x| x.0).collect::<Vec<_>>());
+            d_phi.push(Mat::from_fn(ng, d.len(), |i, c| d[c].1[i]));
+        }
+        let directions: Vec<ModeDirection> = dks
+            .iter()
+            .zip(d_lambda.into_iter().zip(d_phi))
+            .map(|((dk, dm), (d_lambda, d_phi_g))| ModeDirection {
+                d_lambda,
+                d_phi_g,
+                dk,
+                dm,
+            })
+            .collect();
+        let outputs = random_response_derivatives(
+            &p.bulk,
+            &self.sub,
+            s,
+            &p.modes,
+            &self.requests,
+            &self.interpolation,
+            &directions,
+        )?;
+        let mass = dks
+            .iter()
+            .map(|(_, dm)| translational_mass(s, dm))
+            .collect();
+        Ok(DesignGradients { mass, outputs })
+    }
+}
+
+/// Keeps the lowest `n` modes.
+fn truncate(modes: &mut RealModes, n: usize) {
+    modes.lambda.truncate(n);
+    let g = modes.phi_g.subcols(0, n).to_owned();
+    let a = modes.phi_a.subcols(0, n).to_owned();
+    modes.phi_g = g;
+    modes.phi_a = a;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every label form Nastran prints reads back as its request; anything else is refused.
+    #[test]
+    fn output_labels_read_back() {
+        assert_eq!(parse_output("9T3"), Some((9, 3, Quantity::Displacement)));
+        assert_eq!(parse_output("12R2"), Some((12, 5, Quantity::Displacement)));
+        assert_eq!(
+            parse_output("ACCE 9T3"),
+            Some((9, 3, Quantity::Acceleration))
+        );
+        assert_eq!(parse_output("SPCF 11R3"), Some((11, 6, Quantity::SpcForce)));
+        assert_eq!(parse_output("MODE 2"), Some((2, 0, Quantity::Mode)));
+        for bad in [
+            "", "9", "9T4", "T3", "MODE 0", "MODE x", "9X3", "ACCE", "9T",
+        ] {
+            assert_eq!(parse_output(bad), None, "{bad}");
+        }
+    }
+}

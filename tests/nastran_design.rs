@@ -1,0 +1,217 @@
+//! Design variables on a Nastran model's properties (issue 29): DVPREL1-like relations,
+//! the structural mass, and the exact derivatives of mass and random gust response with
+//! respect to every design variable (`nastran::design`), against closed forms and central
+//! differences at several steps.
+
+mod common;
+
+use gustkit::nastran::bulk::BulkData;
+use gustkit::nastran::design::{parse_output, DesignModel, PropertyRelation};
+use gustkit::nastran::random::KInterpolation;
+use gustkit::nastran::structure::subcase_modes;
+use gustkit::nastran::Input;
+use std::path::{Path, PathBuf};
+
+/// The shipped bar wing of `studies/nastran_bar_wing.json`.
+fn bar_wing() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/nastran/bar_wing_gust.bdf")
+}
+
+/// A cantilever plate wing of 2 × 4 CQUAD4 (two PSHELLs, root and tip halves) with a tip mass,
+/// one CAERO1 of 4 × 4 boxes on an infinite-plate SPLINE1, the bar wing's gust cards.
+fn plate_wing_deck() -> String {
+    let mut d = String::from(
+        "SOL 146\nCEND\nSPC = 1\nMETHOD = 1\nFREQ = 40\nRANDOM = 31\nGUST = 32\nSDAMP = 20\nBEGIN BULK\n",
+    );
+    d.push_str("EIGRL,1,,,6\nMAT1,1,7.0e10,,0.3,2700.\nPSHELL,1,1,0.012,1\nPSHELL,2,1,0.008,1\n");
+    for iy in 0..5 {
+        for ix in 0..3 {
+            d.push_str(&format!(
+                "GRID,{},,{},{},0.\n",
+                1 + ix + 3 * iy,
+                0.25 * ix as f64,
+                0.5 * iy as f64
+            ));
+        }
+    }
+    let mut e = 1;
+    for iy in 0..4 {
+        for ix in 0..2 {
+            let g = 1 + ix + 3 * iy;
+            let pid = if iy < 2 { 1 } else { 2 };
+            d.push_str(&format!(
+                "CQUAD4,{e},{pid},{g},{},{},{}\n",
+                g + 1,
+                g + 4,
+                g + 3
+            ));
+            e += 1;
+        }
+    }
+    d.push_str("CONM2,201,15,,0.5\nSPC1,1,123456,1,2,3\n");
+    d.push_str("AERO,0,100.,0.5,0.4\nPARAM,MACH,0.3\n");
+    d.push_str("CAERO1,1001,1000,,4,4,,,1,+CA\n+CA,0.,0.,0.,0.5,0.,2.,0.,0.5\nPAERO1,1000\n");
+    d.push_str("SPLINE1,100,1001,1001,1016,10\nSET1,10,1,THRU,15\n");
+    d.push_str("MKAERO1,0.3,,,,,,,,+MK\n+MK,0.01,0.1,0.5,1.0\n");
+    d.push_str("GUST,32,33,0.01,0.,100.\nRLOAD1,33,34,,,35\nDAREA,34,1,3,1.\n");
+    d.push_str("TABLED1,35,,,,,,,,+TB\n+TB,0.,1.,1000.,1.,ENDT\n");
+    d.push_str("FREQ1,40,0.1,0.25,79\nRANDPS,31,1,1,1.,,36\n");
+    d.push_str("TABRND1,36,,,,,,,,+TR\n+TR,0.,1.,1000.,1.,ENDT\n");
+    d.push_str("TABDMP1,20,CRIT,,,,,,,+TD\n+TD,0.,0.02,1000.,0.02,ENDT\nENDDATA\n");
+    d
+}
+
+/// A design model of `file` with `relations` (card, id, field, c0, terms), the outputs
+/// `labels`, the DLM on 41 k to `k_max` (above the FREQ list's last frequency).
+fn model(
+    file: &Path,
+    k_max: f64,
+    relations: &[(&str, u32, &str, f64, Vec<(usize, f64)>)],
+    n_variables: usize,
+    labels: &[&str],
+) -> DesignModel {
+    let input = Input::read(file).unwrap();
+    let base = BulkData::from_cards(&input.deck.bulk).unwrap();
+    let sub = input.case_control.subcase(1).unwrap();
+    let relations = relations
+        .iter()
+        .map(|(card, id, field, c0, terms)| {
+            PropertyRelation::new(&base, card, *id, field, *c0, terms.clone()).unwrap()
+        })
+        .collect();
+    let (_, modes) = subcase_modes(&base, &sub).unwrap();
+    DesignModel {
+        n_modes: modes.lambda.len(),
+        base,
+        sub,
+        relations,
+        requests: labels.iter().map(|l| parse_output(l).unwrap()).collect(),
+        interpolation: KInterpolation::Dense((0..=40).map(|i| k_max * i as f64 / 40.0).collect()),
+        n_variables,
+    }
+}
+
+/// The derivatives of every output's RMS and N0 and of the mass against central differences
+/// at relative steps 1e-3, 1e-4 and 1e-5: the error, relative to the value and per unit
+/// relative change of the variable, falls as h² to the differences' round-off; the best step
+/// must agree to 1e-7 (≥ 7 digits). Returns the best errors.
+fn check_against_differences(m: &DesignModel, x0: &[f64]) -> f64 {
+    let p = m.analyse(x0).unwrap();
+    let g = m.gradients(&p).unwrap();
+    let mut worst = 0.0f64;
+    for v in 0..m.n_variables {
+        let mut best = vec![f64::INFINITY; 2 * p.rows.len() + 1];
+        for rel in [1e-3, 1e-4, 1e-5] {
+            let h = rel * x0[v];
+            let at = |s: f64| {
+                let mut x = x0.to_vec();
+                x[v] += s * h;
+                m.analyse(&x).unwrap()
+            };
+            let (up, down) = (at(1.0), at(-1.0));
+            let fd_mass = (up.mass - down.mass) / (2.0 * h);
+            let e = x0[v] * (g.mass[v] - fd_mass).abs() / p.mass;
+            best[0] = best[0].min(e);
+            for (y, d) in g.outputs[v].iter().enumerate() {
+                let fd_rms = (up.rows[y].rms - down.rows[y].rms) / (2.0 * h);
+                let fd_n0 = (up.rows[y].n0_hz - down.rows[y].n0_hz) / (2.0 * h);
+                let e_rms = x0[v] * (d.d_rms - fd_rms).abs() / d.rms;
+                let e_n0 = x0[v] * (d.d_n0_hz - fd_n0).abs() / d.n0_hz;
+                eprintln!(
+                    "x{v} h {rel:.0e} {}: x dRMS/dx / RMS {:.8e} (err {e_rms:.1e}), x dN0/dx / N0 {:.8e} (err {e_n0:.1e})",
+                    d.label,
+                    x0[v] * d.d_rms / d.rms,
+                    x0[v] * d.d_n0_hz / d.n0_hz
+                );
+                best[1 + 2 * y] = best[1 + 2 * y].min(e_rms);
+                best[2 + 2 * y] = best[2 + 2 * y].min(e_n0);
+            }
+        }
+        for (i, e) in best.iter().enumerate() {
+            assert!(*e < 1e-7, "variable {v}, quantity {i}: best error {e:.1e}");
+            worst = worst.max(*e);
+        }
+    }
+    worst
+}
+
+/// The bar wing sized by three skin-thickness-like variables (each scales its PBAR's A, I1,
+/// I2 and J; PBAR 2's J shared between two variables, as a DVPREL1 with two terms): the mass
+/// derivative is ρ A₀ L of the section (lumped bars: ρAL + NSM·L, NSM and CONM2s fixed) to 1e-12, and every
+/// derivative of the tip's displacement, acceleration and the root's constraint moment
+/// matches central differences to 1e-7.
+#[test]
+fn bar_wing_design_derivatives() {
+    let sections = [
+        (1, [1.6e-3, 5.6e-7, 8.4e-8, 1.26e-7], 0.75),
+        (2, [1.2e-3, 4.0e-7, 6.0e-8, 9.0e-8], 0.75),
+        (3, [0.8e-3, 2.4e-7, 3.6e-8, 5.4e-8], 0.5),
+    ];
+    let mut relations = Vec::new();
+    for (v, (pid, dims, _)) in sections.iter().enumerate() {
+        for (field, d) in ["A", "I1", "I2", "J"].iter().zip(dims) {
+            let terms = if *pid == 2 && *field == "J" {
+                vec![(1, 0.5 * d), (2, 0.5 * d)]
+            } else {
+                vec![(v, *d)]
+            };
+            relations.push(("PBAR", *pid, *field, 0.0, terms));
+        }
+    }
+    let m = model(
+        &bar_wing(),
+        0.2,
+        &relations,
+        3,
+        &["9T3", "ACCE 9T3", "SPCF 1R1"],
+    );
+    let x0 = [1.0, 1.0, 1.0];
+    let p = m.analyse(&x0).unwrap();
+    // the bars' ρAL, their NSM of 0.6 kg/m over 2 m, eight 0.2 kg CONM2s
+    let mass = 2700.0 * (1.6e-3 * 0.75 + 1.2e-3 * 0.75 + 0.8e-3 * 0.5) + 0.6 * 2.0 + 8.0 * 0.2;
+    assert!((p.mass - mass).abs() < 1e-12 * mass, "{} {mass}", p.mass);
+    let g = m.gradients(&p).unwrap();
+    for (v, (_, dims, length)) in sections.iter().enumerate() {
+        let exact = 2700.0 * dims[0] * length;
+        assert!(
+            (g.mass[v] - exact).abs() < 1e-12 * exact,
+            "{} {exact}",
+            g.mass[v]
+        );
+    }
+    // the labels the response gives are the labels the model was asked for
+    let labels: Vec<&str> = p.rows.iter().map(|r| r.label.as_str()).collect();
+    assert_eq!(labels, ["9T3", "ACCE 9T3", "SPCF 1R1"]);
+    let worst = check_against_differences(&m, &x0);
+    eprintln!("bar wing: largest best error {worst:.1e}");
+}
+
+/// The plate wing sized by its two PSHELL thicknesses: the mass derivative is ρ × area of the
+/// PSHELL's elements (0.5 m² each; the tip CONM2 fixed) to 1e-12, and the derivatives of the
+/// tip's displacement and the root's constraint force match central differences to 1e-7.
+#[test]
+fn plate_wing_design_derivatives() {
+    let dir = common::scratch("nastran", "design-plate");
+    let file = dir.join("plate_wing.bdf");
+    std::fs::write(&file, plate_wing_deck()).unwrap();
+    let m = model(
+        &file,
+        0.35,
+        &[
+            ("PSHELL", 1, "T", 0.0, vec![(0, 1.0)]),
+            ("PSHELL", 2, "T", 0.002, vec![(1, 1.0)]),
+        ],
+        2,
+        &["15T3", "SPCF 2T3", "SPCF 1R1"],
+    );
+    let x0 = [0.012, 0.006];
+    let p = m.analyse(&x0).unwrap();
+    let mass = 2700.0 * (0.012 + 0.008) * 0.5 + 0.5;
+    assert!((p.mass - mass).abs() < 1e-12 * mass, "{} {mass}", p.mass);
+    let g = m.gradients(&p).unwrap();
+    for v in 0..2 {
+        assert!((g.mass[v] - 1350.0).abs() < 1e-12 * 1350.0, "{}", g.mass[v]);
+    }
+    let worst = check_against_differences(&m, &x0);
+    eprintln!("plate wing: largest best error {worst:.1e}");
+}
