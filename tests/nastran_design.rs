@@ -61,12 +61,15 @@ fn plate_wing_deck() -> String {
     d
 }
 
+/// One DVPREL1-like relation: card, property id, field, C0, (variable, coefficient) terms.
+type Relation<'a> = (&'a str, u32, &'a str, f64, Vec<(usize, f64)>);
+
 /// A design model of `file` with `relations` (card, id, field, c0, terms), the outputs
 /// `labels`, the DLM on 41 k to `k_max` (above the FREQ list's last frequency).
 fn model(
     file: &Path,
     k_max: f64,
-    relations: &[(&str, u32, &str, f64, Vec<(usize, f64)>)],
+    relations: &[Relation],
     n_variables: usize,
     labels: &[&str],
 ) -> DesignModel {
