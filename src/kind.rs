@@ -1,5 +1,5 @@
 //! The kinds of study file, told apart in one place: each kind has its own top-level section
-//! (`wing`, `typical_section` or `cfd`), exactly one of which a study holds. The kind is decided
+//! (`wing`, `typical_section`, `cfd` or `model`), exactly one of which a study holds. The kind is decided
 //! once, when the file is loaded (`crate::runner::LoadedStudy`), and written into results.json
 //! as `kind`, which `gustkit report` reads back instead of guessing from the layout. A leaf
 //! module: every study kind's results name it, it names none of them.
@@ -18,6 +18,8 @@ pub enum StudyKind {
     TypicalSection,
     /// A CFD verification case of the paper (NACA 64A010: Table 1, Fig. 1, Table 2).
     CfdVerification,
+    /// A Nastran model's properties designed against its random gust response.
+    NastranDesign,
 }
 
 impl StudyKind {
@@ -27,6 +29,7 @@ impl StudyKind {
             StudyKind::Wing => "wing",
             StudyKind::TypicalSection => "typical_section",
             StudyKind::CfdVerification => "cfd",
+            StudyKind::NastranDesign => "model",
         }
     }
 
@@ -36,13 +39,15 @@ impl StudyKind {
             StudyKind::Wing => "wing",
             StudyKind::TypicalSection => "typical_section",
             StudyKind::CfdVerification => "cfd_verification",
+            StudyKind::NastranDesign => "nastran_design",
         }
     }
 
-    const ALL: [StudyKind; 3] = [
+    const ALL: [StudyKind; 4] = [
         StudyKind::Wing,
         StudyKind::TypicalSection,
         StudyKind::CfdVerification,
+        StudyKind::NastranDesign,
     ];
 
     /// The kind of a study document: the one kind whose section it has.
@@ -57,7 +62,7 @@ impl StudyKind {
         match found.as_slice() {
             [k] => Ok(*k),
             [] => bail!(
-                "{}: .: unknown study kind: the file has none of the sections \"wing\" (a wing study), \"typical_section\" or \"cfd\" (a CFD verification case)",
+                "{}: .: unknown study kind: the file has none of the sections \"wing\" (a wing study), \"typical_section\", \"cfd\" (a CFD verification case) or \"model\" (a Nastran model: {{\"nastran\": \"wing.bdf\"}})",
                 file.display()
             ),
             _ => bail!(
@@ -82,7 +87,7 @@ impl StudyKind {
         };
         serde_json::from_value(kind.clone()).with_context(|| {
             format!(
-                "{}: kind: {kind} is not a study kind (wing, typical_section, cfd_verification)",
+                "{}: kind: {kind} is not a study kind (wing, typical_section, cfd_verification, nastran_design)",
                 path.display()
             )
         })

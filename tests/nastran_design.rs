@@ -218,3 +218,262 @@ fn plate_wing_design_derivatives() {
     let worst = check_against_differences(&m, &x0);
     eprintln!("plate wing: largest best error {worst:.1e}");
 }
+
+/// The shipped study as JSON, with its model path made absolute (so a copy can live anywhere).
+fn bar_wing_study() -> serde_json::Value {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/nastran_bar_wing.json");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
+    v["model"]["nastran"] = bar_wing().display().to_string().into();
+    v
+}
+
+/// Writes `study` to `dir/name.json` and runs it there; returns the output.
+fn run_study(
+    dir: &Path,
+    name: &str,
+    study: &serde_json::Value,
+    extra: &[&str],
+) -> std::process::Output {
+    let file = dir.join(format!("{name}.json"));
+    std::fs::write(&file, serde_json::to_string_pretty(study).unwrap()).unwrap();
+    common::gustkit()
+        .arg("run")
+        .arg(&file)
+        .arg("--reports")
+        .arg(dir.join("reports"))
+        .args(extra)
+        .env("RAYON_NUM_THREADS", "1")
+        .output()
+        .unwrap()
+}
+
+/// One variable scaling all three sections of the bar wing, one limit on the tip's RMS
+/// displacement: the tip RMS falls as the wing stiffens, so the lightest design meets the limit
+/// exactly. The optimizer's answer against the root of RMS(t) = limit found by bisection on
+/// the analysis alone (no gradient, no optimizer): t to 1e-6, the RMS at the limit to 1e-6.
+/// The run also re-analyses the optimum with twice the modes and reduced frequencies and
+/// writes what that moved.
+#[test]
+fn one_variable_optimum_matches_bisection() {
+    let dir = common::scratch("nastran", "design-bisection");
+    let mut v = bar_wing_study();
+    let dims = [
+        [1.6e-3, 5.6e-7, 8.4e-8, 1.26e-7],
+        [1.2e-3, 4.0e-7, 6.0e-8, 9.0e-8],
+        [0.8e-3, 2.4e-7, 3.6e-8, 5.4e-8],
+    ];
+    let mut relations = Vec::new();
+    for (pid, d) in dims.iter().enumerate() {
+        for (field, c) in ["A", "I1", "I2", "J"].iter().zip(d) {
+            relations.push(serde_json::json!({"card": "PBAR", "id": pid + 1, "field": field, "terms": {"t": c}}));
+        }
+    }
+    v["design_variables"] =
+        serde_json::json!([{"name": "t", "initial": 1.0, "lower": 0.3, "upper": 3.0}]);
+    v["properties"] = relations.clone().into();
+    v["constraints"] = serde_json::json!([{"output": "9T3", "rms_max": 0.26}]);
+    let out = run_study(&dir, "one", &v, &[]);
+    common::assert_success(&out);
+    let r: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("reports/nastran_bar_wing/results.json")).unwrap(),
+    )
+    .unwrap();
+    let t_opt = r["design_variables"][0]["final"].as_f64().unwrap();
+    // bisection on the analysis alone
+    let rel: Vec<Relation> = dims
+        .iter()
+        .enumerate()
+        .flat_map(|(pid, d)| {
+            ["A", "I1", "I2", "J"]
+                .into_iter()
+                .zip(d)
+                .map(move |(f, c)| ("PBAR", pid as u32 + 1, f, 0.0, vec![(0, *c)]))
+        })
+        .collect();
+    let m = model(&bar_wing(), 0.0, &rel, 1, &["9T3"]);
+    // the study's own k range (dense_k: 5 % beyond the last frequency)
+    let m = DesignModel {
+        interpolation: KInterpolation::Dense({
+            let k_max = 1.05 * 2.0 * std::f64::consts::PI * 19.85 * 0.25 / 170.0;
+            (0..=40).map(|i| k_max * i as f64 / 40.0).collect()
+        }),
+        ..m
+    };
+    let rms = |t: f64| m.analyse(&[t]).unwrap().rows[0].rms;
+    let (mut lo, mut hi) = (0.3, 3.0);
+    assert!(rms(lo) > 0.26 && rms(hi) < 0.26);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if rms(mid) > 0.26 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let t_root = 0.5 * (lo + hi);
+    eprintln!("optimizer t = {t_opt:.10}, bisection {t_root:.10}");
+    assert!((t_opt - t_root).abs() < 1e-6 * t_root, "{t_opt} {t_root}");
+    let c = &r["constraints"][0];
+    assert!((c["final"].as_f64().unwrap() / 0.26 - 1.0).abs() < 1e-6);
+    // the mass is linear in t: m(t) = m_fixed + t (m(1) − m_fixed)
+    let bars = 2700.0 * (1.6e-3 * 0.75 + 1.2e-3 * 0.75 + 0.8e-3 * 0.5);
+    let mass = 9.55 - bars + t_root * bars;
+    assert!((r["mass_final"].as_f64().unwrap() - mass).abs() < 1e-6 * mass);
+    assert_eq!(r["kind"], "nastran_design");
+    assert!(r["resolution"]["refined_modes"].as_u64().unwrap() == 16);
+    assert!(c["refined"].as_f64().unwrap() > 0.0);
+}
+
+/// The shipped study: converged (exit 0), both limits met, results.json, summary.md and
+/// figures written; `gustkit report` re-renders the summary from results.json to the same
+/// bytes; `--resume` of the finished run continues from its checkpoint to the same design.
+#[test]
+fn shipped_study_runs_reports_and_resumes() {
+    let dir = common::scratch("nastran", "design-shipped");
+    let v = bar_wing_study();
+    let out = run_study(&dir, "shipped", &v, &[]);
+    common::assert_success(&out);
+    let run = dir.join("reports/nastran_bar_wing");
+    for f in [
+        "results.json",
+        "summary.md",
+        "history.svg",
+        "psd_final.svg",
+        "checkpoint.json",
+    ] {
+        assert!(run.join(f).is_file(), "{f}");
+    }
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("results.json")).unwrap()).unwrap();
+    assert_eq!(r["converged"], true);
+    for c in r["constraints"].as_array().unwrap() {
+        let (value, limit) = (c["final"].as_f64().unwrap(), c["limit"].as_f64().unwrap());
+        assert!(value <= limit * (1.0 + 1e-5), "{c}");
+    }
+    assert!(r["mass_final"].as_f64().unwrap() > 0.0);
+    let summary = std::fs::read_to_string(run.join("summary.md")).unwrap();
+    std::fs::remove_file(run.join("summary.md")).unwrap();
+    let out = common::gustkit().arg("report").arg(&run).output().unwrap();
+    common::assert_success(&out);
+    assert_eq!(
+        std::fs::read_to_string(run.join("summary.md")).unwrap(),
+        summary
+    );
+    let out = run_study(&dir, "shipped", &v, &["--resume"]);
+    common::assert_success(&out);
+    let again: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("results.json")).unwrap()).unwrap();
+    assert_eq!(again["design_variables"], r["design_variables"]);
+    // a changed limit is a different problem: --resume refuses, naming the field
+    let mut changed = v.clone();
+    changed["constraints"][0]["rms_max"] = 0.2.into();
+    let out = run_study(&dir, "shipped", &changed, &["--resume"]);
+    common::assert_refused(&out, "constraints");
+}
+
+/// Limits no design within the bounds meets: the run writes everything (results.json with the
+/// reason, summary) and exits 3.
+#[test]
+fn infeasible_limits_exit_3_with_results() {
+    let dir = common::scratch("nastran", "design-infeasible");
+    let mut v = bar_wing_study();
+    v["constraints"] = serde_json::json!([{"output": "SPCF 1R1", "rms_max": 200.0}]);
+    v["optimization"]["max_iterations"] = 15.into();
+    let out = run_study(&dir, "infeasible", &v, &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    let run = dir.join("reports/nastran_bar_wing");
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("results.json")).unwrap()).unwrap();
+    assert_eq!(r["converged"], false);
+    assert!(run.join("summary.md").is_file());
+    assert!(std::fs::read_to_string(run.join("summary.md"))
+        .unwrap()
+        .contains("Not converged"));
+}
+
+/// Bad input: each a clear error (exit 1) naming the file's JSON path and the reason, and no
+/// run folder.
+#[test]
+fn bad_nastran_studies_are_refused() {
+    let dir = common::scratch("nastran", "design-bad");
+    type Edit = Box<dyn Fn(&mut serde_json::Value)>;
+    let cases: Vec<(&str, Edit, &str)> = vec![
+        (
+            "missing property",
+            Box::new(|v| v["properties"][0]["id"] = 7.into()),
+            "properties[0]: model: PBAR 7: is not a property of the model",
+        ),
+        (
+            "wrong field",
+            Box::new(|v| v["properties"][0]["field"] = "T".into()),
+            "field T cannot be a design variable",
+        ),
+        (
+            "unknown variable",
+            Box::new(|v| v["properties"][0]["terms"] = serde_json::json!({"t_rot": 1.6e-3})),
+            "properties[0].terms.t_rot: is not a design variable",
+        ),
+        (
+            "unknown grid",
+            Box::new(|v| v["constraints"][0]["output"] = "99T3".into()),
+            "constraints[0].output: names grid 99",
+        ),
+        (
+            "bad label",
+            Box::new(|v| v["constraints"][0]["output"] = "tip".into()),
+            "constraints[0].output: \"tip\" is not an output label",
+        ),
+        (
+            "no limit",
+            Box::new(|v| v["constraints"][0] = serde_json::json!({"output": "9T3"})),
+            "constraints[0].rms_max: missing",
+        ),
+        (
+            "initial outside bounds",
+            Box::new(|v| v["design_variables"][0]["initial"] = 5.0.into()),
+            "design_variables[0].initial: 5 lies outside the bounds",
+        ),
+        (
+            "missing subcase",
+            Box::new(|v| v["model"]["subcase"] = 4.into()),
+            "model.subcase: the model has no subcase 4",
+        ),
+        (
+            "missing model",
+            Box::new(|v| v["model"]["nastran"] = "nowhere.bdf".into()),
+            "model.nastran",
+        ),
+        (
+            "unknown key",
+            Box::new(|v| v["constraints"][0]["rms_maximum"] = 1.0.into()),
+            "unknown field `rms_maximum`",
+        ),
+        (
+            "objective",
+            Box::new(|v| v["objective"] = "cost".into()),
+            "objective: \"cost\" is not an objective",
+        ),
+        (
+            "idle variable",
+            Box::new(|v| {
+                v["design_variables"].as_array_mut().unwrap().push(
+                    serde_json::json!({"name": "spare", "initial": 1.0, "lower": 0.5, "upper": 2.0}),
+                )
+            }),
+            "design_variables[3]: \"spare\" moves no property",
+        ),
+    ];
+    for (name, edit, needle) in cases {
+        let mut v = bar_wing_study();
+        edit(&mut v);
+        let out = run_study(&dir, "bad", &v, &[]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{name}: {err}");
+        assert!(err.contains(needle), "{name}: {err}");
+        assert!(err.contains("bad.json"), "{name}: {err}");
+        assert!(!err.contains("panicked"), "{name}: {err}");
+        assert!(!dir.join("reports/nastran_bar_wing").exists(), "{name}");
+    }
+}

@@ -117,8 +117,9 @@ fn run_row(row: &ShippedRow) {
 
 /// Studies quick enough for every test run (DLM, a few seconds to a minute on 2 cores); the
 /// others run in `shipped_studies_end_as_the_readme_says_all`.
-const QUICK: [&str; 5] = [
+const QUICK: [&str; 6] = [
     "studies/minimal_wing.json",
+    "studies/nastran_bar_wing.json",
     "studies/agard445_dlm_analysis.json",
     "studies/agard445_flutter_m0901.json",
     "studies/agard445_dlm_sweep.json",

@@ -23,6 +23,16 @@ pub use deck::{Card, Deck, Source};
 
 use std::path::{Path, PathBuf};
 
+/// The file extensions read as Nastran input.
+pub const EXTENSIONS: [&str; 5] = ["bdf", "dat", "inp", "nas", "blk"];
+
+/// Whether `file` names a Nastran input (by its extension).
+pub fn is_nastran(file: &Path) -> bool {
+    file.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
+}
+
 /// An error in a Nastran input: where (file and line), which card or statement (and its id),
 /// and why, in words that say what to change.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

@@ -12,6 +12,7 @@ pub enum LoadedStudy {
     Wing(Box<Study>),
     TypicalSection(Box<SectionStudyFile>),
     CfdVerification(Box<CfdStudyFile>),
+    NastranDesign(Box<crate::study::nastran::NastranStudyFile>),
 }
 
 impl LoadedStudy {
@@ -29,6 +30,9 @@ impl LoadedStudy {
             StudyKind::CfdVerification => {
                 LoadedStudy::CfdVerification(Box::new(CfdStudyFile::from_value(file, &doc)?))
             }
+            StudyKind::NastranDesign => {
+                LoadedStudy::NastranDesign(Box::new(crate::study::nastran::load(file, &doc)?))
+            }
         })
     }
 
@@ -37,6 +41,7 @@ impl LoadedStudy {
             LoadedStudy::Wing(_) => StudyKind::Wing,
             LoadedStudy::TypicalSection(_) => StudyKind::TypicalSection,
             LoadedStudy::CfdVerification(_) => StudyKind::CfdVerification,
+            LoadedStudy::NastranDesign(_) => StudyKind::NastranDesign,
         }
     }
 

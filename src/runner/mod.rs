@@ -7,6 +7,7 @@ pub mod bench;
 pub mod export;
 pub mod load;
 pub mod nastran;
+mod nastran_design;
 pub mod sweep;
 pub mod wing;
 
@@ -46,6 +47,7 @@ pub fn run(file: &Path, reports: &Path, resume: bool) -> Result<Outcome> {
         LoadedStudy::CfdVerification(study) => {
             crate::verification::run(&study, reports).map(|()| Outcome::Done)
         }
+        LoadedStudy::NastranDesign(study) => nastran_design::run(&study, reports, resume),
     }
 }
 
@@ -88,6 +90,7 @@ pub fn report(dir: &Path) -> Result<()> {
             crate::verification::render(dir, &r)?;
             r.study
         }
+        StudyKind::NastranDesign => nastran_design::rerender(dir, &value).map_err(mismatch)?,
         StudyKind::Wing => {
             let r: crate::report::results::RunResults =
                 report::from_json(&results, &value).map_err(mismatch)?;

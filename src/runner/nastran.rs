@@ -14,15 +14,7 @@ use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// The file extensions read as Nastran input.
-pub const EXTENSIONS: [&str; 5] = ["bdf", "dat", "inp", "nas", "blk"];
-
-/// Whether `file` names a Nastran input (by its extension).
-pub fn is_nastran(file: &Path) -> bool {
-    file.extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
-}
+pub use crate::nastran::{is_nastran, EXTENSIONS};
 
 #[derive(Serialize, Deserialize)]
 struct ModeRow {
@@ -187,7 +179,7 @@ pub fn run(file: &Path, reports: &Path) -> Result<crate::runner::Outcome> {
 }
 
 /// The number of modes the aerodynamic analyses use: PARAM LMODES, else all found.
-fn lmodes(b: &BulkData, found: usize) -> usize {
+pub(crate) fn lmodes(b: &BulkData, found: usize) -> usize {
     b.params
         .get("LMODES")
         .and_then(|v| v.parse::<usize>().ok())
@@ -515,7 +507,7 @@ fn requests(
 
 /// The reduced frequencies of a gust response's GAFs: 41 evenly spaced to 5 % beyond the
 /// FREQ list's last frequency.
-fn dense_k(b: &BulkData, sub: &Subcase) -> Result<KInterpolation> {
+pub(crate) fn dense_k(b: &BulkData, sub: &Subcase) -> Result<KInterpolation> {
     // the DLM on reduced frequencies to 5 % beyond the FREQ list's last
     let freq_id = sub
         .selections

@@ -15,6 +15,7 @@ pub mod discrete;
 mod fidelity;
 pub mod limits;
 mod load;
+pub mod nastran;
 pub mod ranges;
 mod resolve;
 pub(crate) mod schema;

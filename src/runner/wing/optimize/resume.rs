@@ -5,8 +5,8 @@ use super::*;
 
 /// Keeps every iteration's checkpoint in `checkpoint.json` of the run folder, written
 /// atomically (a kill never leaves half a checkpoint).
-pub(super) struct FileCheckpoint {
-    pub(super) path: std::path::PathBuf,
+pub(crate) struct FileCheckpoint {
+    pub(crate) path: std::path::PathBuf,
 }
 
 impl Checkpointing for FileCheckpoint {
@@ -54,7 +54,7 @@ pub(super) fn defining_spec(study: &Study) -> Result<serde_json::Value> {
 }
 
 /// The JSON paths at which `a` and `b` differ (below `at`).
-pub(super) fn json_differences(
+pub(crate) fn json_differences(
     a: &serde_json::Value,
     b: &serde_json::Value,
     at: &str,
