@@ -83,5 +83,98 @@ fn main() -> anyhow::Result<()> {
         "{}",
         transient.line("transient response (41 times, 3 outputs)")
     );
+    design_gradients(repeat)
+}
+
+/// A cantilever plate wing of 4 × 8 CQUAD4s, each its own PSHELL (32 thickness variables), 8
+/// modes, one CAERO1 of 4 × 8 boxes on an infinite-plate spline, the bar wing's gust cards.
+fn plate_deck() -> String {
+    let mut d = String::from(
+        "SOL 146\nCEND\nSPC = 1\nMETHOD = 1\nFREQ = 40\nRANDOM = 31\nGUST = 32\nSDAMP = 20\nBEGIN BULK\n",
+    );
+    d.push_str("EIGRL,1,,,8\nMAT1,1,7.0e10,,0.3,2700.\n");
+    for iy in 0..9 {
+        for ix in 0..5 {
+            let (x, y) = (0.125 * ix as f64, 0.25 * iy as f64);
+            d.push_str(&format!("GRID,{},,{x},{y},0.\n", 1 + ix + 5 * iy));
+        }
+    }
+    for iy in 0..8 {
+        for ix in 0..4 {
+            let (e, g) = (1 + ix + 4 * iy, 1 + ix + 5 * iy);
+            d.push_str(&format!("PSHELL,{e},1,{},1\n", 0.012 - 0.0008 * iy as f64));
+            d.push_str(&format!(
+                "CQUAD4,{e},{e},{g},{},{},{}\n",
+                g + 1,
+                g + 6,
+                g + 5
+            ));
+        }
+    }
+    d.push_str("CONM2,201,45,,0.5\nSPC1,1,123456,1,THRU,5\n");
+    d.push_str("AERO,0,100.,0.5,0.4\nPARAM,MACH,0.3\n");
+    d.push_str("CAERO1,1001,1000,,8,4,,,1,+CA\n+CA,0.,0.,0.,0.5,0.,2.,0.,0.5\nPAERO1,1000\n");
+    d.push_str("SPLINE1,100,1001,1001,1032,10\nSET1,10,1,THRU,45\n");
+    d.push_str("MKAERO1,0.3,,,,,,,,+MK\n+MK,0.01,0.1,0.5,1.0\n");
+    d.push_str("GUST,32,33,0.01,0.,100.\nRLOAD1,33,34,,,35\nDAREA,34,1,3,1.\n");
+    d.push_str("TABLED1,35,,,,,,,,+TB\n+TB,0.,1.,1000.,1.,ENDT\n");
+    d.push_str("FREQ1,40,0.1,0.25,79\nRANDPS,31,1,1,1.,,36\n");
+    d.push_str("TABRND1,36,,,,,,,,+TR\n+TR,0.,1.,1000.,1.,ENDT\n");
+    d.push_str("TABDMP1,20,CRIT,,,,,,,+TD\n+TD,0.,0.02,1000.,0.02,ENDT\nENDDATA\n");
+    d
+}
+
+/// The gradients of a design study's mass and two RMS limits with respect to 32 PSHELL
+/// thicknesses: the forward mode (a sweep a variable) against the reverse mode (a sweep a
+/// limit), with the analysis beside them.
+fn design_gradients(repeat: usize) -> anyhow::Result<()> {
+    use gustkit::nastran::design::{parse_output, DesignModel, PropertyRelation};
+    let dir = std::env::temp_dir().join(format!("gustkit-bench-design-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let file = dir.join("plate32.bdf");
+    std::fs::write(&file, plate_deck())?;
+    let (base, sub) = load(&file)?;
+    let relations = (0..32)
+        .map(|e| PropertyRelation::new(&base, "PSHELL", e + 1, "T", 0.0, vec![(e as usize, 1.0)]))
+        .collect::<Result<Vec<_>, _>>()?;
+    let (_, modes) = subcase_modes(&base, &sub)?;
+    let x0: Vec<f64> = relations.iter().map(|r| r.current(&base)).collect();
+    let model = DesignModel {
+        n_modes: modes.lambda.len(),
+        base,
+        sub,
+        relations,
+        requests: ["45T3", "SPCF 3R1"]
+            .iter()
+            .map(|l| parse_output(l).expect("a label"))
+            .collect(),
+        interpolation: KInterpolation::Dense((0..=40).map(|i| 0.35 * i as f64 / 40.0).collect()),
+        n_variables: 32,
+    };
+    let p = model.analyse(&x0)?;
+    println!(
+        "design gradients (plate wing: 32 CQUAD4s, 32 PSHELL thickness variables, {} modes, 32 boxes, 2 outputs):",
+        model.n_modes
+    );
+    let analysis = measure(repeat, || {
+        let t0 = Instant::now();
+        model.analyse(&x0)?;
+        Ok(t0.elapsed().as_secs_f64())
+    })?;
+    println!("{}", analysis.line("analysis (modes, mass, response)"));
+    let forward = measure(3, || {
+        let t0 = Instant::now();
+        model.gradients(&p)?;
+        Ok(t0.elapsed().as_secs_f64())
+    })?;
+    println!("{}", forward.line("forward mode: 32 variables"));
+    let functionals = vec![vec![(1.0, 0.0), (0.0, 0.0)], vec![(0.0, 0.0), (1.0, 0.0)]];
+    let reverse = measure(repeat, || {
+        let t0 = Instant::now();
+        model.gradients_reverse(&p, &functionals)?;
+        Ok(t0.elapsed().as_secs_f64())
+    })?;
+    println!("{}", reverse.line("reverse mode: 2 limits"));
+    let _ = std::fs::remove_dir_all(&dir);
     Ok(())
 }

@@ -138,6 +138,93 @@ fn check_against_differences(m: &DesignModel, x0: &[f64]) -> f64 {
     worst
 }
 
+/// The reverse mode against the forward mode (the dot-product test): for two functionals of
+/// every output's RMS and N0 with fixed pseudo-random weights, the reverse gradient of each
+/// variable equals the forward derivatives paired with the weights to 1e-10 of the pairing's
+/// magnitude (both exact: they differ by round-off in different solves); the mass's to 1e-14.
+/// Returns the largest relative difference.
+fn check_reverse_against_forward(m: &DesignModel, x0: &[f64]) -> f64 {
+    let p = m.analyse(x0).unwrap();
+    let fwd = m.gradients(&p).unwrap();
+    let n_out = p.rows.len();
+    let weight = |f: usize, y: usize, which: usize| {
+        // a fixed, sign-changing sequence in [-1, 1]
+        (((7 * f + 3 * y + 5 * which + 1) as f64) * 0.618_033_988_75).fract() * 2.0 - 1.0
+    };
+    let functionals: Vec<Vec<(f64, f64)>> = (0..2)
+        .map(|f| {
+            (0..n_out)
+                .map(|y| {
+                    // per unit value, so that every output weighs alike
+                    (
+                        weight(f, y, 0) / p.rows[y].rms,
+                        weight(f, y, 1) / p.rows[y].n0_hz,
+                    )
+                })
+                .collect()
+        })
+        .collect();
+    let rev = m.gradients_reverse(&p, &functionals).unwrap();
+    let mut worst = 0.0f64;
+    for v in 0..m.n_variables {
+        assert!((rev.mass[v] - fwd.mass[v]).abs() <= 1e-14 * fwd.mass[v].abs());
+        for (f, seeds) in functionals.iter().enumerate() {
+            let (mut pairing, mut size) = (0.0, 0.0);
+            for (y, &(rb, nb)) in seeds.iter().enumerate() {
+                let d = &fwd.outputs[v][y];
+                pairing += rb * d.d_rms + nb * d.d_n0_hz;
+                size += (rb * d.d_rms).abs() + (nb * d.d_n0_hz).abs();
+            }
+            let diff = (rev.functionals[f][v] - pairing).abs() / size;
+            eprintln!(
+                "x{v} functional {f}: reverse {:.12e}, forward {pairing:.12e}, difference {diff:.1e}",
+                rev.functionals[f][v]
+            );
+            assert!(diff < 1e-10, "x{v} functional {f}: {diff:.1e}");
+            worst = worst.max(diff);
+        }
+    }
+    worst
+}
+
+/// The reverse mode of the bar wing's and the plate wing's responses (every output kind:
+/// displacement, acceleration, constraint force and moment, modal coordinate) against the
+/// forward mode, on the DLM's dense k and on MKAERO's k with linear interpolation.
+#[test]
+fn reverse_mode_matches_forward_mode() {
+    let relations: Vec<Relation> = vec![
+        ("PBAR", 1, "A", 0.0, vec![(0, 1.6e-3)]),
+        ("PBAR", 1, "I1", 0.0, vec![(0, 5.6e-7)]),
+        ("PBAR", 2, "I2", 0.0, vec![(1, 6.0e-8)]),
+        ("PBAR", 2, "J", 0.0, vec![(1, 4.5e-8), (2, 4.5e-8)]),
+        ("PBAR", 3, "A", 0.0, vec![(2, 0.8e-3)]),
+    ];
+    let labels = ["9T3", "9R2", "ACCE 9T3", "SPCF 1R1", "SPCF 1T3", "MODE 2"];
+    let dense = model(&bar_wing(), 0.2, &relations, 3, &labels);
+    let mut worst = check_reverse_against_forward(&dense, &[1.0, 1.0, 1.0]);
+    let k: Vec<f64> = (0..=40).map(|i| 0.2 * i as f64 / 40.0).collect();
+    let mkaero = DesignModel {
+        interpolation: KInterpolation::LinearOnMkaero(k),
+        ..dense
+    };
+    worst = worst.max(check_reverse_against_forward(&mkaero, &[0.9, 1.2, 1.1]));
+    let dir = common::scratch("nastran", "design-reverse");
+    let file = dir.join("plate_wing.bdf");
+    std::fs::write(&file, plate_wing_deck()).unwrap();
+    let plate = model(
+        &file,
+        0.35,
+        &[
+            ("PSHELL", 1, "T", 0.0, vec![(0, 1.0)]),
+            ("PSHELL", 2, "T", 0.002, vec![(1, 1.0)]),
+        ],
+        2,
+        &["15T3", "13R1", "SPCF 2T3", "SPCF 1R1"],
+    );
+    worst = worst.max(check_reverse_against_forward(&plate, &[0.012, 0.006]));
+    eprintln!("largest difference {worst:.1e}");
+}
+
 /// The bar wing sized by three skin-thickness-like variables (each scales its PBAR's A, I1,
 /// I2 and J; PBAR 2's J shared between two variables, as a DVPREL1 with two terms): the mass
 /// derivative is ρ A₀ L of the section (lumped bars: ρAL + NSM·L, NSM and CONM2s fixed) to 1e-12, and every

@@ -595,23 +595,8 @@ fn transfer_vjp(
         if !any {
             continue;
         }
-        let lam = lus[j].solve_adjoint(&eta_bar);
-        for m in 0..nm {
-            let l = lam[m];
-            // Ā_mn = −λ_m conj(η_n); Q̄_ss = −q Ā = q λ_m conj(η_n); Q̄_gs = q λ
-            let wn = p.omega_n[m];
-            let dadl = c64::new(1.0, omega * p.damping_ratio / wn);
-            lambda[m] += (-(l * eta[m].conj()).conj() * dadl).re;
-            for (i, wi) in weights.weights[j].iter().enumerate() {
-                if *wi == 0.0 {
-                    continue;
-                }
-                table.q_gs[i][m] += l * (p.q_inf * wi);
-                for n in 0..nm {
-                    table.q_ss[i][m][n] += l * eta[n].conj() * (p.q_inf * wi);
-                }
-            }
-        }
+        let at = (omega, &weights.weights[j][..], &eta[..], &lus[j]);
+        accumulate_eta_seed(p, at, &eta_bar, &mut table, &mut lambda);
     }
     debug_assert_eq!(table.k.len(), nk);
     Ok(GustGradient {
@@ -620,6 +605,36 @@ fn transfer_vjp(
         outputs,
         residual,
     })
+}
+
+/// One frequency's share of the reverse sweep from a seed η̄ on η(ω) (spline weights `w`,
+/// factorization `lu` of A(ω)): Aᴴ λ = η̄, then Q̄_gs += q λ, Q̄_ss += q λ ηᴴ and
+/// ω̄²_n,m += Re(−conj(λ_m) η_m (1 + iω ζ/ω_n,m)), spread to the table's k by the weights.
+fn accumulate_eta_seed(
+    p: &GustProblem,
+    (omega, w, eta, lu): (f64, &[f64], &[c64], &SmallLu),
+    eta_bar: &[c64],
+    table: &mut GafTable,
+    lambda: &mut [f64],
+) {
+    let nm = p.omega_n.len();
+    let lam = lu.solve_adjoint(eta_bar);
+    for m in 0..nm {
+        let l = lam[m];
+        // Ā_mn = −λ_m conj(η_n); Q̄_ss = −q Ā = q λ_m conj(η_n); Q̄_gs = q λ
+        let wn = p.omega_n[m];
+        let dadl = c64::new(1.0, omega * p.damping_ratio / wn);
+        lambda[m] += (-(l * eta[m].conj()).conj() * dadl).re;
+        for (i, wi) in w.iter().enumerate() {
+            if *wi == 0.0 {
+                continue;
+            }
+            table.q_gs[i][m] += l * (p.q_inf * wi);
+            for n in 0..nm {
+                table.q_ss[i][m][n] += l * eta[n].conj() * (p.q_inf * wi);
+            }
+        }
+    }
 }
 
 /// The tangent of η at one frequency (spline weights `w`, factorization `lu` of A(ω)) along
@@ -683,6 +698,52 @@ impl FrequencyResponse {
                 )
             })
             .collect())
+    }
+}
+
+impl FrequencyResponse {
+    /// Reverse mode of η(ω_j) (the adjoint of [`FrequencyResponse::eta_jvp`]): seeds
+    /// `eta_bar[j]` on η at each grid frequency (conjugate convention, δJ = Re Σ conj(η̄)·δη) to
+    /// seeds on the GAF table and on ω_n²; for a caller that integrates the response its own way.
+    pub fn eta_vjp(
+        &self,
+        p: &GustProblem,
+        eta_bar: &[Vec<c64>],
+    ) -> Result<GustGradient, GustError> {
+        let weights = p.check()?;
+        let nm = p.omega_n.len();
+        if eta_bar.len() != p.grid.omega.len() || eta_bar.iter().any(|e| e.len() != nm) {
+            return Err(GustError::Input(
+                "seeds: one η̄ of the problem's modes a grid frequency".into(),
+            ));
+        }
+        let flight_like = gustkit_core::FlightCondition {
+            mach: p.table.mach,
+            velocity: p.velocity,
+            density: 1.0,
+            b_ref: p.table.b_ref,
+            x_ref: p.table.x_ref,
+        };
+        let mut table = GafTable::zeros(&flight_like, &p.table.k, nm);
+        let mut lambda = vec![0.0; nm];
+        for (j, &omega) in p.grid.omega.iter().enumerate() {
+            if eta_bar[j].iter().all(|e| *e == c64::new(0.0, 0.0)) {
+                continue;
+            }
+            let at = (
+                omega,
+                &weights.weights[j][..],
+                &self.eta[j][..],
+                &self.lus[j],
+            );
+            accumulate_eta_seed(p, at, &eta_bar[j], &mut table, &mut lambda);
+        }
+        Ok(GustGradient {
+            table,
+            lambda,
+            outputs: Vec::new(),
+            residual: None,
+        })
     }
 }
 

@@ -149,8 +149,13 @@ pub fn lifting_surfaces(b: &BulkData, s: &Structure) -> R<LiftingSurfaces> {
     if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
         return Err(NastranError::model("CAERO1", format!("box id {} belongs to two panels: space the panels' EIDs by at least their box counts", w[0])));
     }
-    let dlm =
+    let n_surfaces = surfaces.len();
+    let mut dlm =
         Dlm::new(surfaces, symmetry).map_err(|e| NastranError::model("CAERO1", e.to_string()))?;
+    // a Nastran model's panels are fixed: its reverse mode needs no geometry gradient
+    for si in 0..n_surfaces {
+        dlm.set_active_geometry(si, &[]);
+    }
     Ok(LiftingSurfaces {
         dlm,
         box_ids,
@@ -371,6 +376,35 @@ pub fn modal_surface(
             let n = normals[p];
             out.disp[m][p] = [n[0] * w, n[1] * w, n[2] * w];
             out.disp_x[m][p] = [n[0] * wx, n[1] * wx, n[2] * wx];
+        }
+    }
+    out
+}
+
+/// The transpose of [`modal_surface`]: seeds on the modal surface's displacements and slopes to
+/// seeds on the g-set shapes (`ng` rows, a column a mode).
+pub fn modal_surface_vjp(
+    surf: &LiftingSurfaces,
+    rows: &SplineRows,
+    seed: &ModalSurface,
+) -> faer::Mat<f64> {
+    use gustkit_core::Aerodynamics;
+    let normals = &surf.dlm.surface().normals;
+    let ng = rows.value.ncols();
+    let n_modes = seed.n_modes();
+    let mut out = faer::Mat::<f64>::zeros(ng, n_modes);
+    for m in 0..n_modes {
+        for (p, n) in normals.iter().enumerate() {
+            let d = seed.disp[m][p];
+            let dx = seed.disp_x[m][p];
+            let w_bar = n[0] * d[0] + n[1] * d[1] + n[2] * d[2];
+            let wx_bar = n[0] * dx[0] + n[1] * dx[1] + n[2] * dx[2];
+            if w_bar == 0.0 && wx_bar == 0.0 {
+                continue;
+            }
+            for j in 0..ng {
+                out[(j, m)] += rows.value[(p, j)] * w_bar + rows.slope[(p, j)] * wx_bar;
+            }
         }
     }
     out

@@ -12,11 +12,11 @@
 
 use super::bulk::BulkData;
 use super::random::{
-    random_response, random_response_derivatives, KInterpolation, ModeDirection, Quantity,
-    RandomDerivative, RandomRow,
+    random_response, random_response_derivatives, random_response_vjp, KInterpolation,
+    ModeDirection, Quantity, RandomDerivative, RandomRow,
 };
 use super::structure::{
-    constrained, mode_derivatives, subcase_modes, BarDimension, RealModes, Structure,
+    constrained, mode_adjoint, mode_derivatives, subcase_modes, BarDimension, RealModes, Structure,
 };
 use super::{NastranError, Subcase};
 use faer::Mat;
@@ -369,6 +369,80 @@ impl DesignModel {
             .collect();
         Ok(DesignGradients { mass, outputs })
     }
+}
+
+impl DesignModel {
+    /// The reverse mode: the gradients of functionals J = Σ_y (r̄_y RMS_y + n̄_y N0_y) of the
+    /// outputs (`functionals[f][y] = (r̄_y, n̄_y)`) and of the mass with respect to every design
+    /// variable, `[functional][variable]`. Per functional: the response's reverse sweep to seeds
+    /// on the modes (`random::random_response_vjp`), one adjoint solve a mode
+    /// (`structure::mode_adjoint`), then per related field the pairing with its ∂K and ∂M — so
+    /// the cost grows with the number of functionals, not of variables.
+    pub fn gradients_reverse(
+        &self,
+        p: &DesignPoint,
+        functionals: &[Vec<(f64, f64)>],
+    ) -> R<ReverseGradients> {
+        let s = &p.structure;
+        let spc = constrained(s, &p.bulk, self.sub.selections.get("SPC").copied())?;
+        let seeds = random_response_vjp(
+            &p.bulk,
+            &self.sub,
+            s,
+            &p.modes,
+            &self.requests,
+            &self.interpolation,
+            functionals,
+        )?;
+        let which: Vec<usize> = (0..self.n_modes).collect();
+        let adjoints = seeds
+            .iter()
+            .map(|ms| mode_adjoint(s, &spc, &p.modes, &which, (&ms.lambda, &ms.phi_g)))
+            .collect::<R<Vec<_>>>()?;
+        let mut out = ReverseGradients {
+            mass: vec![0.0; self.n_variables],
+            functionals: vec![vec![0.0; self.n_variables]; functionals.len()],
+        };
+        let ng = s.k_gg.nrows();
+        for r in &self.relations {
+            let (dk, dm) = r.derivative(s, &p.bulk)?;
+            let d_mass = translational_mass(s, &dm);
+            let per_functional: Vec<f64> = adjoints
+                .iter()
+                .zip(&seeds)
+                .map(|(adj, ms)| {
+                    let mut v = adj.along(&p.modes, (&dk, &dm));
+                    // the constraint forces' rows meet ∂K φ and ∂M φ directly
+                    for (dof, k_bar, m_bar) in &ms.spc_rows {
+                        for m in 0..self.n_modes {
+                            let (mut dkp, mut dmp) = (0.0, 0.0);
+                            for j in 0..ng {
+                                dkp += dk[(*dof, j)] * p.modes.phi_g[(j, m)];
+                                dmp += dm[(*dof, j)] * p.modes.phi_g[(j, m)];
+                            }
+                            v += k_bar[m] * dkp + m_bar[m] * dmp;
+                        }
+                    }
+                    v
+                })
+                .collect();
+            for &(var, coef) in &r.terms {
+                out.mass[var] += coef * d_mass;
+                for (f, g) in per_functional.iter().enumerate() {
+                    out.functionals[f][var] += coef * g;
+                }
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// What [`DesignModel::gradients_reverse`] gives: the mass's gradient and each functional's,
+/// one entry a design variable.
+#[derive(Clone, Debug)]
+pub struct ReverseGradients {
+    pub mass: Vec<f64>,
+    pub functionals: Vec<Vec<f64>>,
 }
 
 /// Keeps the lowest `n` modes.

@@ -49,6 +49,22 @@ pub fn spectral_moments(freqs: &[f64], psd: &[f64]) -> (f64, f64) {
     (m0, m2)
 }
 
+/// The weights of [`spectral_moments`]: m₀ = Σ w₀ᵢ PSDᵢ and m₂ = Σ w₂ᵢ PSDᵢ (the moments are
+/// linear in the PSD), for the reverse mode.
+pub fn spectral_moment_weights(freqs: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let n = freqs.len();
+    let (mut w0, mut w2) = (vec![0.0; n], vec![0.0; n]);
+    for i in 1..n {
+        let (fa, fb) = (freqs[i - 1], freqs[i]);
+        let h = fb - fa;
+        w0[i - 1] += 0.5 * h;
+        w0[i] += 0.5 * h;
+        w2[i - 1] += h * (3.0 * fa * fa + 2.0 * fa * fb + fb * fb) / 12.0;
+        w2[i] += h * (fa * fa + 2.0 * fa * fb + 3.0 * fb * fb) / 12.0;
+    }
+    (w0, w2)
+}
+
 /// The gust's input spectrum of a RANDOM set: RANDPS's X times its TABRND1 (1 without one).
 struct GustSpectrum<'a> {
     x: f64,
@@ -196,22 +212,8 @@ pub fn random_response_derivatives(
     let input = gust_spectrum(b, sub)?;
     let sol = super::response::gust_frequency_solution(b, sub, s, modes, interpolation)?;
     let n = sol.response.n_modes;
-    if let Some(id) = sub.selections.get("SDAMPING") {
-        if let Some(t) = b.tables.get(id) {
-            for f in &modes.freq_hz()[..n] {
-                let v = table_value(t, *f);
-                let flat = [0.999_999, 1.000_001]
-                    .iter()
-                    .all(|c| (table_value(t, f * c) - v).abs() <= 1e-12 * v.abs());
-                if !flat {
-                    return Err(NastranError::model(
-                        &format!("SDAMP = {id}"),
-                        format!("its damping changes with frequency at {f:.4} Hz (a retained mode's): the derivative holds the modal damping fixed; give a table flat over the modes' frequencies"),
-                    ));
-                }
-            }
-        }
-    }
+    check_flat_damping(b, sub, modes, n)?;
+    check_mode_norm(b, sub, requests)?;
     let rows = super::response::output_rows(b, sub, s, modes, n, requests)?;
     directions
         .iter()
@@ -343,9 +345,204 @@ fn derivative_along(
         .collect()
 }
 
+/// Seeds on the modes of a functional of the random response (the reverse mode of
+/// [`random_response`] up to the modes): ∂J/∂λ, ∂J/∂φ (g-set) and, for the constraint forces'
+/// rows (K φ)[dof] and (M φ)[dof], their seeds per mode, which a design direction's ∂K and ∂M
+/// meet directly.
+#[derive(Clone, Debug)]
+pub struct ModeSeeds {
+    pub lambda: Vec<f64>,
+    pub phi_g: faer::Mat<f64>,
+    /// (g dof, k̄ per mode, m̄ per mode) of every SPCF row with a seed.
+    pub spc_rows: Vec<(usize, Vec<f64>, Vec<f64>)>,
+}
+
+/// The reverse mode of the RMS and N0 of `requests`: for each functional J = Σ_y (r̄_y RMS_y +
+/// n̄_y N0_y) (`functionals[f][y] = (r̄_y, n̄_y)`), the seeds on the modes ([`ModeSeeds`]),
+/// sharing the response: the spectral moments' and the PSD's transposes, η̄ per frequency, the
+/// modal problem's adjoint (`FrequencyResponse::eta_vjp`), the DLM's reverse mode through the
+/// splines' transpose, and the rows' own seeds. The modal damping is held fixed, as in the
+/// forward mode; modal coordinates are supported in the MASS normalization only (a MAX one
+/// moves with the shape).
+pub fn random_response_vjp(
+    b: &BulkData,
+    sub: &Subcase,
+    s: &Structure,
+    modes: &RealModes,
+    requests: &[(u32, u8, Quantity)],
+    interpolation: &KInterpolation,
+    functionals: &[Vec<(f64, f64)>],
+) -> R<Vec<ModeSeeds>> {
+    use faer::c64;
+    let input = gust_spectrum(b, sub)?;
+    let sol = super::response::gust_frequency_solution(b, sub, s, modes, interpolation)?;
+    let n = sol.response.n_modes;
+    check_flat_damping(b, sub, modes, n)?;
+    check_mode_norm(b, sub, requests)?;
+    let rows = super::response::output_rows(b, sub, s, modes, n, requests)?;
+    let r = &sol.response;
+    let freqs = &r.frequencies_hz;
+    let (w0, w2) = spectral_moment_weights(freqs);
+    let mut grid_index = vec![None; freqs.len()];
+    for (j, &i) in sol.live.iter().enumerate() {
+        grid_index[i] = Some(j);
+    }
+    let ms = super::aero::modal_surface(&sol.surf, &sol.rows, modes, n);
+    let outputs: Vec<Vec<c64>> = rows.iter().map(|row| r.output(row)).collect();
+    functionals
+        .iter()
+        .map(|seeds| {
+            if seeds.len() != rows.len() {
+                return Err(NastranError::model(
+                    "reverse mode",
+                    format!("{} seeds for {} outputs", seeds.len(), rows.len()),
+                ));
+            }
+            let zero = c64::new(0.0, 0.0);
+            let mut eta_bar = vec![vec![zero; n]; sol.live.len()];
+            let mut k_bar = vec![vec![0.0; n]; rows.len()];
+            let mut m_bar = vec![vec![0.0; n]; rows.len()];
+            for (y, row) in rows.iter().enumerate() {
+                let (rms_bar, n0_bar) = seeds[y];
+                if rms_bar == 0.0 && n0_bar == 0.0 {
+                    continue;
+                }
+                let ys = &outputs[y];
+                let psd: Vec<f64> = ys
+                    .iter()
+                    .zip(freqs)
+                    .map(|(v, &f)| v.norm_sqr() * input.at(f))
+                    .collect();
+                let (m0, m2) = spectral_moments(freqs, &psd);
+                let rms = m0.sqrt();
+                let n0 = if m0 > 0.0 { (m2 / m0).sqrt() } else { 0.0 };
+                // RMS = √m₀, N0 = √(m₂/m₀)
+                let mut m0_bar = if rms > 0.0 {
+                    rms_bar / (2.0 * rms)
+                } else {
+                    0.0
+                };
+                let mut m2_bar = 0.0;
+                if n0 > 0.0 {
+                    m0_bar -= n0_bar * m2 / (2.0 * n0 * m0 * m0);
+                    m2_bar += n0_bar / (2.0 * n0 * m0);
+                }
+                for (i, &f) in freqs.iter().enumerate() {
+                    let (Some(eta), Some(j)) = (&r.eta[i], grid_index[i]) else {
+                        continue;
+                    };
+                    // PSD = |y|² X: ȳ = 2 X PSD̄ y (conjugate convention)
+                    let psd_bar = m0_bar * w0[i] + m2_bar * w2[i];
+                    let y_bar = ys[i] * (2.0 * input.at(f) * psd_bar);
+                    let w2f = (2.0 * std::f64::consts::PI * f).powi(2);
+                    for m in 0..n {
+                        let c = r.load[i] * (row.k_row[m] - w2f * row.m_row[m]);
+                        eta_bar[j][m] += c.conj() * y_bar;
+                        let t = (y_bar.conj() * r.load[i] * eta[m]).re;
+                        k_bar[y][m] += t;
+                        m_bar[y][m] -= w2f * t;
+                    }
+                }
+            }
+            let g = sol.eta_vjp(&eta_bar)?;
+            let surface_bar = sol.gafs_vjp_of(b, &ms, &g.table)?;
+            let mut phi_g = super::aero::modal_surface_vjp(&sol.surf, &sol.rows, &surface_bar);
+            let mut spc_rows = Vec::new();
+            for (y, &(grid, comp, quantity)) in requests.iter().enumerate() {
+                if k_bar[y].iter().chain(&m_bar[y]).all(|v| *v == 0.0) {
+                    continue;
+                }
+                let dof = || s.dof(grid, comp).expect("output_rows checked the grid");
+                match quantity {
+                    Quantity::Displacement => {
+                        for m in 0..n {
+                            phi_g[(dof(), m)] += k_bar[y][m];
+                        }
+                    }
+                    Quantity::Acceleration => {
+                        for m in 0..n {
+                            phi_g[(dof(), m)] += m_bar[y][m];
+                        }
+                    }
+                    // the MASS normalization's scale is 1, whatever the shape
+                    Quantity::Mode => {}
+                    Quantity::SpcForce => {
+                        let d = dof();
+                        for m in 0..n {
+                            for j in 0..phi_g.nrows() {
+                                phi_g[(j, m)] +=
+                                    k_bar[y][m] * s.k_gg[(d, j)] + m_bar[y][m] * s.m_gg[(d, j)];
+                            }
+                        }
+                        spc_rows.push((d, k_bar[y].clone(), m_bar[y].clone()));
+                    }
+                }
+            }
+            Ok(ModeSeeds {
+                lambda: g.lambda,
+                phi_g,
+                spc_rows,
+            })
+        })
+        .collect()
+}
+
+/// Refuses a derivative through an SDAMP table that is not flat at a retained mode's frequency
+/// (the derivatives hold the modal damping fixed).
+fn check_flat_damping(b: &BulkData, sub: &Subcase, modes: &RealModes, n: usize) -> R<()> {
+    let Some(id) = sub.selections.get("SDAMPING") else {
+        return Ok(());
+    };
+    let Some(t) = b.tables.get(id) else {
+        return Ok(());
+    };
+    for f in &modes.freq_hz()[..n] {
+        let v = table_value(t, *f);
+        let flat = [0.999_999, 1.000_001]
+            .iter()
+            .all(|c| (table_value(t, f * c) - v).abs() <= 1e-12 * v.abs());
+        if !flat {
+            return Err(NastranError::model(
+                &format!("SDAMP = {id}"),
+                format!("its damping changes with frequency at {f:.4} Hz (a retained mode's): the derivative holds the modal damping fixed; give a table flat over the modes' frequencies"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a derivative of modal coordinates in the MAX normalization (its scale, the shape's
+/// largest component, moves with the design).
+fn check_mode_norm(b: &BulkData, sub: &Subcase, requests: &[(u32, u8, Quantity)]) -> R<()> {
+    let norm = sub
+        .selections
+        .get("METHOD")
+        .and_then(|m| b.eigr.get(m))
+        .map_or("MASS", |e| e.norm.as_str());
+    if requests.iter().any(|r| r.2 == Quantity::Mode) && norm == "MAX" {
+        return Err(NastranError::model(
+            "SDISPLACEMENT",
+            "derivatives of modal coordinates are taken in the MASS normalization: NORM MAX scales them by the shape's largest component, which moves with the design; give the EIGR/EIGRL NORM MASS".into(),
+        ));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::spectral_moments;
+
+    /// The weights reproduce the moments on an uneven list to 1e-14.
+    #[test]
+    fn moment_weights_match_the_moments() {
+        let f = [0.5, 0.7, 1.3, 2.0, 2.2, 3.0];
+        let s = [0.3, 1.7, 0.2, 4.0, 0.9, 0.1];
+        let (m0, m2) = spectral_moments(&f, &s);
+        let (w0, w2) = super::spectral_moment_weights(&f);
+        let dot = |w: &[f64]| w.iter().zip(&s).map(|(a, b)| a * b).sum::<f64>();
+        assert!((dot(&w0) - m0).abs() < 1e-14 * m0);
+        assert!((dot(&w2) - m2).abs() < 1e-14 * m2);
+    }
 
     /// The moments are exact for a PSD linear between the frequencies: S = 2 − f/2 on an
     /// uneven list over [0.5, 3] against ∫S df = [2f − f²/4] and ∫f²S df = [2f³/3 − f⁴/8] to

@@ -272,6 +272,32 @@ impl GustSolution {
         )
     }
 
+    /// The reverse mode of [`GustSolution::gafs_of`]: seeds on the table to seeds on the modal
+    /// surface.
+    pub fn gafs_vjp_of(
+        &self,
+        b: &BulkData,
+        ms: &gustkit_core::ModalSurface,
+        seed: &gustkit_core::GafTable,
+    ) -> R<gustkit_core::ModalSurface> {
+        gaf_table_vjp(
+            b,
+            &self.surf,
+            &self.flight,
+            ms,
+            (&self.interpolation, self.mach),
+            seed,
+        )
+    }
+
+    /// The reverse mode of η at the grid's frequencies (one seed a grid frequency, conjugate
+    /// convention) to seeds on the GAF table and ω_n².
+    pub fn eta_vjp(&self, eta_bar: &[Vec<c64>]) -> R<crate::gust::GustGradient> {
+        self.fr
+            .eta_vjp(&self.problem(), eta_bar)
+            .map_err(|e| NastranError::model("frequency response", e.to_string()))
+    }
+
     /// The forward mode of η at the grid's frequencies along the GAF table and ω_n².
     pub fn eta_jvp(&self, d_table: &gustkit_core::GafTable, d_lambda: &[f64]) -> R<Vec<Vec<c64>>> {
         self.fr
@@ -318,38 +344,13 @@ fn gaf_table(
     Ok(match interpolation {
         KInterpolation::Dense(k) => surf.dlm.gafs(flight, ms, k).map_err(dlm_error)?,
         KInterpolation::LinearOnMkaero(k) => {
-            let mut ks: Vec<f64> = b
-                .mkaero
-                .iter()
-                .filter(|m| (m.0 - mach).abs() < 1e-9)
-                .map(|m| m.1)
-                .collect();
-            ks.sort_by(f64::total_cmp);
-            ks.dedup();
-            if ks.is_empty() {
-                return Err(NastranError::model(
-                    "MKAERO1",
-                    format!("has no reduced frequency at Mach {mach}"),
-                ));
-            }
+            let ks = mkaero_k(b, mach)?;
             let coarse = surf.dlm.gafs(flight, ms, &ks).map_err(dlm_error)?;
             // every entry comes from the MKAERO table: no DLM solve at the fine k
             gustkit_core::aero::check_reduced_frequencies(k).map_err(dlm_error)?;
             let mut t = gustkit_core::GafTable::zeros(flight, k, ms.n_modes());
             for (i, &kk) in k.iter().enumerate() {
-                let seg = ks.windows(2).position(|w| kk >= w[0] && kk <= w[1]);
-                let last = ks.len() - 1;
-                let (a, bb, u) = match seg {
-                    Some(j) => (j, j + 1, (kk - ks[j]) / (ks[j + 1] - ks[j])),
-                    // beyond the ends: the end segments' lines, extrapolated
-                    None if ks.len() == 1 => (0, 0, 0.0),
-                    None if kk < ks[0] => (0, 1, (kk - ks[0]) / (ks[1] - ks[0])),
-                    None => (
-                        last - 1,
-                        last,
-                        (kk - ks[last - 1]) / (ks[last] - ks[last - 1]),
-                    ),
-                };
+                let (a, bb, u) = mkaero_segment(&ks, kk);
                 let mix = |x: c64, y: c64| x * (1.0 - u) + y * u;
                 for r in 0..t.q_ss[i].len() {
                     for c in 0..t.q_ss[i][r].len() {
@@ -361,6 +362,78 @@ fn gaf_table(
             t
         }
     })
+}
+
+/// The MKAERO reduced frequencies at `mach`, sorted, without repeats.
+fn mkaero_k(b: &BulkData, mach: f64) -> R<Vec<f64>> {
+    let mut ks: Vec<f64> = b
+        .mkaero
+        .iter()
+        .filter(|m| (m.0 - mach).abs() < 1e-9)
+        .map(|m| m.1)
+        .collect();
+    ks.sort_by(f64::total_cmp);
+    ks.dedup();
+    if ks.is_empty() {
+        return Err(NastranError::model(
+            "MKAERO1",
+            format!("has no reduced frequency at Mach {mach}"),
+        ));
+    }
+    Ok(ks)
+}
+
+/// Where k lies on the sorted MKAERO list `ks`: the two entries it is linear between and its
+/// fraction u of the way (beyond the ends, the end segments' lines, extrapolated).
+fn mkaero_segment(ks: &[f64], kk: f64) -> (usize, usize, f64) {
+    let seg = ks.windows(2).position(|w| kk >= w[0] && kk <= w[1]);
+    let last = ks.len() - 1;
+    match seg {
+        Some(j) => (j, j + 1, (kk - ks[j]) / (ks[j + 1] - ks[j])),
+        None if ks.len() == 1 => (0, 0, 0.0),
+        None if kk < ks[0] => (0, 1, (kk - ks[0]) / (ks[1] - ks[0])),
+        None => (
+            last - 1,
+            last,
+            (kk - ks[last - 1]) / (ks[last] - ks[last - 1]),
+        ),
+    }
+}
+
+/// The reverse mode of [`gaf_table`]: seeds on the table (its reduced frequencies, conjugate
+/// convention) to seeds on the modal surface's displacements and slopes, through the DLM's
+/// reverse mode (and, on MKAERO's k, the transposed linear interpolation).
+fn gaf_table_vjp(
+    b: &BulkData,
+    surf: &super::aero::LiftingSurfaces,
+    flight: &FlightCondition,
+    ms: &gustkit_core::ModalSurface,
+    (interpolation, mach): (&KInterpolation, f64),
+    seed: &gustkit_core::GafTable,
+) -> R<gustkit_core::ModalSurface> {
+    use gustkit_core::AerodynamicsReverse;
+    let dlm_error = |e: gustkit_core::AeroError| NastranError::model("DLM", e.to_string());
+    let g = match interpolation {
+        KInterpolation::Dense(k) => surf.dlm.gafs_vjp(flight, ms, k, seed),
+        KInterpolation::LinearOnMkaero(k) => {
+            let ks = mkaero_k(b, mach)?;
+            let n = ms.n_modes();
+            let mut coarse = gustkit_core::GafTable::zeros(flight, &ks, n);
+            for (i, &kk) in k.iter().enumerate() {
+                let (a, bb, u) = mkaero_segment(&ks, kk);
+                for r in 0..n {
+                    for c in 0..n {
+                        coarse.q_ss[a][r][c] += seed.q_ss[i][r][c] * (1.0 - u);
+                        coarse.q_ss[bb][r][c] += seed.q_ss[i][r][c] * u;
+                    }
+                    coarse.q_gs[a][r] += seed.q_gs[i][r] * (1.0 - u);
+                    coarse.q_gs[bb][r] += seed.q_gs[i][r] * u;
+                }
+            }
+            surf.dlm.gafs_vjp(flight, ms, &ks, &coarse)
+        }
+    };
+    Ok(g.map_err(dlm_error)?.modes)
 }
 
 /// [`gust_frequency_response`] with what it solved kept ([`GustSolution`]).

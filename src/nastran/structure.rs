@@ -1879,6 +1879,172 @@ fn bar_local<T: ScalarOps>(
     Ok((k, m))
 }
 
+fn vdot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>()
+}
+
+/// The checks a mode's derivative needs: mass-normalized, and its root not repeated.
+fn check_mode(modes: &RealModes, i: usize, phi: &[f64], m_phi: &[f64]) -> R<()> {
+    let lambda = modes.lambda[i];
+    if !((vdot(phi, m_phi) - 1.0).abs() < 1e-8) {
+        return Err(NastranError::model(
+            &format!("mode {}", i + 1),
+            format!("is not mass-normalized (φᵀMφ = {:.6e}): the derivative is taken of the mass-normalized modes `real_modes` and `subcase_modes` give (whatever the EIGR/EIGRL NORM, which scales only the printed modal coordinates)", vdot(phi, m_phi)),
+        ));
+    }
+    // a root repeated within the solution's accuracy (the dense solve finds every root)
+    if let Some(j) = (0..modes.lambda.len()).find(|&j| {
+        j != i && (modes.lambda[j] - lambda).abs() <= 1e-8 * lambda.abs().max(f64::MIN_POSITIVE)
+    }) {
+        return Err(NastranError::model(
+            &format!("mode {}", i + 1),
+            format!(
+                "its eigenvalue {lambda:.6e} is repeated (mode {} has the same to 1e-8): a repeated root has no derivative of its own mode shape (the pair's shapes mix under any change); derive a quantity of the pair (the sum of their responses) or break the symmetry",
+                j + 1
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Solves (K − λM) v = rhs with the row and column of φ's largest component removed (v zero
+/// there): Nelson's system, symmetric, so its adjoint is the same solve. A nearly repeated root
+/// leaves it singular: refused.
+fn pivoted_solve(
+    (k, m): (&Mat<f64>, &Mat<f64>),
+    (i, lambda): (usize, f64),
+    phi: &[f64],
+    rhs: &[f64],
+) -> R<Vec<f64>> {
+    use faer::prelude::Solve;
+    let n = k.nrows();
+    let pivot = (0..n)
+        .max_by(|&a, &b| phi[a].abs().total_cmp(&phi[b].abs()))
+        .expect("an a-set has components");
+    let full = |r: usize| if r < pivot { r } else { r + 1 };
+    let a = Mat::<f64>::from_fn(n - 1, n - 1, |r, c| {
+        k[(full(r), full(c))] - lambda * m[(full(r), full(c))]
+    });
+    let rhs_red = Mat::<f64>::from_fn(n - 1, 1, |r, _| rhs[full(r)]);
+    let v_red = a.full_piv_lu().solve(&rhs_red);
+    let mut v = vec![0.0; n];
+    for r in 0..n - 1 {
+        v[full(r)] = v_red[(r, 0)];
+    }
+    // a repeated eigenvalue leaves the reduced matrix singular: the solve is not finite or
+    // does not satisfy its equations
+    let residual = (0..n - 1)
+        .map(|r| {
+            let row: f64 = (0..n - 1).map(|c| a[(r, c)] * v_red[(c, 0)]).sum();
+            (row - rhs_red[(r, 0)]).abs()
+        })
+        .fold(0.0f64, f64::max);
+    let rhs_n = (0..n - 1)
+        .map(|r| rhs_red[(r, 0)].abs())
+        .fold(0.0f64, f64::max);
+    let scale = (0..n).map(|r| k[(r, r)].abs()).fold(0.0f64, f64::max);
+    let v_n = v.iter().map(|x| x.abs()).fold(0.0f64, f64::max);
+    if v.iter().any(|x| !x.is_finite()) || residual > 1e-8 * (rhs_n + scale * v_n) {
+        return Err(NastranError::model(
+            &format!("mode {}", i + 1),
+            format!(
+                "its eigenvalue {lambda:.6e} is nearly repeated: K − λM without the pivot's row and column is singular to the solution's accuracy"
+            ),
+        ));
+    }
+    Ok(v)
+}
+
+/// The adjoint of [`mode_derivatives`] for seeds λ̄ᵢ and φ̄ᵢ (g-set columns) on the modes
+/// `which`: per mode a g-set vector uᵢ and a scalar cᵢ such that, for every design direction
+/// (∂K, ∂M),
+///   Σᵢ λ̄ᵢ ∂λᵢ + φ̄ᵢᵀ ∂φᵢ = Σᵢ uᵢᵀ (∂K − λᵢ ∂M) φᵢ − cᵢ φᵢᵀ ∂M φᵢ,
+/// from Nelson's ∂φ = v − (φᵀMv + ½ φᵀ∂Mφ) φ: with w = φ̄ − (φ̄ᵀφ) Mφ (a-set) and (K − λM) ψ = w
+/// on the pivoted system, uᵢ = λ̄ᵢ φᵢ − ψ̃ᵢ, ψ̃ = ψ − (ψᵀMφ) φ, cᵢ = ½ φ̄ᵢᵀφᵢ. One solve a mode
+/// whatever the number of design variables (the forward mode needs one a mode and variable).
+pub fn mode_adjoint(
+    s: &Structure,
+    spc: &BTreeSet<usize>,
+    modes: &RealModes,
+    which: &[usize],
+    (lambda_bar, phi_bar_g): (&[f64], &Mat<f64>),
+) -> R<ModeAdjoint> {
+    let (t, _) = s.reduction(spc)?;
+    let sym = |a: Mat<f64>| {
+        let n = a.nrows();
+        Mat::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]))
+    };
+    let k = sym(t.transpose() * &s.k_gg * &t);
+    let m = sym(t.transpose() * &s.m_gg * &t);
+    let n = k.nrows();
+    let ng = t.nrows();
+    let phi_bar_a = t.transpose() * phi_bar_g;
+    let mut u_g = Mat::<f64>::zeros(ng, which.len());
+    let mut c = Vec::with_capacity(which.len());
+    for (col, &i) in which.iter().enumerate() {
+        let lambda = modes.lambda[i];
+        let phi: Vec<f64> = modes.phi_a.col(i).iter().copied().collect();
+        let m_phi: Vec<f64> = (0..n)
+            .map(|r| (0..n).map(|q| m[(r, q)] * phi[q]).sum())
+            .collect();
+        check_mode(modes, i, &phi, &m_phi)?;
+        let bar: Vec<f64> = phi_bar_a.col(col).iter().copied().collect();
+        let along = vdot(&bar, &phi);
+        let w: Vec<f64> = bar
+            .iter()
+            .zip(&m_phi)
+            .map(|(b, mp)| b - along * mp)
+            .collect();
+        let psi = pivoted_solve((&k, &m), (i, lambda), &phi, &w)?;
+        let psi_m_phi = vdot(&psi, &m_phi);
+        let u_a: Vec<f64> = (0..n)
+            .map(|r| lambda_bar[col] * phi[r] - (psi[r] - psi_m_phi * phi[r]))
+            .collect();
+        for r in 0..ng {
+            u_g[(r, col)] = (0..n).map(|q| t[(r, q)] * u_a[q]).sum();
+        }
+        c.push(0.5 * along);
+    }
+    Ok(ModeAdjoint {
+        which: which.to_vec(),
+        u_g,
+        c,
+    })
+}
+
+/// What [`mode_adjoint`] gives: per mode the g-set vector uᵢ (a column) and the scalar cᵢ.
+#[derive(Clone, Debug)]
+pub struct ModeAdjoint {
+    pub which: Vec<usize>,
+    pub u_g: Mat<f64>,
+    pub c: Vec<f64>,
+}
+
+impl ModeAdjoint {
+    /// Σᵢ λ̄ᵢ ∂λᵢ + φ̄ᵢᵀ ∂φᵢ along one design direction (∂K, ∂M in the g-set).
+    pub fn along(&self, modes: &RealModes, (dk_g, dm_g): (&Mat<f64>, &Mat<f64>)) -> f64 {
+        let ng = dk_g.nrows();
+        let mut total = 0.0;
+        for (col, &i) in self.which.iter().enumerate() {
+            let phi = modes.phi_g.col(i);
+            let lambda = modes.lambda[i];
+            for r in 0..ng {
+                let (mut dk_phi, mut dm_phi) = (0.0, 0.0);
+                for q in 0..ng {
+                    let p = phi[q];
+                    if p != 0.0 {
+                        dk_phi += dk_g[(r, q)] * p;
+                        dm_phi += dm_g[(r, q)] * p;
+                    }
+                }
+                total +=
+                    self.u_g[(r, col)] * (dk_phi - lambda * dm_phi) - self.c[col] * phi[r] * dm_phi;
+            }
+        }
+        total
+    }
+}
+
 /// Exact derivatives of mass-normalized real modes (as [`real_modes`] gives them) along one
 /// design direction (∂K, ∂M in the g-set, e.g. from [`Structure::shell_thickness_derivative`]
 /// or [`Structure::bar_property_derivative`]) for the modes `which` of `modes` (solved by
@@ -1895,7 +2061,6 @@ pub fn mode_derivatives(
     (dk_g, dm_g): (&Mat<f64>, &Mat<f64>),
     which: &[usize],
 ) -> R<Vec<(f64, Vec<f64>)>> {
-    use faer::prelude::Solve;
     let (t, _) = s.reduction(spc)?;
     let sym = |a: Mat<f64>| {
         let n = a.nrows();
@@ -1920,62 +2085,13 @@ pub fn mode_derivatives(
             let dk_phi = times(&dk, &phi_v);
             let dm_phi = times(&dm, &phi_v);
             let m_phi = times(&m, &phi_v);
-            let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
-            if !((dot(&phi_v, &m_phi) - 1.0).abs() < 1e-8) {
-                return Err(NastranError::model(
-                    &format!("mode {}", i + 1),
-                    format!("is not mass-normalized (φᵀMφ = {:.6e}): the derivative is taken of the mass-normalized modes `real_modes` and `subcase_modes` give (whatever the EIGR/EIGRL NORM, which scales only the printed modal coordinates)", dot(&phi_v, &m_phi)),
-                ));
-            }
-            // a root repeated within the solution's accuracy (the dense solve finds every root)
-            if let Some(j) = (0..modes.lambda.len()).find(|&j| {
-                j != i && (modes.lambda[j] - lambda).abs() <= 1e-8 * lambda.abs().max(f64::MIN_POSITIVE)
-            }) {
-                return Err(NastranError::model(
-                    &format!("mode {}", i + 1),
-                    format!(
-                        "its eigenvalue {lambda:.6e} is repeated (mode {} has the same to 1e-8): a repeated root has no derivative of its own mode shape (the pair's shapes mix under any change); derive a quantity of the pair (the sum of their responses) or break the symmetry",
-                        j + 1
-                    ),
-                ));
-            }
-            let d_lambda = dot(&phi_v, &dk_phi) - lambda * dot(&phi_v, &dm_phi);
-            let pivot = (0..n)
-                .max_by(|&a, &b| phi_v[a].abs().total_cmp(&phi_v[b].abs()))
-                .expect("an a-set has components");
-            let full = |r: usize| if r < pivot { r } else { r + 1 };
-            let a = Mat::<f64>::from_fn(n - 1, n - 1, |r, c| {
-                k[(full(r), full(c))] - lambda * m[(full(r), full(c))]
-            });
-            let rhs = Mat::<f64>::from_fn(n - 1, 1, |r, _| {
-                let r = full(r);
-                -(dk_phi[r] - lambda * dm_phi[r]) + d_lambda * m_phi[r]
-            });
-            let v_red = a.full_piv_lu().solve(&rhs);
-            let mut v = vec![0.0; n];
-            for r in 0..n - 1 {
-                v[full(r)] = v_red[(r, 0)];
-            }
-            // a repeated eigenvalue leaves the reduced matrix singular: the solve is not finite
-            // or does not satisfy its equations
-            let residual = (0..n - 1)
-                .map(|r| {
-                    let row: f64 = (0..n - 1).map(|c| a[(r, c)] * v_red[(c, 0)]).sum();
-                    (row - rhs[(r, 0)]).abs()
-                })
-                .fold(0.0f64, f64::max);
-            let rhs_n = (0..n - 1).map(|r| rhs[(r, 0)].abs()).fold(0.0f64, f64::max);
-            let scale = (0..n).map(|r| k[(r, r)].abs()).fold(0.0f64, f64::max);
-            let v_n = v.iter().map(|x| x.abs()).fold(0.0f64, f64::max);
-            if v.iter().any(|x| !x.is_finite()) || residual > 1e-8 * (rhs_n + scale * v_n) {
-                return Err(NastranError::model(
-                    &format!("mode {}", i + 1),
-                    format!(
-                        "its eigenvalue {lambda:.6e} is nearly repeated: K − λM without the pivot's row and column is singular to the solution's accuracy"
-                    ),
-                ));
-            }
-            let c = -(dot(&m_phi, &v) + 0.5 * dot(&phi_v, &dm_phi));
+            check_mode(modes, i, &phi_v, &m_phi)?;
+            let d_lambda = vdot(&phi_v, &dk_phi) - lambda * vdot(&phi_v, &dm_phi);
+            let rhs: Vec<f64> = (0..n)
+                .map(|r| -(dk_phi[r] - lambda * dm_phi[r]) + d_lambda * m_phi[r])
+                .collect();
+            let v = pivoted_solve((&k, &m), (i, lambda), &phi_v, &rhs)?;
+            let c = -(vdot(&m_phi, &v) + 0.5 * vdot(&phi_v, &dm_phi));
             let d_phi_a: Vec<f64> = v.iter().zip(&phi_v).map(|(x, p)| x + c * p).collect();
             let ng = t.nrows();
             let d_phi_g = (0..ng)
