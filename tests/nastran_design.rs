@@ -513,6 +513,11 @@ fn bad_nastran_studies_are_refused() {
             "constraints[0].output: \"tip\" is not an output label",
         ),
         (
+            "unknown monitor",
+            Box::new(|v| v["constraints"][0]["output"] = "ROOT CMX".into()),
+            "constraints[0].output: \"ROOT CMX\" is no output of the model (its monitor components: none",
+        ),
+        (
             "no limit",
             Box::new(|v| v["constraints"][0] = serde_json::json!({"output": "9T3"})),
             "constraints[0].rms_max: missing",
@@ -563,4 +568,48 @@ fn bad_nastran_studies_are_refused() {
         assert!(!err.contains("panicked"), "{name}: {err}");
         assert!(!dir.join("reports/nastran_bar_wing").exists(), "{name}");
     }
+}
+
+/// The bar wing with a monitor point at the mid-span station (y = 0.75 m) summing the loads of
+/// the outboard grids 4–9: shear CZ, bending CMX and torsion CMY.
+fn bar_wing_with_monitor(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(bar_wing()).unwrap();
+    let cards = "MONPNT1 MID     OUTBOARD LOADS                                          +MON1\n\
+                 +MON1   345     WING    0       0.      0.75    0.                      \n\
+                 AECOMP  WING    SET1    78                                              \n\
+                 SET1    78      4       5       6       7       8       9               \n\
+                 ENDDATA\n";
+    let file = dir.join("bar_wing_monitor.bdf");
+    std::fs::write(&file, text.replace("ENDDATA\n", cards)).unwrap();
+    file
+}
+
+/// Monitor loads as design outputs: the mid-span station's shear, bending and torsion (their
+/// aerodynamic part through the box forces' tangent and reverse mode, their inertial part
+/// through ∂M and ∂φ) against central differences (best step to 1e-7) and the reverse mode
+/// against the forward mode (1e-10), on the dense k and on MKAERO's.
+#[test]
+fn monitor_load_derivatives() {
+    let dir = common::scratch("nastran", "design-monitor");
+    let file = bar_wing_with_monitor(&dir);
+    let relations: Vec<Relation> = vec![
+        ("PBAR", 1, "A", 0.0, vec![(0, 1.6e-3)]),
+        ("PBAR", 1, "I1", 0.0, vec![(0, 5.6e-7)]),
+        ("PBAR", 2, "I1", 0.0, vec![(1, 4.0e-7)]),
+        ("PBAR", 3, "A", 0.0, vec![(1, 0.4e-3), (2, 0.4e-3)]),
+        ("PBAR", 3, "J", 0.0, vec![(2, 5.4e-8)]),
+    ];
+    let m = model(&file, 0.2, &relations, 3, &["9T3"]);
+    let p = m.analyse(&[1.0, 1.0, 1.0]).unwrap();
+    let labels: Vec<&str> = p.rows.iter().map(|r| r.label.as_str()).collect();
+    assert_eq!(labels, ["9T3", "MID CZ", "MID CMX", "MID CMY"]);
+    let worst = check_against_differences(&m, &[1.0, 1.0, 1.0]);
+    let mut rev = check_reverse_against_forward(&m, &[1.0, 1.0, 1.0]);
+    let k: Vec<f64> = (0..=40).map(|i| 0.2 * i as f64 / 40.0).collect();
+    let mkaero = DesignModel {
+        interpolation: KInterpolation::LinearOnMkaero(k),
+        ..m
+    };
+    rev = rev.max(check_reverse_against_forward(&mkaero, &[1.1, 0.9, 1.2]));
+    eprintln!("monitor: differences {worst:.1e}, reverse against forward {rev:.1e}");
 }

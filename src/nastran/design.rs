@@ -205,7 +205,8 @@ pub fn translational_mass(s: &Structure, m: &Mat<f64>) -> f64 {
 }
 
 /// An output of the random response by Nastran's label (`9T3`, `9R1`, `ACCE 9T3`,
-/// `SPCF 11R3`, `MODE 2`) as a request (grid or mode, component, quantity).
+/// `SPCF 11R3`, `MODE 2`) as a request (grid or mode, component, quantity). A monitor
+/// component (`ROOT CMX`) is no request: every MONPNT1 of the model is part of the response.
 pub fn parse_output(label: &str) -> Option<(u32, u8, Quantity)> {
     let t = label.trim();
     let (quantity, rest) = if let Some(r) = t.strip_prefix("ACCE ") {
@@ -262,7 +263,8 @@ pub struct DesignPoint {
     pub structure: Structure,
     pub modes: RealModes,
     pub mass: f64,
-    /// The random response of the constrained outputs (the requests' order).
+    /// The random response of the requests (their order), then of every monitor component of
+    /// the model (`NAME CMX`).
     pub rows: Vec<RandomRow>,
     /// What the response noticed (one line each).
     pub warnings: Vec<String>,
@@ -293,7 +295,7 @@ impl DesignModel {
         }
         truncate(&mut modes, self.n_modes);
         let mass = translational_mass(&structure, &structure.m_gg);
-        let (mut all, warnings) = random_response(
+        let (rows, warnings) = random_response(
             &bulk,
             &self.sub,
             &structure,
@@ -301,14 +303,13 @@ impl DesignModel {
             &self.requests,
             &self.interpolation,
         )?;
-        all.truncate(self.requests.len());
         Ok(DesignPoint {
             x: x.to_vec(),
             bulk,
             structure,
             modes,
             mass,
-            rows: all,
+            rows,
             warnings,
         })
     }
@@ -412,13 +413,17 @@ impl DesignModel {
                 .zip(&seeds)
                 .map(|(adj, ms)| {
                     let mut v = adj.along(&p.modes, (&dk, &dm));
-                    // the constraint forces' rows meet ∂K φ and ∂M φ directly
-                    for (dof, k_bar, m_bar) in &ms.spc_rows {
+                    // the constraint forces' and monitors' rows meet lᵀ∂Kφ and lᵀ∂Mφ directly
+                    for (l, k_bar, m_bar) in &ms.direct {
+                        let rows: Vec<usize> = (0..ng).filter(|&i| l[i] != 0.0).collect();
                         for m in 0..self.n_modes {
                             let (mut dkp, mut dmp) = (0.0, 0.0);
-                            for j in 0..ng {
-                                dkp += dk[(*dof, j)] * p.modes.phi_g[(j, m)];
-                                dmp += dm[(*dof, j)] * p.modes.phi_g[(j, m)];
+                            for &i in &rows {
+                                for j in 0..ng {
+                                    let phi = p.modes.phi_g[(j, m)];
+                                    dkp += l[i] * dk[(i, j)] * phi;
+                                    dmp += l[i] * dm[(i, j)] * phi;
+                                }
                             }
                             v += k_bar[m] * dkp + m_bar[m] * dmp;
                         }
@@ -452,6 +457,14 @@ fn truncate(modes: &mut RealModes, n: usize) {
     let a = modes.phi_a.subcols(0, n).to_owned();
     modes.phi_g = g;
     modes.phi_a = a;
+}
+
+/// Whether `label` has the form of a monitor component's (`NAME CX` … `NAME CMZ`).
+pub fn is_monitor_label(label: &str) -> bool {
+    let t = label.trim();
+    ["CX", "CY", "CZ", "CMX", "CMY", "CMZ"]
+        .iter()
+        .any(|c| t.len() > c.len() + 1 && t.ends_with(&format!(" {c}")))
 }
 
 #[cfg(test)]

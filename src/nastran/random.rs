@@ -214,10 +214,50 @@ pub fn random_response_derivatives(
     let n = sol.response.n_modes;
     check_flat_damping(b, sub, modes, n)?;
     check_mode_norm(b, sub, requests)?;
-    let rows = super::response::output_rows(b, sub, s, modes, n, requests)?;
+    let mut rows = super::response::output_rows(b, sub, s, modes, n, requests)?;
+    rows.extend(sol.response.monitor_rows.iter().cloned());
+    let monitors = monitors_of(b, s, &sol)?;
     directions
         .iter()
-        .map(|d| derivative_along(b, sub, s, modes, requests, (&input, &sol, &rows), d))
+        .map(|d| {
+            derivative_along(
+                b,
+                sub,
+                s,
+                modes,
+                requests,
+                (&input, &sol, &rows, &monitors),
+                d,
+            )
+        })
+        .collect()
+}
+
+/// The model's monitor components as functionals (none without MONPNT1).
+fn monitors_of(
+    b: &BulkData,
+    s: &Structure,
+    sol: &super::response::GustSolution,
+) -> R<Vec<super::response::MonitorFunctional>> {
+    if b.monitors.is_empty() {
+        return Ok(Vec::new());
+    }
+    super::response::monitor_functionals(b, s, &sol.rows, sol.surf.box_ids.len())
+}
+
+/// lᵀ A φ_m for every mode m < n (A a g-set matrix, l a g-set vector).
+fn paired(l: &[f64], a: &faer::Mat<f64>, phi: &faer::Mat<f64>, n: usize) -> Vec<f64> {
+    let ng = a.nrows();
+    let la: Vec<f64> = (0..ng)
+        .map(|j| {
+            (0..ng)
+                .filter(|&i| l[i] != 0.0)
+                .map(|i| l[i] * a[(i, j)])
+                .sum()
+        })
+        .collect();
+    (0..n)
+        .map(|m| (0..ng).map(|j| la[j] * phi[(j, m)]).sum())
         .collect()
 }
 
@@ -228,10 +268,11 @@ fn derivative_along(
     s: &Structure,
     modes: &RealModes,
     requests: &[(u32, u8, Quantity)],
-    (input, sol, rows): (
+    (input, sol, rows, monitors): (
         &GustSpectrum,
         &super::response::GustSolution,
         &[super::response::OutputRow],
+        &[super::response::MonitorFunctional],
     ),
     direction: &ModeDirection,
 ) -> R<Vec<RandomDerivative>> {
@@ -272,8 +313,28 @@ fn derivative_along(
             _ => {}
         }
     }
-    // the GAF table's tangent from the table of [φ | ∂φ]
+    // the monitor rows' tangents: m_row = −lᵀ M φ, so −lᵀ (∂M φ + M ∂φ)
+    for f in monitors {
+        let (a, c) = (
+            paired(&f.l, direction.dm, &modes.phi_g, n),
+            paired(&f.l, &s.m_gg, &direction.d_phi_g, n),
+        );
+        d_rows.push(super::response::OutputRow {
+            label: f.label.clone(),
+            k_row: vec![0.0; n],
+            m_row: a.iter().zip(&c).map(|(x, y)| -(x + y)).collect(),
+            aero: f.aero.clone(),
+        });
+    }
     let ng = modes.phi_g.nrows();
+    // the box forces of ∂φ (the monitors' aerodynamic loads are linear in the shapes)
+    let d_forces = if monitors.is_empty() {
+        Vec::new()
+    } else {
+        let moved_surface = super::aero::modal_surface(&sol.surf, &sol.rows, &moved, n);
+        sol.box_forces_of(&moved_surface)?
+    };
+    // the GAF table's tangent from the table of [φ | ∂φ]
     let both = RealModes {
         phi_g: faer::Mat::from_fn(ng, 2 * n, |i, c| {
             if c < n {
@@ -315,13 +376,28 @@ fn derivative_along(
                     continue;
                 };
                 let w2 = (2.0 * std::f64::consts::PI * f).powi(2);
-                let dy = (0..n)
+                let mut dy = (0..n)
                     .map(|m| {
                         d_eta[j][m] * (row.k_row[m] - w2 * row.m_row[m])
                             + eta[m] * (d_row.k_row[m] - w2 * d_row.m_row[m])
                     })
-                    .sum::<c64>()
-                    * r.load[i];
+                    .sum::<c64>();
+                if !row.aero.is_empty() {
+                    // q Σ_boxes aero (Σ_m ∂F η_m + F ∂η_m)
+                    let forces = r.box_forces[i]
+                        .as_ref()
+                        .expect("box forces where the model has monitor points");
+                    for (box_j, (wj, fj)) in row.aero.iter().zip(forces).enumerate() {
+                        if *wj != 0.0 {
+                            let dfj = &d_forces[j][box_j];
+                            let load = (0..n)
+                                .map(|m| dfj[m] * eta[m] + fj[m] * d_eta[j][m])
+                                .sum::<c64>();
+                            dy += load * (r.q * wj);
+                        }
+                    }
+                }
+                let dy = dy * r.load[i];
                 let x = input.at(f);
                 psd[i] = ys[i].norm_sqr() * x;
                 d_psd[i] = 2.0 * (ys[i].conj() * dy).re * x;
@@ -346,15 +422,16 @@ fn derivative_along(
 }
 
 /// Seeds on the modes of a functional of the random response (the reverse mode of
-/// [`random_response`] up to the modes): ∂J/∂λ, ∂J/∂φ (g-set) and, for the constraint forces'
-/// rows (K φ)[dof] and (M φ)[dof], their seeds per mode, which a design direction's ∂K and ∂M
-/// meet directly.
+/// [`random_response`] up to the modes): ∂J/∂λ, ∂J/∂φ (g-set) and, for the rows that pair the
+/// matrices with the shapes — lᵀ K φ and lᵀ M φ of the constraint forces (l a unit vector) and
+/// the monitor points (l their force summation) — the seeds per mode, which a design
+/// direction's ∂K and ∂M meet directly.
 #[derive(Clone, Debug)]
 pub struct ModeSeeds {
     pub lambda: Vec<f64>,
     pub phi_g: faer::Mat<f64>,
-    /// (g dof, k̄ per mode, m̄ per mode) of every SPCF row with a seed.
-    pub spc_rows: Vec<(usize, Vec<f64>, Vec<f64>)>,
+    /// (l over the g-set, seed on lᵀKφ_m, seed on lᵀMφ_m per mode) of every such row.
+    pub direct: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)>,
 }
 
 /// The reverse mode of the RMS and N0 of `requests`: for each functional J = Σ_y (r̄_y RMS_y +
@@ -379,10 +456,13 @@ pub fn random_response_vjp(
     let n = sol.response.n_modes;
     check_flat_damping(b, sub, modes, n)?;
     check_mode_norm(b, sub, requests)?;
-    let rows = super::response::output_rows(b, sub, s, modes, n, requests)?;
+    let mut rows = super::response::output_rows(b, sub, s, modes, n, requests)?;
+    rows.extend(sol.response.monitor_rows.iter().cloned());
+    let monitors = monitors_of(b, s, &sol)?;
     let r = &sol.response;
     let freqs = &r.frequencies_hz;
     let (w0, w2) = spectral_moment_weights(freqs);
+    let n_boxes = sol.surf.box_ids.len();
     let mut grid_index = vec![None; freqs.len()];
     for (j, &i) in sol.live.iter().enumerate() {
         grid_index[i] = Some(j);
@@ -400,6 +480,9 @@ pub fn random_response_vjp(
             }
             let zero = c64::new(0.0, 0.0);
             let mut eta_bar = vec![vec![zero; n]; sol.live.len()];
+            // seeds on the box forces' modal columns, where monitors have seeds
+            let mut force_bar = vec![vec![vec![zero; n + 1]; n_boxes]; sol.live.len()];
+            let mut any_force = false;
             let mut k_bar = vec![vec![0.0; n]; rows.len()];
             let mut m_bar = vec![vec![0.0; n]; rows.len()];
             for (y, row) in rows.iter().enumerate() {
@@ -442,12 +525,35 @@ pub fn random_response_vjp(
                         k_bar[y][m] += t;
                         m_bar[y][m] -= w2f * t;
                     }
+                    if !row.aero.is_empty() {
+                        // y += load q Σ_boxes aero (Σ_m F η_m + F_g)
+                        let forces = r.box_forces[i]
+                            .as_ref()
+                            .expect("box forces where the model has monitor points");
+                        for (box_j, (wj, fj)) in row.aero.iter().zip(forces).enumerate() {
+                            if *wj == 0.0 {
+                                continue;
+                            }
+                            let c = r.load[i] * (r.q * wj);
+                            for m in 0..n {
+                                eta_bar[j][m] += (c * fj[m]).conj() * y_bar;
+                                force_bar[j][box_j][m] += (c * eta[m]).conj() * y_bar;
+                            }
+                            any_force = true;
+                        }
+                    }
                 }
             }
             let g = sol.eta_vjp(&eta_bar)?;
-            let surface_bar = sol.gafs_vjp_of(b, &ms, &g.table)?;
+            let mut surface_bar = sol.gafs_vjp_of(b, &ms, &g.table)?;
+            if any_force {
+                let from_forces = sol.box_forces_vjp_of(&ms, &force_bar)?;
+                for (t, v) in surface_bar.values_mut().zip(from_forces.values()) {
+                    *t += v;
+                }
+            }
             let mut phi_g = super::aero::modal_surface_vjp(&sol.surf, &sol.rows, &surface_bar);
-            let mut spc_rows = Vec::new();
+            let mut direct = Vec::new();
             for (y, &(grid, comp, quantity)) in requests.iter().enumerate() {
                 if k_bar[y].iter().chain(&m_bar[y]).all(|v| *v == 0.0) {
                     continue;
@@ -474,14 +580,38 @@ pub fn random_response_vjp(
                                     k_bar[y][m] * s.k_gg[(d, j)] + m_bar[y][m] * s.m_gg[(d, j)];
                             }
                         }
-                        spc_rows.push((d, k_bar[y].clone(), m_bar[y].clone()));
+                        let mut l = vec![0.0; phi_g.nrows()];
+                        l[d] = 1.0;
+                        direct.push((l, k_bar[y].clone(), m_bar[y].clone()));
                     }
                 }
+            }
+            // the monitor rows: m_row = −lᵀ M φ
+            for (f, y) in monitors.iter().zip(requests.len()..) {
+                if m_bar[y].iter().all(|v| *v == 0.0) {
+                    continue;
+                }
+                let ng = phi_g.nrows();
+                let m_l: Vec<f64> = (0..ng)
+                    .map(|j| {
+                        (0..ng)
+                            .filter(|&i| f.l[i] != 0.0)
+                            .map(|i| f.l[i] * s.m_gg[(i, j)])
+                            .sum()
+                    })
+                    .collect();
+                for m in 0..n {
+                    for j in 0..ng {
+                        phi_g[(j, m)] -= m_bar[y][m] * m_l[j];
+                    }
+                }
+                let minus: Vec<f64> = m_bar[y].iter().map(|v| -v).collect();
+                direct.push((f.l.clone(), vec![0.0; n], minus));
             }
             Ok(ModeSeeds {
                 lambda: g.lambda,
                 phi_g,
-                spc_rows,
+                direct,
             })
         })
         .collect()

@@ -290,6 +290,40 @@ impl GustSolution {
         )
     }
 
+    /// The reduced frequencies of the loaded frequencies (`live`), where the box forces are
+    /// taken.
+    fn live_k(&self) -> Vec<f64> {
+        self.live
+            .iter()
+            .map(|&i| {
+                2.0 * std::f64::consts::PI * self.response.frequencies_hz[i] * self.surf.b_ref
+                    / self.velocity
+            })
+            .collect()
+    }
+
+    /// The boxes' forces per unit q of any modal surface of this model at each loaded
+    /// frequency (`[live][box][column]`, the modes then the gust).
+    pub fn box_forces_of(&self, ms: &gustkit_core::ModalSurface) -> R<Vec<Vec<Vec<c64>>>> {
+        self.surf
+            .dlm
+            .box_forces(&self.flight, ms, &self.live_k())
+            .map_err(|e| NastranError::model("DLM", e.to_string()))
+    }
+
+    /// The reverse mode of [`GustSolution::box_forces_of`]: seeds on the forces (one a loaded
+    /// frequency) to seeds on the modal surface.
+    pub fn box_forces_vjp_of(
+        &self,
+        ms: &gustkit_core::ModalSurface,
+        seeds: &[Vec<Vec<c64>>],
+    ) -> R<gustkit_core::ModalSurface> {
+        self.surf
+            .dlm
+            .box_forces_vjp(&self.flight, ms, &self.live_k(), seeds)
+            .map_err(|e| NastranError::model("DLM", e.to_string()))
+    }
+
     /// The reverse mode of η at the grid's frequencies (one seed a grid frequency, conjugate
     /// convention) to seeds on the GAF table and ω_n².
     pub fn eta_vjp(&self, eta_bar: &[Vec<c64>]) -> R<crate::gust::GustGradient> {
@@ -834,6 +868,16 @@ pub fn frequency_rows(
     Ok((response.frequencies_hz, rows, response.warnings))
 }
 
+/// One MONPNT1 component as a functional of the g-set loads: its label, the weights `l` that sum
+/// the grids' forces and moments at the point along the component's axis, and those weights
+/// carried to the boxes' doublet points through the splines (`aero`, one a box).
+#[derive(Clone, Debug)]
+pub struct MonitorFunctional {
+    pub label: String,
+    pub l: Vec<f64>,
+    pub aero: Vec<f64>,
+}
+
 /// The rows of every MONPNT1's components: the aerodynamic and inertial loads on its AECOMP's
 /// grids summed at its point (force summation),
 ///   F = Σᵢ fᵢ,   M = Σᵢ (xᵢ − x₀) × fᵢ + mᵢ,   (fᵢ, mᵢ) = q Gᵢᵀ F_boxes + ω² (M Φ η)ᵢ,
@@ -847,11 +891,6 @@ pub fn monitor_rows(
     rows: &super::spline::SplineRows,
     n_boxes: usize,
 ) -> R<Vec<OutputRow>> {
-    let frame = |id: u32, what: &str| -> R<super::structure::Frame> {
-        s.frames.get(&id).copied().ok_or_else(|| {
-            NastranError::model(what, format!("coordinate system {id} is not defined"))
-        })
-    };
     let ng = s.k_gg.nrows();
     // M Φ, the inertial loads of the modes
     let m_phi: Vec<Vec<f64>> = (0..n_modes)
@@ -861,6 +900,34 @@ pub fn monitor_rows(
                 .collect()
         })
         .collect();
+    Ok(monitor_functionals(b, s, rows, n_boxes)?
+        .into_iter()
+        .map(|f| OutputRow {
+            m_row: m_phi
+                .iter()
+                .map(|mp| -(0..ng).map(|g| f.l[g] * mp[g]).sum::<f64>())
+                .collect(),
+            label: f.label,
+            k_row: vec![0.0; n_modes],
+            aero: f.aero,
+        })
+        .collect())
+}
+
+/// Every MONPNT1 component of the model as a [`MonitorFunctional`], in the order of
+/// [`monitor_rows`].
+pub fn monitor_functionals(
+    b: &BulkData,
+    s: &Structure,
+    rows: &super::spline::SplineRows,
+    n_boxes: usize,
+) -> R<Vec<MonitorFunctional>> {
+    let frame = |id: u32, what: &str| -> R<super::structure::Frame> {
+        s.frames.get(&id).copied().ok_or_else(|| {
+            NastranError::model(what, format!("coordinate system {id} is not defined"))
+        })
+    };
+    let ng = s.k_gg.nrows();
     let names = ["CX", "CY", "CZ", "CMX", "CMY", "CMZ"];
     let mut out = Vec::new();
     for mon in b.monitors.values() {
@@ -920,14 +987,9 @@ pub fn monitor_rows(
             let aero: Vec<f64> = (0..n_boxes)
                 .map(|j| (0..ng).map(|g| l[g] * rows.value[(n_boxes + j, g)]).sum())
                 .collect();
-            let m_row: Vec<f64> = m_phi
-                .iter()
-                .map(|mp| -(0..ng).map(|g| l[g] * mp[g]).sum::<f64>())
-                .collect();
-            out.push(OutputRow {
+            out.push(MonitorFunctional {
                 label: format!("{} {}", mon.name, names[a]),
-                k_row: vec![0.0; n_modes],
-                m_row,
+                l,
                 aero,
             });
         }

@@ -249,7 +249,8 @@ struct NastranDesignResults {
     resolution: Resolution,
     history: Vec<HistoryRow>,
     frequencies_hz: Vec<f64>,
-    /// The constrained outputs at the final design.
+    /// The constrained grid and mode outputs, then every monitor component, at the final
+    /// design.
     final_response: Vec<OutputPsd>,
     function_time_median_s: f64,
     gradient_time_median_s: f64,
@@ -304,10 +305,13 @@ fn design_model(study: &NastranStudyFile) -> Result<(DesignModel, Vec<Limit>, Ve
         })
         .collect::<Result<Vec<_>>>()?;
     let (s, modes) = subcase_modes(&base, &sub).with_context(|| at("model.nastran"))?;
+    // the requests: the constrained grid and mode outputs (monitor points are always part of
+    // the response)
     let mut labels: Vec<String> = Vec::new();
-    let mut limits = Vec::new();
     for (i, c) in study.constraints.iter().enumerate() {
-        let request = parse_output(&c.output).expect("checked at load");
+        let Some(request) = parse_output(&c.output) else {
+            continue;
+        };
         if request.2 != crate::nastran::random::Quantity::Mode && !s.index.contains_key(&request.0)
         {
             bail!(
@@ -317,14 +321,8 @@ fn design_model(study: &NastranStudyFile) -> Result<(DesignModel, Vec<Limit>, Ve
             );
         }
         let label = c.output.trim().to_string();
-        let row = labels.iter().position(|l| *l == label).unwrap_or_else(|| {
+        if !labels.contains(&label) {
             labels.push(label);
-            labels.len() - 1
-        });
-        for (n0, max) in [(false, c.rms_max), (true, c.n0_max_hz)] {
-            if let Some(max) = max {
-                limits.push(Limit { row, n0, max });
-            }
         }
     }
     let requests = labels.iter().map(|l| parse_output(l).unwrap()).collect();
@@ -340,6 +338,35 @@ fn design_model(study: &NastranStudyFile) -> Result<(DesignModel, Vec<Limit>, Ve
         n_variables,
         n_modes,
     };
+    // each limit's row of the response, by its label
+    let x0: Vec<f64> = study.design_variables.iter().map(|v| v.initial).collect();
+    let start = model
+        .analyse(&x0)
+        .with_context(|| format!("{}: the initial design", study.file.display()))?;
+    let mut limits = Vec::new();
+    for (i, c) in study.constraints.iter().enumerate() {
+        let label = c.output.trim();
+        let Some(row) = start.rows.iter().position(|r| r.label == label) else {
+            let monitors: Vec<&str> = start.rows[model.requests.len()..]
+                .iter()
+                .map(|r| r.label.as_str())
+                .collect();
+            bail!(
+                "{}: \"{label}\" is no output of the model (its monitor components: {})",
+                at(&format!("constraints[{i}].output")),
+                if monitors.is_empty() {
+                    "none, it has no MONPNT1".to_string()
+                } else {
+                    monitors.join(", ")
+                }
+            );
+        };
+        for (n0, max) in [(false, c.rms_max), (true, c.n0_max_hz)] {
+            if let Some(max) = max {
+                limits.push(Limit { row, n0, max });
+            }
+        }
+    }
     Ok((model, limits, warnings))
 }
 

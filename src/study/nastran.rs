@@ -77,7 +77,7 @@ pub struct RelationSpec {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ConstraintSpec {
-    /// `9T3`, `ACCE 9T3`, `SPCF 11R3` or `MODE 2`.
+    /// `9T3`, `ACCE 9T3`, `SPCF 11R3`, `MODE 2` or a MONPNT1 component (`ROOT CMX`).
     pub output: String,
     /// Largest RMS (the output's unit in the model's units).
     #[serde(default)]
@@ -263,10 +263,12 @@ impl NastranStudyFile {
         }
         for (i, c) in self.constraints.iter().enumerate() {
             let at = |f: &str| format!("constraints[{i}].{f}");
-            if crate::nastran::design::parse_output(&c.output).is_none() {
+            if crate::nastran::design::parse_output(&c.output).is_none()
+                && !crate::nastran::design::is_monitor_label(&c.output)
+            {
                 return bad(
                     at("output"),
-                    format!("\"{}\" is not an output label: 9T3 (grid 9, component T3), 9R1, ACCE 9T3, SPCF 11R3 or MODE 2", c.output),
+                    format!("\"{}\" is not an output label: 9T3 (grid 9, component T3), 9R1, ACCE 9T3, SPCF 11R3, MODE 2 or a monitor point's component (ROOT CMX)", c.output),
                 );
             }
             if c.rms_max.is_none() && c.n0_max_hz.is_none() {

@@ -477,6 +477,72 @@ impl Dlm {
             .collect()
     }
 
+    /// The reverse mode of [`Dlm::box_forces`] with respect to the mode shapes: seeds F̄ on every
+    /// box force (`seeds[ik][box][col]`, conjugate convention δJ = Re Σ conj(F̄) δF; the gust
+    /// column's are ignored, it does not depend on the shapes) to seeds on the modal surface's
+    /// displacements and slopes at the control points. F = A c, D c = W: c̄ = A F̄, Dᴴ λ = c̄,
+    /// and W = n·u_x + i k/b n·u gives ū_x = Re(conj λ) n, ū = Re(conj(λ) i k/b) n.
+    pub fn box_forces_vjp(
+        &self,
+        flight: &FlightCondition,
+        modes: &ModalSurface,
+        k: &[f64],
+        seeds: &[Vec<Vec<c64>>],
+    ) -> Result<ModalSurface, AeroError> {
+        self.check_inputs(flight, modes, k)?;
+        let n = self.n_boxes();
+        let nm = modes.n_modes();
+        if seeds.len() != k.len()
+            || seeds
+                .iter()
+                .any(|s| s.len() != n || s.iter().any(|b| b.len() < nm))
+        {
+            return Err(AeroError::Input(format!(
+                "seeds: one force seed a box ({n}) and mode ({nm}) at each of the {} reduced frequencies",
+                k.len()
+            )));
+        }
+        let mats = self.matrices(flight, k);
+        let parts: Vec<ModalSurface> = k
+            .par_iter()
+            .enumerate()
+            .map(|(ik, &kk)| {
+                let kd = kk / flight.b_ref;
+                let mut out = ModalSurface::zeros(nm, 2 * n);
+                if seeds[ik]
+                    .iter()
+                    .all(|b| b[..nm].iter().all(|v| *v == c64::new(0.0, 0.0)))
+                {
+                    return Ok(out);
+                }
+                let dm = Mat::<c64>::from_fn(n, n, |i, j| mats[ik][i * n + j].value());
+                let lu = dm.partial_piv_lu();
+                let mut lam =
+                    Mat::<c64>::from_fn(n, nm, |j, m| seeds[ik][j][m] * self.boxes[j].area);
+                lu.solve_adjoint_in_place(lam.as_mut());
+                for m in 0..nm {
+                    for j in 0..n {
+                        let nrm = self.boxes[j].normal();
+                        let l = lam[(j, m)].conj();
+                        let (sx, su) = (l.re, (l * c64::new(0.0, kd)).re);
+                        for a in 0..3 {
+                            out.disp_x[m][j][a] += sx * nrm[a];
+                            out.disp[m][j][a] += su * nrm[a];
+                        }
+                    }
+                }
+                Ok(out)
+            })
+            .collect::<Result<_, AeroError>>()?;
+        let mut total = ModalSurface::zeros(nm, 2 * n);
+        for part in &parts {
+            for (t, p) in total.values_mut().zip(part.values()) {
+                *t += p;
+            }
+        }
+        Ok(total)
+    }
+
     /// Forward mode with respect to the geometry parameters ([`Aerodynamics::geometry_names`]):
     /// dQ along `dq`, from the tangent equation dc = D⁻¹ (dW − dD c) with dD, dW and the force
     /// weights differentiated by dual numbers through the box geometry.
