@@ -95,3 +95,61 @@ pub fn assert_refused(out: &std::process::Output, needle: &str) {
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(err.contains(needle), "{err}");
 }
+
+/// gustkit's plate as Nastran bulk data, every point through `rot` (a rigid rotation of the
+/// whole wing): the grain's CORD2R 9, MAT8 1, GRIDs (ids from 1 in the plate's node order), one
+/// PSHELL a CQUAD4 with the element's thickness, SPC1 1 at the clamped nodes.
+pub fn plate_bulk_data(plate: &PlateModel, rot: &dyn Fn([f64; 3]) -> [f64; 3]) -> String {
+    let xy = plate.node_xy();
+    let grain = mahogany().grain_angle;
+    let mut deck = String::new();
+    // the grain direction (sin g, cos g, 0) as the x axis of CORD2R 9
+    let g_dir = rot([grain.sin(), grain.cos(), 0.0]);
+    let normal = rot([0.0, 0.0, 1.0]);
+    let cpt = [
+        g_dir[0] + 0.3 * normal[0],
+        g_dir[1] + 0.3 * normal[1],
+        g_dir[2] + 0.3 * normal[2],
+    ];
+    deck.push_str(&format!(
+        "CORD2R,9,,0.,0.,0.,{:.17e},{:.17e},{:.17e}\n,{:.17e},{:.17e},{:.17e}\n",
+        normal[0], normal[1], normal[2], cpt[0], cpt[1], cpt[2]
+    ));
+    let m = mahogany();
+    deck.push_str(&format!(
+        "MAT8,1,{:e},{:e},{},{:e},,,{}\n",
+        m.e1, m.e2, m.nu12, m.g12, m.density
+    ));
+    for (i, p) in xy.iter().enumerate() {
+        let q = rot([p[0], p[1], 0.0]);
+        deck.push_str(&format!(
+            "GRID*,{},,{:.17e},{:.17e}\n*,{:.17e}\n",
+            i + 1,
+            q[0],
+            q[1],
+            q[2]
+        ));
+    }
+    for (e, nodes) in plate.mesh.elements.iter().enumerate() {
+        deck.push_str(&format!(
+            "PSHELL*,{},1,{:.17e},1\n",
+            e + 1,
+            plate.element_thickness(e)
+        ));
+        deck.push_str(&format!(
+            "CQUAD4,{},{},{},{},{},{},9\n",
+            e + 1,
+            e + 1,
+            nodes[0] + 1,
+            nodes[1] + 1,
+            nodes[2] + 1,
+            nodes[3] + 1
+        ));
+    }
+    for (i, &c) in plate.mesh.clamped.iter().enumerate() {
+        if c {
+            deck.push_str(&format!("SPC1,1,123456,{}\n", i + 1));
+        }
+    }
+    deck
+}
