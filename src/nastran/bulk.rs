@@ -499,7 +499,39 @@ impl BulkData {
         Ok(b)
     }
 
+    /// One card into the model: each kind read by the method of its group; a card gustkit reads
+    /// without use is named once in `not_used`, any other refused naming card and line.
     fn read(&mut self, c: &Card, not_used: &mut Vec<String>) -> R<()> {
+        match c.name.as_str() {
+            "GRID" | "GRDSET" | "CORD2R" | "CONM2" | "CONM1" | "CELAS2" | "CMASS2" | "CBAR"
+            | "CBEAM" | "PBAR" | "PBEAM" | "CQUAD4" | "CTRIA3" | "PSHELL" | "MAT1" | "MAT8"
+            | "GENEL" => self.read_structure(c),
+            "RBE2" | "RBAR" | "MPC" | "SPC" | "SPC1" | "SUPORT" => self.read_constraint(c),
+            "CAERO1" | "PAERO1" | "AEFACT" | "AELIST" | "MONPNT1" | "AECOMP" | "SET1"
+            | "SPLINE1" | "SPLINE2" | "SPLINE4" | "AERO" | "AEROS" | "MKAERO1" | "MKAERO2"
+            | "FLFACT" | "FLUTTER" => self.read_aero(c),
+            "EIGR" | "EIGRL" | "PARAM" | "GUST" | "RLOAD1" | "TLOAD1" | "DAREA" | "TABLED1"
+            | "TABRND1" | "TABDMP1" | "RANDPS" | "FREQ" | "FREQ1" | "FREQ2" | "TSTEP" => {
+                self.read_dynamic(c)
+            }
+            other => {
+                if let Some((_, why)) = READ_NOT_USED.iter().find(|(n, _)| *n == other) {
+                    let line = format!("{other} ({why})");
+                    if !not_used.contains(&line) {
+                        not_used.push(line);
+                    }
+                    return Ok(());
+                }
+                Err(NastranError::card(
+                    c,
+                    "is not a card gustkit reads: remove it, or replace it by the cards listed in the README's Nastran input section (an element, property or load of another kind cannot be left out silently)",
+                ))
+            }
+        }
+    }
+
+    /// Grids, frames, elements, properties and materials.
+    fn read_structure(&mut self, c: &Card) -> R<()> {
         match c.name.as_str() {
             "GRID" => {
                 let id = c.id_field(1, "ID")?;
@@ -818,6 +850,13 @@ impl BulkData {
                 let g = read_genel(c)?;
                 insert(&mut self.genels, g.id, g, c, "general element")
             }
+            other => unreachable!("read_structure was handed {other}"),
+        }
+    }
+
+    /// Rigid elements, multipoint and single-point constraints, the free-body set.
+    fn read_constraint(&mut self, c: &Card) -> R<()> {
+        match c.name.as_str() {
             "RBE2" => {
                 let id = c.id_field(1, "EID")?;
                 let mut gm = Vec::new();
@@ -947,43 +986,13 @@ impl BulkData {
                 }
                 Ok(())
             }
-            "EIGR" | "EIGRL" => {
-                let sid = c.id_field(1, "SID")?;
-                let e = if c.name == "EIGR" {
-                    Eigr {
-                        sid,
-                        method: c.text(2).to_string(),
-                        f1: c.real_opt(3, "F1")?,
-                        f2: c.real_opt(4, "F2")?,
-                        nd: c.int_opt(6, "ND")?.map(|n| n as u32),
-                        norm: c.text(9).to_string(),
-                    }
-                } else {
-                    Eigr {
-                        sid,
-                        method: "LAN".into(),
-                        f1: c.real_opt(2, "V1")?,
-                        f2: c.real_opt(3, "V2")?,
-                        nd: c.int_opt(4, "ND")?.map(|n| n as u32),
-                        norm: c.text(8).to_string(),
-                    }
-                };
-                if e.nd.is_none() && e.f2.is_none() {
-                    return Err(NastranError::card(
-                        c,
-                        "asks for no roots: give ND or an upper frequency",
-                    ));
-                }
-                insert(&mut self.eigr, sid, e, c, "eigenvalue method")
-            }
-            "PARAM" => {
-                let name = c.text(1).to_string();
-                if name.is_empty() {
-                    return Err(c.field_error(1, "N", "names no parameter"));
-                }
-                self.params.insert(name, c.text(2).to_string());
-                Ok(())
-            }
+            other => unreachable!("read_constraint was handed {other}"),
+        }
+    }
+
+    /// Lifting surfaces, splines, sets, monitor points and the aeroelastic solution cards.
+    fn read_aero(&mut self, c: &Card) -> R<()> {
+        match c.name.as_str() {
             "CAERO1" => {
                 let id = c.id_field(1, "EID")?;
                 let point = |k: usize, n: &str| -> R<[f64; 3]> {
@@ -1316,6 +1325,50 @@ impl BulkData {
                 }
                 insert(&mut self.flutter, id, f, c, "FLUTTER")
             }
+            other => unreachable!("read_aero was handed {other}"),
+        }
+    }
+
+    /// Eigenvalue methods, parameters, dynamic loads, tables, frequencies and time steps.
+    fn read_dynamic(&mut self, c: &Card) -> R<()> {
+        match c.name.as_str() {
+            "EIGR" | "EIGRL" => {
+                let sid = c.id_field(1, "SID")?;
+                let e = if c.name == "EIGR" {
+                    Eigr {
+                        sid,
+                        method: c.text(2).to_string(),
+                        f1: c.real_opt(3, "F1")?,
+                        f2: c.real_opt(4, "F2")?,
+                        nd: c.int_opt(6, "ND")?.map(|n| n as u32),
+                        norm: c.text(9).to_string(),
+                    }
+                } else {
+                    Eigr {
+                        sid,
+                        method: "LAN".into(),
+                        f1: c.real_opt(2, "V1")?,
+                        f2: c.real_opt(3, "V2")?,
+                        nd: c.int_opt(4, "ND")?.map(|n| n as u32),
+                        norm: c.text(8).to_string(),
+                    }
+                };
+                if e.nd.is_none() && e.f2.is_none() {
+                    return Err(NastranError::card(
+                        c,
+                        "asks for no roots: give ND or an upper frequency",
+                    ));
+                }
+                insert(&mut self.eigr, sid, e, c, "eigenvalue method")
+            }
+            "PARAM" => {
+                let name = c.text(1).to_string();
+                if name.is_empty() {
+                    return Err(c.field_error(1, "N", "names no parameter"));
+                }
+                self.params.insert(name, c.text(2).to_string());
+                Ok(())
+            }
             "GUST" => {
                 let id = c.id_field(1, "SID")?;
                 let g = Gust {
@@ -1495,19 +1548,8 @@ impl BulkData {
                 }
                 insert(&mut self.tstep, sid, Tstep { sid, intervals }, c, "TSTEP")
             }
-            other => {
-                if let Some((_, why)) = READ_NOT_USED.iter().find(|(n, _)| *n == other) {
-                    let line = format!("{other} ({why})");
-                    if !not_used.contains(&line) {
-                        not_used.push(line);
-                    }
-                    return Ok(());
-                }
-                Err(NastranError::card(
-                    c,
-                    "is not a card gustkit reads: remove it, or replace it by the cards listed in the README's Nastran input section (an element, property or load of another kind cannot be left out silently)",
-                ))
-            }
+
+            other => unreachable!("read_dynamic was handed {other}"),
         }
     }
 }
