@@ -623,8 +623,12 @@ fn accumulate_eta_seed(
         let l = lam[m];
         // Ā_mn = −λ_m conj(η_n); Q̄_ss = −q Ā = q λ_m conj(η_n); Q̄_gs = q λ
         let wn = p.omega_n[m];
-        let dadl = c64::new(1.0, omega * p.damping_ratio / wn);
-        lambda[m] += (-(l * eta[m].conj()).conj() * dadl).re;
+        // a rigid-body mode (ω_n = 0): its ω_n² stays zero under sizing, and its seed is not
+        // formed (the damping term's derivative is not defined there)
+        if wn > 0.0 {
+            let dadl = c64::new(1.0, omega * p.damping_ratio / wn);
+            lambda[m] += (-(l * eta[m].conj()).conj() * dadl).re;
+        }
         for (i, wi) in w.iter().enumerate() {
             if *wi == 0.0 {
                 continue;
@@ -658,6 +662,10 @@ fn eta_tangent(
             let mut v = interp(&|i| d_table.q_gs[i][m]) * p.q_inf;
             for n in 0..nm {
                 v += interp(&|i| d_table.q_ss[i][m][n]) * p.q_inf * eta[n];
+            }
+            if d_lambda[m] == 0.0 {
+                // a rigid-body mode (ω_n = 0) has no ∂(ω_n²): its damping term is not formed
+                return v;
             }
             let wn = p.omega_n[m];
             v - c64::new(1.0, omega * p.damping_ratio / wn) * d_lambda[m] * eta[m]

@@ -1562,7 +1562,19 @@ pub fn subcase_modes(b: &BulkData, sub: &super::Subcase) -> R<(Structure, RealMo
         .map(|(i, _)| i)
         .take(eig.nd.map_or(usize::MAX, |n| n as usize))
         .collect();
-    modes.lambda = keep.iter().map(|&i| modes.lambda[i]).collect();
+    // a free body's rigid-body roots, zero to the solution's accuracy, are zero (the response
+    // would otherwise see a round-off stiffness that changes from one design to the next)
+    modes.lambda = keep
+        .iter()
+        .map(|&i| {
+            let l = modes.lambda[i];
+            if rigid_body > 0 && l.abs() <= tol {
+                0.0
+            } else {
+                l
+            }
+        })
+        .collect();
     modes.phi_g = Mat::from_fn(modes.phi_g.nrows(), keep.len(), |i, j| {
         modes.phi_g[(i, keep[j])]
     });
@@ -1883,6 +1895,17 @@ fn vdot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>()
 }
 
+/// The rigid-body modes of a free body (SUPORT): the roots zero to 1e-8 of the largest, as
+/// [`subcase_modes`] tells them. They span K's null space, which no sizing moves; the response
+/// depends on them only through that space (any M-orthonormal basis of it gives the same), so
+/// their repeated zero root needs no derivative of its own shapes.
+fn rigid_body_modes(modes: &RealModes) -> Vec<usize> {
+    let tol = 1e-8 * modes.lambda.iter().fold(0.0f64, |a, l| a.max(l.abs()));
+    (0..modes.lambda.len())
+        .filter(|&i| modes.lambda[i].abs() <= tol)
+        .collect()
+}
+
 /// The checks a mode's derivative needs: mass-normalized, and its root not repeated.
 fn check_mode(modes: &RealModes, i: usize, phi: &[f64], m_phi: &[f64]) -> R<()> {
     let lambda = modes.lambda[i];
@@ -1981,7 +2004,22 @@ pub fn mode_adjoint(
     let phi_bar_a = t.transpose() * phi_bar_g;
     let mut u_g = Mat::<f64>::zeros(ng, which.len());
     let mut c = Vec::with_capacity(which.len());
+    // the rigid-body modes kept: B_rs = φ̄_rᵀ φ_s (g-set), met by −½ Σ B_rs φ_sᵀ ∂M φ_r
+    let rigid: Vec<usize> = rigid_body_modes(modes)
+        .into_iter()
+        .filter(|r| which.contains(r))
+        .collect();
+    let rigid_b = Mat::<f64>::from_fn(rigid.len(), rigid.len(), |a, b| {
+        let col = which.iter().position(|w| *w == rigid[a]).expect("kept");
+        (0..ng)
+            .map(|q| phi_bar_g[(q, col)] * modes.phi_g[(q, rigid[b])])
+            .sum()
+    });
     for (col, &i) in which.iter().enumerate() {
+        if rigid.contains(&i) {
+            c.push(0.0);
+            continue;
+        }
         let lambda = modes.lambda[i];
         let phi: Vec<f64> = modes.phi_a.col(i).iter().copied().collect();
         let m_phi: Vec<f64> = (0..n)
@@ -2009,6 +2047,8 @@ pub fn mode_adjoint(
         which: which.to_vec(),
         u_g,
         c,
+        rigid,
+        rigid_b,
     })
 }
 
@@ -2018,6 +2058,10 @@ pub struct ModeAdjoint {
     pub which: Vec<usize>,
     pub u_g: Mat<f64>,
     pub c: Vec<f64>,
+    /// The rigid-body modes among them and B_rs = φ̄_rᵀ φ_s: their share is
+    /// −½ Σ B_rs φ_sᵀ ∂M φ_r.
+    pub rigid: Vec<usize>,
+    pub rigid_b: Mat<f64>,
 }
 
 impl ModeAdjoint {
@@ -2041,6 +2085,17 @@ impl ModeAdjoint {
                     self.u_g[(r, col)] * (dk_phi - lambda * dm_phi) - self.c[col] * phi[r] * dm_phi;
             }
         }
+        for (a, &r) in self.rigid.iter().enumerate() {
+            let phi_r = modes.phi_g.col(r);
+            let dm_phi_r: Vec<f64> = (0..ng)
+                .map(|q| (0..ng).map(|j| dm_g[(q, j)] * phi_r[j]).sum())
+                .collect();
+            for (b, &other) in self.rigid.iter().enumerate() {
+                let phi_s = modes.phi_g.col(other);
+                let pair: f64 = (0..ng).map(|q| phi_s[q] * dm_phi_r[q]).sum();
+                total -= 0.5 * self.rigid_b[(a, b)] * pair;
+            }
+        }
         total
     }
 }
@@ -2052,8 +2107,10 @@ impl ModeAdjoint {
 /// and ∂φ in the g-set. ∂λ = φᵀ(∂K − λ∂M)φ; ∂φ by Nelson's method on the a-set: (K − λM) v =
 /// −(∂K − λ∂M)φ + ∂λ Mφ with the row and column of φ's largest entry removed (v zero there),
 /// then ∂φ = v − (φᵀMv + ½ φᵀ∂Mφ) φ, which keeps φᵀMφ = 1. Dense: O(n_a³) a mode. A repeated
-/// eigenvalue (the reduced matrix singular) is refused: its modes have no derivative of their
-/// own.
+/// elastic eigenvalue (the reduced matrix singular) is refused: its modes have no derivative
+/// of their own. A free body's rigid-body modes (zero roots, [`rigid_body_modes`]) take ∂λ = 0
+/// and ∂φ_r = −½ Σ_s φ_s (φ_sᵀ ∂M φ_r): K's null space does not move, and of its
+/// M-orthonormal bases this is the symmetric choice (the response depends on the space only).
 pub fn mode_derivatives(
     s: &Structure,
     spc: &BTreeSet<usize>,
@@ -2071,6 +2128,7 @@ pub fn mode_derivatives(
     let dk = sym(t.transpose() * dk_g * &t);
     let dm = sym(t.transpose() * dm_g * &t);
     let n = k.nrows();
+    let rigid = rigid_body_modes(modes);
     which
         .iter()
         .map(|&i| {
@@ -2085,6 +2143,23 @@ pub fn mode_derivatives(
             let dk_phi = times(&dk, &phi_v);
             let dm_phi = times(&dm, &phi_v);
             let m_phi = times(&m, &phi_v);
+            if rigid.contains(&i) {
+                // K's null space does not move: ∂λ = 0 and, of the M-orthonormal bases of that
+                // space, the symmetric choice ∂φ_r = −½ Σ_s φ_s (φ_sᵀ ∂M φ_r)
+                let mut d_phi_a = vec![0.0; n];
+                for &r in &rigid {
+                    let phi_r: Vec<f64> = modes.phi_a.col(r).iter().copied().collect();
+                    let c = -0.5 * vdot(&phi_r, &dm_phi);
+                    for q in 0..n {
+                        d_phi_a[q] += c * phi_r[q];
+                    }
+                }
+                let ng = t.nrows();
+                let d_phi_g = (0..ng)
+                    .map(|r| (0..n).map(|q| t[(r, q)] * d_phi_a[q]).sum())
+                    .collect();
+                return Ok((0.0, d_phi_g));
+            }
             check_mode(modes, i, &phi_v, &m_phi)?;
             let d_lambda = vdot(&phi_v, &dk_phi) - lambda * vdot(&phi_v, &dm_phi);
             let rhs: Vec<f64> = (0..n)
