@@ -549,14 +549,7 @@ fn transfer_vjp(
     }
     let nm = p.omega_n.len();
     let nk = p.table.k.len();
-    let flight_like = gustkit_core::FlightCondition {
-        mach: p.table.mach,
-        velocity: p.velocity,
-        density: 1.0,
-        b_ref: p.table.b_ref,
-        x_ref: p.table.x_ref,
-    };
-    let mut table = GafTable::zeros(&flight_like, &p.table.k, nm);
+    let mut table = seed_table(p);
     let mut lambda = vec![0.0; nm];
     let mut outputs = vec![vec![0.0; nm]; p.outputs.len()];
     let mut residual = p
@@ -605,6 +598,18 @@ fn transfer_vjp(
         outputs,
         residual,
     })
+}
+
+/// A zero table of seeds on the problem's GAF table (its k, Mach and reference values).
+fn seed_table(p: &GustProblem) -> GafTable {
+    let flight_like = gustkit_core::FlightCondition {
+        mach: p.table.mach,
+        velocity: p.velocity,
+        density: 1.0,
+        b_ref: p.table.b_ref,
+        x_ref: p.table.x_ref,
+    };
+    GafTable::zeros(&flight_like, &p.table.k, p.omega_n.len())
 }
 
 /// One frequency's share of the reverse sweep from a seed η̄ on η(ω) (spline weights `w`,
@@ -725,14 +730,7 @@ impl FrequencyResponse {
                 "seeds: one η̄ of the problem's modes a grid frequency".into(),
             ));
         }
-        let flight_like = gustkit_core::FlightCondition {
-            mach: p.table.mach,
-            velocity: p.velocity,
-            density: 1.0,
-            b_ref: p.table.b_ref,
-            x_ref: p.table.x_ref,
-        };
-        let mut table = GafTable::zeros(&flight_like, &p.table.k, nm);
+        let mut table = seed_table(p);
         let mut lambda = vec![0.0; nm];
         for (j, &omega) in p.grid.omega.iter().enumerate() {
             if eta_bar[j].iter().all(|e| *e == c64::new(0.0, 0.0)) {

@@ -209,14 +209,12 @@ pub fn random_response_derivatives(
     interpolation: &KInterpolation,
     directions: &[ModeDirection],
 ) -> R<Vec<Vec<RandomDerivative>>> {
-    let input = gust_spectrum(b, sub)?;
-    let sol = super::response::gust_frequency_solution(b, sub, s, modes, interpolation)?;
-    let n = sol.response.n_modes;
-    check_flat_damping(b, sub, modes, n)?;
-    check_mode_norm(b, sub, requests)?;
-    let mut rows = super::response::output_rows(b, sub, s, modes, n, requests)?;
-    rows.extend(sol.response.monitor_rows.iter().cloned());
-    let monitors = monitors_of(b, s, &sol)?;
+    let Prepared {
+        input,
+        sol,
+        rows,
+        monitors,
+    } = prepare(b, sub, s, modes, requests, interpolation)?;
     directions
         .iter()
         .map(|d| {
@@ -231,6 +229,41 @@ pub fn random_response_derivatives(
             )
         })
         .collect()
+}
+
+/// What both derivative modes start from: the input spectrum, the solved response, the rows
+/// of the requests and monitor points, and the monitors as functionals.
+struct Prepared<'a> {
+    input: GustSpectrum<'a>,
+    sol: super::response::GustSolution,
+    rows: Vec<super::response::OutputRow>,
+    monitors: Vec<super::response::MonitorFunctional>,
+}
+
+/// The response solved once for the derivatives, with their checks (flat modal damping, the
+/// MASS normalization of modal coordinates).
+fn prepare<'a>(
+    b: &'a BulkData,
+    sub: &Subcase,
+    s: &Structure,
+    modes: &RealModes,
+    requests: &[(u32, u8, Quantity)],
+    interpolation: &KInterpolation,
+) -> R<Prepared<'a>> {
+    let input = gust_spectrum(b, sub)?;
+    let sol = super::response::gust_frequency_solution(b, sub, s, modes, interpolation)?;
+    let n = sol.response.n_modes;
+    check_flat_damping(b, sub, modes, n)?;
+    check_mode_norm(b, sub, requests)?;
+    let mut rows = super::response::output_rows(b, sub, s, modes, n, requests)?;
+    rows.extend(sol.response.monitor_rows.iter().cloned());
+    let monitors = monitors_of(b, s, &sol)?;
+    Ok(Prepared {
+        input,
+        sol,
+        rows,
+        monitors,
+    })
 }
 
 /// The model's monitor components as functionals (none without MONPNT1).
@@ -451,14 +484,13 @@ pub fn random_response_vjp(
     functionals: &[Vec<(f64, f64)>],
 ) -> R<Vec<ModeSeeds>> {
     use faer::c64;
-    let input = gust_spectrum(b, sub)?;
-    let sol = super::response::gust_frequency_solution(b, sub, s, modes, interpolation)?;
+    let Prepared {
+        input,
+        sol,
+        rows,
+        monitors,
+    } = prepare(b, sub, s, modes, requests, interpolation)?;
     let n = sol.response.n_modes;
-    check_flat_damping(b, sub, modes, n)?;
-    check_mode_norm(b, sub, requests)?;
-    let mut rows = super::response::output_rows(b, sub, s, modes, n, requests)?;
-    rows.extend(sol.response.monitor_rows.iter().cloned());
-    let monitors = monitors_of(b, s, &sol)?;
     let r = &sol.response;
     let freqs = &r.frequencies_hz;
     let (w0, w2) = spectral_moment_weights(freqs);

@@ -1891,6 +1891,20 @@ fn bar_local<T: ScalarOps>(
     Ok((k, m))
 }
 
+/// (A + Aᵀ)/2: the reduced matrices symmetric to the last bit.
+fn symmetric_part(a: Mat<f64>) -> Mat<f64> {
+    let n = a.nrows();
+    Mat::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]))
+}
+
+/// The reduction u_g = T u_a of a subcase's constraints and the a-set's K and M.
+fn a_set_matrices(s: &Structure, spc: &BTreeSet<usize>) -> R<(Mat<f64>, Mat<f64>, Mat<f64>)> {
+    let (t, _) = s.reduction(spc)?;
+    let k = symmetric_part(t.transpose() * &s.k_gg * &t);
+    let m = symmetric_part(t.transpose() * &s.m_gg * &t);
+    Ok((t, k, m))
+}
+
 fn vdot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>()
 }
@@ -1992,13 +2006,7 @@ pub fn mode_adjoint(
     which: &[usize],
     (lambda_bar, phi_bar_g): (&[f64], &Mat<f64>),
 ) -> R<ModeAdjoint> {
-    let (t, _) = s.reduction(spc)?;
-    let sym = |a: Mat<f64>| {
-        let n = a.nrows();
-        Mat::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]))
-    };
-    let k = sym(t.transpose() * &s.k_gg * &t);
-    let m = sym(t.transpose() * &s.m_gg * &t);
+    let (t, k, m) = a_set_matrices(s, spc)?;
     let n = k.nrows();
     let ng = t.nrows();
     let phi_bar_a = t.transpose() * phi_bar_g;
@@ -2118,15 +2126,9 @@ pub fn mode_derivatives(
     (dk_g, dm_g): (&Mat<f64>, &Mat<f64>),
     which: &[usize],
 ) -> R<Vec<(f64, Vec<f64>)>> {
-    let (t, _) = s.reduction(spc)?;
-    let sym = |a: Mat<f64>| {
-        let n = a.nrows();
-        Mat::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]))
-    };
-    let k = sym(t.transpose() * &s.k_gg * &t);
-    let m = sym(t.transpose() * &s.m_gg * &t);
-    let dk = sym(t.transpose() * dk_g * &t);
-    let dm = sym(t.transpose() * dm_g * &t);
+    let (t, k, m) = a_set_matrices(s, spc)?;
+    let dk = symmetric_part(t.transpose() * dk_g * &t);
+    let dm = symmetric_part(t.transpose() * dm_g * &t);
     let n = k.nrows();
     let rigid = rigid_body_modes(modes);
     which

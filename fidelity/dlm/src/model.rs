@@ -477,6 +477,23 @@ impl Dlm {
             .collect()
     }
 
+    /// Seeds on the modes' displacements and slopes at the control points from the adjoint λ
+    /// of D c = W (one column a mode): W = n·u_x + i kd n·u gives ū = Re(conj(λ) i kd) n and
+    /// ū_x = Re(conj(λ)) n.
+    fn control_point_seeds(&self, lam: &Mat<c64>, kd: f64, out: &mut ModalSurface) {
+        for m in 0..out.n_modes() {
+            for (j, b) in self.boxes.iter().enumerate() {
+                let nrm = b.normal();
+                let l = lam[(j, m)].conj();
+                let (sx, su) = (l.re, (l * c64::new(0.0, kd)).re);
+                for a in 0..3 {
+                    out.disp_x[m][j][a] += sx * nrm[a];
+                    out.disp[m][j][a] += su * nrm[a];
+                }
+            }
+        }
+    }
+
     /// The reverse mode of [`Dlm::box_forces`] with respect to the mode shapes: seeds F̄ on every
     /// box force (`seeds[ik][box][col]`, conjugate convention δJ = Re Σ conj(F̄) δF; the gust
     /// column's are ignored, it does not depend on the shapes) to seeds on the modal surface's
@@ -520,17 +537,7 @@ impl Dlm {
                 let mut lam =
                     Mat::<c64>::from_fn(n, nm, |j, m| seeds[ik][j][m] * self.boxes[j].area);
                 lu.solve_adjoint_in_place(lam.as_mut());
-                for m in 0..nm {
-                    for j in 0..n {
-                        let nrm = self.boxes[j].normal();
-                        let l = lam[(j, m)].conj();
-                        let (sx, su) = (l.re, (l * c64::new(0.0, kd)).re);
-                        for a in 0..3 {
-                            out.disp_x[m][j][a] += sx * nrm[a];
-                            out.disp[m][j][a] += su * nrm[a];
-                        }
-                    }
-                }
+                self.control_point_seeds(&lam, kd, &mut out);
                 Ok(out)
             })
             .collect::<Result<_, AeroError>>()?;
@@ -742,18 +749,7 @@ impl AerodynamicsReverse for Dlm {
                         }
                     }
                     // mode shapes at the control points through W: W̄ = λ
-                    for m in 0..nm {
-                        for j in 0..n {
-                            let nrm = self.boxes[j].normal();
-                            let l = lam[(j, m)].conj();
-                            // W = n·u_x + i kd n·u  ⇒  ū = Re(conj(λ) i kd) n, ū_x = Re(conj(λ)) n
-                            let (sx, su) = (l.re, (l * c64::new(0.0, kd)).re);
-                            for a in 0..3 {
-                                g.modes.disp_x[m][j][a] += sx * nrm[a];
-                                g.modes.disp[m][j][a] += su * nrm[a];
-                            }
-                        }
-                    }
+                    self.control_point_seeds(&lam, kd, &mut g.modes);
                     // geometry: ℒ(q) = Re[Σ conj(Q̄) Hᵀ A c + Σ conj(λ)(W − D c)] with c, λ
                     // frozen, differentiated by duals along the active parameters
                     let qbar_mat = Mat::<c64>::from_fn(nm, nm + 1, qbar);
