@@ -2076,31 +2076,26 @@ impl ModeAdjoint {
     /// Σᵢ λ̄ᵢ ∂λᵢ + φ̄ᵢᵀ ∂φᵢ along one design direction (∂K, ∂M in the g-set).
     pub fn along(&self, modes: &RealModes, (dk_g, dm_g): (&Mat<f64>, &Mat<f64>)) -> f64 {
         let ng = dk_g.nrows();
+        // ∂K Φ and ∂M Φ of the modes concerned, by two products
+        let phi = Mat::<f64>::from_fn(ng, self.which.len(), |r, col| {
+            modes.phi_g[(r, self.which[col])]
+        });
+        let dk_phi = dk_g * &phi;
+        let dm_phi = dm_g * &phi;
         let mut total = 0.0;
         for (col, &i) in self.which.iter().enumerate() {
-            let phi = modes.phi_g.col(i);
             let lambda = modes.lambda[i];
             for r in 0..ng {
-                let (mut dk_phi, mut dm_phi) = (0.0, 0.0);
-                for q in 0..ng {
-                    let p = phi[q];
-                    if p != 0.0 {
-                        dk_phi += dk_g[(r, q)] * p;
-                        dm_phi += dm_g[(r, q)] * p;
-                    }
-                }
-                total +=
-                    self.u_g[(r, col)] * (dk_phi - lambda * dm_phi) - self.c[col] * phi[r] * dm_phi;
+                total += self.u_g[(r, col)] * (dk_phi[(r, col)] - lambda * dm_phi[(r, col)])
+                    - self.c[col] * phi[(r, col)] * dm_phi[(r, col)];
             }
         }
+        let column = |mode: usize| self.which.iter().position(|w| *w == mode).expect("kept");
         for (a, &r) in self.rigid.iter().enumerate() {
-            let phi_r = modes.phi_g.col(r);
-            let dm_phi_r: Vec<f64> = (0..ng)
-                .map(|q| (0..ng).map(|j| dm_g[(q, j)] * phi_r[j]).sum())
-                .collect();
+            let cr = column(r);
             for (b, &other) in self.rigid.iter().enumerate() {
-                let phi_s = modes.phi_g.col(other);
-                let pair: f64 = (0..ng).map(|q| phi_s[q] * dm_phi_r[q]).sum();
+                let cs = column(other);
+                let pair: f64 = (0..ng).map(|q| phi[(q, cs)] * dm_phi[(q, cr)]).sum();
                 total -= 0.5 * self.rigid_b[(a, b)] * pair;
             }
         }
