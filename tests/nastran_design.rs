@@ -649,3 +649,45 @@ fn free_flying_design_derivatives() {
     let rev = check_reverse_against_forward(&m, &[1.0, 1.0, 1.0]);
     eprintln!("free flying: differences {worst:.1e}, reverse against forward {rev:.1e}");
 }
+
+/// A run stopped by its iteration limit (exit 3, results written, checkpoint kept) and resumed
+/// with a higher limit ends at the uninterrupted run's optimum (the same iterates: the
+/// checkpoint holds the BFGS matrix and the merit penalty), to 1e-12.
+#[test]
+fn stopped_run_resumes_to_the_same_optimum() {
+    let dir = common::scratch("nastran", "design-resume");
+    let v = bar_wing_study();
+    let out = run_study(&dir, "whole", &v, &[]);
+    common::assert_success(&out);
+    let read = || -> serde_json::Value {
+        serde_json::from_str(
+            &std::fs::read_to_string(dir.join("reports/nastran_bar_wing/results.json")).unwrap(),
+        )
+        .unwrap()
+    };
+    let whole = read();
+    let mut short = v.clone();
+    short["optimization"]["max_iterations"] = 2.into();
+    let out = run_study(&dir, "whole", &short, &[]);
+    assert_eq!(
+        out.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(read()["converged"], false);
+    let out = run_study(&dir, "whole", &v, &["--resume"]);
+    common::assert_success(&out);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("resuming from iteration"));
+    let resumed = read();
+    assert_eq!(resumed["iterations"], whole["iterations"]);
+    for (a, b) in resumed["design_variables"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(whole["design_variables"].as_array().unwrap())
+    {
+        let (x, y) = (a["final"].as_f64().unwrap(), b["final"].as_f64().unwrap());
+        assert!((x - y).abs() <= 1e-12 * y.abs(), "{x} {y}");
+    }
+}
