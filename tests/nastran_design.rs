@@ -533,6 +533,11 @@ fn bad_nastran_studies_are_refused() {
             "model.subcase: the model has no subcase 4",
         ),
         (
+            "flutter subcase",
+            Box::new(|v| v["model"]["flutter_subcase"] = 7.into()),
+            "model.flutter_subcase: the model has no subcase 7 with FMETHOD",
+        ),
+        (
             "missing model",
             Box::new(|v| v["model"]["nastran"] = "nowhere.bdf".into()),
             "model.nastran",
@@ -690,4 +695,67 @@ fn stopped_run_resumes_to_the_same_optimum() {
         let (x, y) = (a["final"].as_f64().unwrap(), b["final"].as_f64().unwrap());
         assert!((x - y).abs() <= 1e-12 * y.abs(), "{x} {y}");
     }
+}
+
+/// The flutter check of a design study (`model.flutter_subcase`): the model's FLUTTER 30 (p-k)
+/// at the initial and final designs. With its velocities to 1.15 × the flight speed (the
+/// shipped deck) neither design flutters and the run ends with exit 0; with the velocities to
+/// 400 m/s the initial design's flutter speed is the one `gustkit run` finds for the same deck
+/// as SOL 145 (the same p-k), the final design flutters within the list, and the run ends
+/// with exit 3 saying where. The in-plane modes, which the lattice does not see, have a
+/// damping of round-off size (±1e-15) and are not flutter.
+#[test]
+fn flutter_check_of_the_final_design() {
+    let dir = common::scratch("nastran", "design-flutter");
+    let v = bar_wing_study();
+    let out = run_study(&dir, "flutter", &v, &[]);
+    common::assert_success(&out);
+    let read = |name: &str| -> serde_json::Value {
+        serde_json::from_str(
+            &std::fs::read_to_string(dir.join(format!("reports/{name}/results.json"))).unwrap(),
+        )
+        .unwrap()
+    };
+    let r = read("nastran_bar_wing");
+    let row = &r["flutter_check"][0];
+    assert_eq!(row["velocity_max"], 195.5);
+    assert!(row.get("final_speed").is_none() || row["final_speed"].is_null());
+    // velocities to 400 m/s
+    let deck = std::fs::read_to_string(bar_wing()).unwrap();
+    assert!(deck.contains("FLFACT,4,100.,THRU,195.5,20"));
+    let wide = deck.replace("FLFACT,4,100.,THRU,195.5,20", "FLFACT,4,50.,THRU,400.,36");
+    std::fs::write(dir.join("wide.bdf"), &wide).unwrap();
+    let mut w = v.clone();
+    w["model"]["nastran"] = dir.join("wide.bdf").display().to_string().into();
+    let out = run_study(&dir, "flutter", &w, &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert!(err.contains("the final design flutters at V = "), "{err}");
+    let r = read("nastran_bar_wing");
+    let row = &r["flutter_check"][0];
+    let (initial, last) = (
+        row["initial_speed"].as_f64().unwrap(),
+        row["final_speed"].as_f64().unwrap(),
+    );
+    // the same deck as a SOL 145 analysis: its flutter point
+    let cc_end = wide.find("BEGIN BULK").unwrap();
+    let sol145 = format!(
+        "SOL 145\nCEND\nSPC = 1\nMETHOD = 1\nFMETHOD = 30\n{}",
+        &wide[cc_end..]
+    );
+    std::fs::write(dir.join("f145.bdf"), sol145).unwrap();
+    let out = common::gustkit()
+        .arg("run")
+        .arg(dir.join("f145.bdf"))
+        .arg("--reports")
+        .arg(dir.join("reports"))
+        .output()
+        .unwrap();
+    common::assert_success(&out);
+    let f = read("f145");
+    let point = &f["subcases"][0]["flutter"][0];
+    assert_eq!(point["flutter_speed"].as_f64().unwrap(), initial);
+    eprintln!("flutter: initial {initial:.3} m/s (SOL 145 the same), final {last:.3} m/s");
+    // a coupled bending–torsion mode, not an in-plane one
+    assert!(initial > 150.0 && last > 150.0, "{initial} {last}");
 }

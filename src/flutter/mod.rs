@@ -21,6 +21,11 @@ use num_complex::Complex64;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+/// A damping g at or below this is the round-off of a root without aerodynamic damping (a
+/// Nastran model's in-plane mode, which the lattice does not see: g = ±1e-15 from one speed
+/// to the next), not a crossing into flutter. Physical damping is ten million times larger.
+pub const G_ROUNDOFF: f64 = 1e-9;
+
 /// Why a flutter analysis failed.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum FlutterError {
@@ -543,7 +548,7 @@ impl PkProblem<'_> {
                         *c.damping_g.last().expect("previous point"),
                         velocities[iv - 1],
                     );
-                    if g0 < 0.0 && r.g >= 0.0 {
+                    if g0 < 0.0 && r.g > G_ROUNDOFF {
                         flutter = Some(self.refine(m, (v0, g0), (v, r.g), &p_prev)?);
                     }
                 }

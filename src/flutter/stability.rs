@@ -38,7 +38,7 @@ pub fn check_stability(
     let gmax = pk
         .max_damping(flight.velocity, &ks)
         .map_err(|e| anyhow::anyhow!("stability check: {e}"))?;
-    if gmax >= 0.0 {
+    if gmax > crate::flutter::G_ROUNDOFF {
         anyhow::bail!(
             "unstable: the aeroelastic system has an undamped p-k root at the flight speed V = {:.1} m/s (g = {gmax:+.4}, on a branch the mode tracking did not follow; {conditions})",
             flight.velocity

@@ -52,7 +52,7 @@ impl Verdict {
         let start = r
             .curves
             .iter()
-            .filter(|c| c.damping_g.first().is_some_and(|g| *g >= 0.0))
+            .filter(|c| c.damping_g.first().is_some_and(|g| *g > super::G_ROUNDOFF))
             .max_by(|a, b| a.damping_g[0].total_cmp(&b.damping_g[0]));
         if let Some(c) = start {
             return Verdict::UndampedFromStart {

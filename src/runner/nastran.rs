@@ -24,18 +24,18 @@ struct ModeRow {
 }
 
 #[derive(Serialize, Deserialize)]
-struct FlutterPoint {
-    flutter_id: u32,
-    method_run: String,
-    mach: f64,
-    density_ratio: f64,
-    velocities: Vec<f64>,
+pub(crate) struct FlutterPoint {
+    pub(crate) flutter_id: u32,
+    pub(crate) method_run: String,
+    pub(crate) mach: f64,
+    pub(crate) density_ratio: f64,
+    pub(crate) velocities: Vec<f64>,
     /// Per mode: damping g and frequency (Hz) at each velocity.
-    damping_g: Vec<Vec<f64>>,
-    frequency_hz: Vec<Vec<f64>>,
-    flutter_speed: Option<f64>,
-    flutter_frequency_hz: Option<f64>,
-    flutter_mode: Option<usize>,
+    pub(crate) damping_g: Vec<Vec<f64>>,
+    pub(crate) frequency_hz: Vec<Vec<f64>>,
+    pub(crate) flutter_speed: Option<f64>,
+    pub(crate) flutter_frequency_hz: Option<f64>,
+    pub(crate) flutter_mode: Option<usize>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -342,7 +342,7 @@ fn transient_csv(t: &TransientResults) -> String {
     out
 }
 
-fn flutter(
+pub(crate) fn flutter(
     b: &BulkData,
     sub: &Subcase,
     s: &crate::nastran::structure::Structure,

@@ -196,6 +196,22 @@ struct ConstraintResult {
     refined: f64,
 }
 
+/// One p-k flutter point of the flutter subcase at the initial and final designs.
+#[derive(Serialize, Deserialize)]
+struct FlutterCheckRow {
+    flutter_id: u32,
+    mach: f64,
+    density_ratio: f64,
+    /// The FLFACT velocities' range (the model's units).
+    velocity_min: f64,
+    velocity_max: f64,
+    /// The flutter speed within the range, none when stable throughout.
+    initial_speed: Option<f64>,
+    final_speed: Option<f64>,
+    final_frequency_hz: Option<f64>,
+    final_mode: Option<usize>,
+}
+
 #[derive(Serialize, Deserialize)]
 struct HistoryRow {
     iteration: usize,
@@ -246,6 +262,9 @@ struct NastranDesignResults {
     design_variables: Vec<VariableResult>,
     properties: Vec<PropertyResult>,
     constraints: Vec<ConstraintResult>,
+    /// The flutter subcase's points at the initial and final designs (`model.flutter_subcase`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    flutter_check: Vec<FlutterCheckRow>,
     resolution: Resolution,
     history: Vec<HistoryRow>,
     frequencies_hz: Vec<f64>,
@@ -284,6 +303,18 @@ fn design_model(study: &NastranStudyFile) -> Result<(DesignModel, Vec<Limit>, Ve
         ),
     };
     let sub: Subcase = input.case_control.subcase(id).expect("listed subcase");
+    if let Some(f) = study.model.flutter_subcase {
+        let ok = input
+            .case_control
+            .subcase(f)
+            .is_some_and(|s| s.selections.contains_key("FMETHOD"));
+        if !ok {
+            bail!(
+                "{}: the model has no subcase {f} with FMETHOD (its subcases: {ids:?}): name the subcase of its p-k flutter analysis",
+                at("model.flutter_subcase")
+            );
+        }
+    }
     if !sub.selections.contains_key("RANDOM") {
         bail!(
             "{}: subcase {id} selects no RANDOM: the constraints are on its random gust response (GUST, FREQUENCY, RANDOM)",
@@ -368,6 +399,46 @@ fn design_model(study: &NastranStudyFile) -> Result<(DesignModel, Vec<Limit>, Ve
         }
     }
     Ok((model, limits, warnings))
+}
+
+/// The p-k flutter points of the study's flutter subcase at the initial and final designs.
+fn flutter_check(
+    study: &NastranStudyFile,
+    model: &DesignModel,
+    (x0, x): (&[f64], &[f64]),
+) -> Result<Vec<FlutterCheckRow>> {
+    let Some(id) = study.model.flutter_subcase else {
+        return Ok(Vec::new());
+    };
+    let input = Input::read(&study.model_path())?;
+    let sub = input
+        .case_control
+        .subcase(id)
+        .context("the flutter subcase was checked at load")?;
+    let at = |x: &[f64]| -> Result<Vec<super::nastran::FlutterPoint>> {
+        let b = crate::nastran::design::apply(&model.base, &model.relations, x)?;
+        let (s, modes) = subcase_modes(&b, &sub)?;
+        super::nastran::flutter(&b, &sub, &s, &modes)
+    };
+    let (before, after) = (
+        at(x0).context("the flutter check of the initial design")?,
+        at(x).context("the flutter check of the final design")?,
+    );
+    Ok(before
+        .iter()
+        .zip(&after)
+        .map(|(a, b)| FlutterCheckRow {
+            flutter_id: b.flutter_id,
+            mach: b.mach,
+            density_ratio: b.density_ratio,
+            velocity_min: b.velocities.first().copied().unwrap_or(0.0),
+            velocity_max: b.velocities.last().copied().unwrap_or(0.0),
+            initial_speed: a.flutter_speed,
+            final_speed: b.flutter_speed,
+            final_frequency_hz: b.flutter_frequency_hz,
+            final_mode: b.flutter_mode,
+        })
+        .collect())
 }
 
 /// The same model with twice the modes (the METHOD asked for 2n roots, its upper frequency
@@ -474,7 +545,7 @@ pub fn run(study: &NastranStudyFile, reports: &Path, resume: bool) -> Result<sup
     let check = fine
         .analyse(&info.x)
         .context("the final design's resolution check (twice the modes and reduced frequencies)")?;
-    let results = results(
+    let mut results = results(
         study,
         (&model, &fine),
         &limits,
@@ -483,6 +554,7 @@ pub fn run(study: &NastranStudyFile, reports: &Path, resume: bool) -> Result<sup
         &problem,
         warnings,
     );
+    results.flutter_check = flutter_check(study, &model, (&x0, &info.x))?;
     write_atomic(
         &dir.join("results.json"),
         serde_json::to_string_pretty(&results)?.as_bytes(),
@@ -525,6 +597,17 @@ pub fn run(study: &NastranStudyFile, reports: &Path, resume: bool) -> Result<sup
             violated.join("; ")
         )));
     }
+    let fluttering: Vec<String> = results
+        .flutter_check
+        .iter()
+        .filter_map(|f| f.final_speed.map(|v| flutter_words(f, v)))
+        .collect();
+    if !fluttering.is_empty() {
+        return Ok(super::Outcome::GoalNotReached(format!(
+            "the final design {}",
+            fluttering.join("; ")
+        )));
+    }
     if !unresolved.is_empty() {
         return Ok(super::Outcome::GoalNotReached(format!(
             "the final design exceeds its limits by more than {:.0} % with twice the modes and reduced frequencies: {}",
@@ -533,6 +616,21 @@ pub fn run(study: &NastranStudyFile, reports: &Path, resume: bool) -> Result<sup
         )));
     }
     Ok(super::Outcome::Done)
+}
+
+/// "flutters at V = … (FLUTTER 30 at Mach …, density ratio …), mode 3, 42.1 Hz".
+fn flutter_words(f: &FlutterCheckRow, v: f64) -> String {
+    let mut w = format!(
+        "flutters at V = {v:.6} (FLUTTER {} at Mach {}, density ratio {}; velocities {}–{})",
+        f.flutter_id, f.mach, f.density_ratio, f.velocity_min, f.velocity_max
+    );
+    if let Some(m) = f.final_mode {
+        w += &format!(", mode {m}");
+    }
+    if let Some(hz) = f.final_frequency_hz {
+        w += &format!(", {hz:.4} Hz");
+    }
+    w
 }
 
 /// The checkpoint's problem id: the study's defining fields and the model's data.
@@ -683,6 +781,7 @@ fn results(
                 .fold(0.0, f64::max),
         },
         constraints,
+        flutter_check: Vec::new(),
         history: info
             .history
             .iter()
@@ -849,6 +948,28 @@ fn summary(r: &NastranDesignResults) -> String {
         "\nThe constraints see {} modes and {} reduced frequencies (the model's METHOD and PARAM LMODES; the DLM on reduced frequencies to 5 % beyond the FREQ list's last); the final design re-analysed with {} modes and {} reduced frequencies moves them by at most {:.2e} of their limits (a refined value more than {:.0} % above its limit is in bold and fails the run). The lattice is the model's CAERO1 boxes, as Nastran's.\n",
         s.modes, s.reduced_frequencies, s.refined_modes, s.refined_reduced_frequencies, s.largest_change_of_limit, 100.0 * RMS_TOLERANCE
     ));
+    if !r.flutter_check.is_empty() {
+        out.push_str(
+            "\n| flutter (p-k) | velocities | initial design | final design |\n|---|---|---|---|\n",
+        );
+        for f in &r.flutter_check {
+            let speed = |v: Option<f64>| v.map_or("no flutter".to_string(), |v| format!("{v:.6}"));
+            let final_words = match f.final_speed {
+                Some(v) => format!("**{}**", flutter_words(f, v)),
+                None => "no flutter".into(),
+            };
+            out.push_str(&format!(
+                "| FLUTTER {}, Mach {}, density ratio {} | {}–{} | {} | {} |\n",
+                f.flutter_id,
+                f.mach,
+                f.density_ratio,
+                f.velocity_min,
+                f.velocity_max,
+                speed(f.initial_speed),
+                final_words
+            ));
+        }
+    }
     if !r.warnings.is_empty() {
         out.push_str("\nWarnings:\n\n");
         for w in &r.warnings {

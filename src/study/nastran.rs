@@ -46,6 +46,11 @@ pub struct ModelSpec {
     /// out).
     #[serde(default)]
     pub subcase: Option<u32>,
+    /// A subcase with FMETHOD (the model's FLUTTER, FLFACT and MKAERO cards): its p-k flutter
+    /// points analysed at the initial and final designs; a final design that flutters within
+    /// the FLFACT velocities ends the run with exit 3.
+    #[serde(default)]
+    pub flutter_subcase: Option<u32>,
 }
 
 /// A design variable (DESVAR): its name, initial value and bounds.
