@@ -162,6 +162,10 @@ impl PropertyRelation {
     }
 }
 
+/// The memory the forward mode may hold in design variables' dense ∂K and ∂M at once (a group
+/// of variables is swept together, sharing one response; 16 n_g² bytes a variable).
+const DERIVATIVE_BUDGET_BYTES: f64 = 2e9;
+
 /// The model at design `x`: every related field set to its relation's value. A value that is
 /// not positive (a section or thickness the elements cannot have) is refused naming the field.
 pub fn apply(base: &BulkData, relations: &[PropertyRelation], x: &[f64]) -> R<BulkData> {
@@ -320,55 +324,58 @@ impl DesignModel {
         let s = &p.structure;
         let spc = constrained(s, &p.bulk, self.sub.selections.get("SPC").copied())?;
         let ng = s.k_gg.nrows();
-        // ∂K, ∂M of every related field, once
-        let parts: Vec<(Mat<f64>, Mat<f64>)> = self
-            .relations
-            .iter()
-            .map(|r| r.derivative(s, &p.bulk))
-            .collect::<R<_>>()?;
-        let mut dks = Vec::with_capacity(self.n_variables);
-        for v in 0..self.n_variables {
-            let (mut dk, mut dm) = (Mat::<f64>::zeros(ng, ng), Mat::<f64>::zeros(ng, ng));
-            for (r, (pk, pm)) in self.relations.iter().zip(&parts) {
-                for &(_, c) in r.terms.iter().filter(|t| t.0 == v) {
-                    dk += faer::Scale(c) * pk;
-                    dm += faer::Scale(c) * pm;
-                }
-            }
-            dks.push((dk, dm));
-        }
+        // the variables' dense ∂K, ∂M (16 n_g² bytes each) in groups that fit the budget
+        let per_variable = 16.0 * (ng * ng) as f64;
+        let group = ((DERIVATIVE_BUDGET_BYTES / per_variable).floor() as usize).max(1);
         let which: Vec<usize> = (0..self.n_modes).collect();
-        let mut d_lambda = Vec::with_capacity(self.n_variables);
-        let mut d_phi = Vec::with_capacity(self.n_variables);
-        for (dk, dm) in &dks {
-            let d = mode_derivatives(s, &spc, &p.modes, (dk, dm), &which)?;
-            d_lambda.push(d.iter().map(|x| x.0).collect::<Vec<_>>());
-            d_phi.push(Mat::from_fn(ng, d.len(), |i, c| d[c].1[i]));
+        let variables: Vec<usize> = (0..self.n_variables).collect();
+        let (mut mass, mut outputs) = (Vec::new(), Vec::new());
+        for vars in variables.chunks(group) {
+            let dks = vars
+                .iter()
+                .map(|&v| self.variable_direction(s, &p.bulk, v))
+                .collect::<R<Vec<_>>>()?;
+            let mut directions = Vec::with_capacity(dks.len());
+            for (dk, dm) in &dks {
+                let d = mode_derivatives(s, &spc, &p.modes, (dk, dm), &which)?;
+                directions.push(ModeDirection {
+                    d_lambda: d.iter().map(|x| x.0).collect(),
+                    d_phi_g: Mat::from_fn(ng, d.len(), |i, c| d[c].1[i]),
+                    dk,
+                    dm,
+                });
+            }
+            outputs.extend(random_response_derivatives(
+                &p.bulk,
+                &self.sub,
+                s,
+                &p.modes,
+                &self.requests,
+                &self.interpolation,
+                &directions,
+            )?);
+            mass.extend(dks.iter().map(|(_, dm)| translational_mass(s, dm)));
         }
-        let directions: Vec<ModeDirection> = dks
-            .iter()
-            .zip(d_lambda.into_iter().zip(d_phi))
-            .map(|((dk, dm), (d_lambda, d_phi_g))| ModeDirection {
-                d_lambda,
-                d_phi_g,
-                dk,
-                dm,
-            })
-            .collect();
-        let outputs = random_response_derivatives(
-            &p.bulk,
-            &self.sub,
-            s,
-            &p.modes,
-            &self.requests,
-            &self.interpolation,
-            &directions,
-        )?;
-        let mass = dks
-            .iter()
-            .map(|(_, dm)| translational_mass(s, dm))
-            .collect();
         Ok(DesignGradients { mass, outputs })
+    }
+
+    /// ∂K and ∂M (g-set) along design variable `v`: Σ coefficient × the field's derivative
+    /// over the relations that name it.
+    fn variable_direction(&self, s: &Structure, b: &BulkData, v: usize) -> R<(Mat<f64>, Mat<f64>)> {
+        let ng = s.k_gg.nrows();
+        let (mut dk, mut dm) = (Mat::<f64>::zeros(ng, ng), Mat::<f64>::zeros(ng, ng));
+        for r in &self.relations {
+            let coefficients: Vec<f64> = r.terms.iter().filter(|t| t.0 == v).map(|t| t.1).collect();
+            if coefficients.is_empty() {
+                continue;
+            }
+            let (pk, pm) = r.derivative(s, b)?;
+            for c in coefficients {
+                dk += faer::Scale(c) * &pk;
+                dm += faer::Scale(c) * &pm;
+            }
+        }
+        Ok((dk, dm))
     }
 }
 
