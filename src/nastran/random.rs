@@ -78,6 +78,19 @@ impl GustSpectrum<'_> {
     }
 }
 
+/// The PSD |y|² X(f) of one output's complex response y(f) on the frequency list.
+fn psd_of(ys: &[faer::c64], freqs: &[f64], input: &GustSpectrum) -> Vec<f64> {
+    ys.iter()
+        .zip(freqs)
+        .map(|(y, &f)| y.norm_sqr() * input.at(f))
+        .collect()
+}
+
+/// RMS = √m₀ and N0 = √(m₂/m₀) (0 where m₀ is).
+fn rms_and_n0(m0: f64, m2: f64) -> (f64, f64) {
+    (m0.sqrt(), if m0 > 0.0 { (m2 / m0).sqrt() } else { 0.0 })
+}
+
 /// The RANDPS of the subcase's RANDOM set (exactly one) and its TABRND1.
 fn gust_spectrum<'a>(b: &'a BulkData, sub: &Subcase) -> R<GustSpectrum<'a>> {
     let random_id = sub.selections.get("RANDOM").copied().ok_or_else(|| {
@@ -129,17 +142,13 @@ pub fn random_response(
     let out = rows
         .iter()
         .map(|row| {
-            let psd_values: Vec<f64> = response
-                .output(row)
-                .iter()
-                .zip(freqs)
-                .map(|(y, &f)| y.norm_sqr() * input.at(f))
-                .collect();
+            let psd_values = psd_of(&response.output(row), freqs, &input);
             let (m0, m2) = spectral_moments(freqs, &psd_values);
+            let (rms, n0_hz) = rms_and_n0(m0, m2);
             RandomRow {
                 label: row.label.clone(),
-                rms: m0.sqrt(),
-                n0_hz: if m0 > 0.0 { (m2 / m0).sqrt() } else { 0.0 },
+                rms,
+                n0_hz,
                 psd: psd_values,
                 frequencies_hz: freqs.clone(),
             }
@@ -175,8 +184,9 @@ pub struct RandomDerivative {
 /// factorizations, the rows' tangents (φ rows; the constraint forces' add ∂K φ and ∂M φ), and
 /// the spectral moments' (linear in the PSD): dRMS = dm₀/(2 RMS), dN0 = (dm₂/m₀ − m₂ dm₀/m₀²)
 /// /(2 N0). The modal damping is held fixed: an SDAMP table that is not flat at a retained
-/// mode's frequency is refused. Monitor points are not among its outputs yet (their
-/// aerodynamic part would need the box forces' tangent).
+/// mode's frequency is refused. The model's monitor points follow the requests among the
+/// outputs (their aerodynamic part through the box forces of ∂φ, their inertial part through
+/// −lᵀ(∂M φ + M ∂φ)).
 pub fn random_response_derivative(
     b: &BulkData,
     sub: &Subcase,
@@ -209,25 +219,10 @@ pub fn random_response_derivatives(
     interpolation: &KInterpolation,
     directions: &[ModeDirection],
 ) -> R<Vec<Vec<RandomDerivative>>> {
-    let Prepared {
-        input,
-        sol,
-        rows,
-        monitors,
-    } = prepare(b, sub, s, modes, requests, interpolation)?;
+    let prepared = prepare(b, sub, s, modes, requests, interpolation)?;
     directions
         .iter()
-        .map(|d| {
-            derivative_along(
-                b,
-                sub,
-                s,
-                modes,
-                requests,
-                (&input, &sol, &rows, &monitors),
-                d,
-            )
-        })
+        .map(|d| derivative_along(b, sub, s, modes, requests, &prepared, d))
         .collect()
 }
 
@@ -238,6 +233,10 @@ struct Prepared<'a> {
     sol: super::response::GustSolution,
     rows: Vec<super::response::OutputRow>,
     monitors: Vec<super::response::MonitorFunctional>,
+    /// Each row's complex response y(f) on the FREQ list.
+    outputs: Vec<Vec<faer::c64>>,
+    /// The modal problem's grid index of each FREQ-list frequency with a load.
+    grid_index: Vec<Option<usize>>,
 }
 
 /// The response solved once for the derivatives, with their checks (flat modal damping, the
@@ -258,11 +257,18 @@ fn prepare<'a>(
     let mut rows = super::response::output_rows(b, sub, s, modes, n, requests)?;
     rows.extend(sol.response.monitor_rows.iter().cloned());
     let monitors = monitors_of(b, s, &sol)?;
+    let outputs = rows.iter().map(|row| sol.response.output(row)).collect();
+    let mut grid_index = vec![None; sol.response.frequencies_hz.len()];
+    for (j, &i) in sol.live.iter().enumerate() {
+        grid_index[i] = Some(j);
+    }
     Ok(Prepared {
         input,
         sol,
         rows,
         monitors,
+        outputs,
+        grid_index,
     })
 }
 
@@ -278,17 +284,23 @@ fn monitors_of(
     super::response::monitor_functionals(b, s, &sol.rows, sol.surf.box_ids.len())
 }
 
-/// lᵀ A φ_m for every mode m < n (A a g-set matrix, l a g-set vector).
-fn paired(l: &[f64], a: &faer::Mat<f64>, phi: &faer::Mat<f64>, n: usize) -> Vec<f64> {
+/// lᵀ A (A a g-set matrix, l a g-set vector, mostly zeros).
+fn row_of(l: &[f64], a: &faer::Mat<f64>) -> Vec<f64> {
     let ng = a.nrows();
-    let la: Vec<f64> = (0..ng)
+    (0..ng)
         .map(|j| {
             (0..ng)
                 .filter(|&i| l[i] != 0.0)
                 .map(|i| l[i] * a[(i, j)])
                 .sum()
         })
-        .collect();
+        .collect()
+}
+
+/// lᵀ A φ_m for every mode m < n.
+fn paired(l: &[f64], a: &faer::Mat<f64>, phi: &faer::Mat<f64>, n: usize) -> Vec<f64> {
+    let ng = a.nrows();
+    let la = row_of(l, a);
     (0..n)
         .map(|m| (0..ng).map(|j| la[j] * phi[(j, m)]).sum())
         .collect()
@@ -301,15 +313,18 @@ fn derivative_along(
     s: &Structure,
     modes: &RealModes,
     requests: &[(u32, u8, Quantity)],
-    (input, sol, rows, monitors): (
-        &GustSpectrum,
-        &super::response::GustSolution,
-        &[super::response::OutputRow],
-        &[super::response::MonitorFunctional],
-    ),
+    prepared: &Prepared,
     direction: &ModeDirection,
 ) -> R<Vec<RandomDerivative>> {
     use faer::c64;
+    let Prepared {
+        input,
+        sol,
+        rows,
+        monitors,
+        outputs,
+        grid_index,
+    } = prepared;
     let n = sol.response.n_modes;
     if direction.d_lambda.len() < n || direction.d_phi_g.ncols() < n {
         return Err(NastranError::model(
@@ -394,15 +409,11 @@ fn derivative_along(
     let d_eta = sol.eta_jvp(&d_table, &direction.d_lambda[..n])?;
     let r = &sol.response;
     let freqs = &r.frequencies_hz;
-    let mut grid_index = vec![None; freqs.len()];
-    for (j, &i) in sol.live.iter().enumerate() {
-        grid_index[i] = Some(j);
-    }
     rows.iter()
         .zip(&d_rows)
-        .map(|(row, d_row)| {
+        .zip(outputs)
+        .map(|((row, d_row), ys)| {
             // y(f) as the response gives it, and its tangent
-            let ys = r.output(row);
             let (mut psd, mut d_psd) = (vec![0.0; freqs.len()], vec![0.0; freqs.len()]);
             for (i, &f) in freqs.iter().enumerate() {
                 let (Some(eta), Some(j)) = (&r.eta[i], grid_index[i]) else {
@@ -437,8 +448,7 @@ fn derivative_along(
             }
             let (m0, m2) = spectral_moments(freqs, &psd);
             let (dm0, dm2) = spectral_moments(freqs, &d_psd);
-            let rms = m0.sqrt();
-            let n0 = if m0 > 0.0 { (m2 / m0).sqrt() } else { 0.0 };
+            let (rms, n0) = rms_and_n0(m0, m2);
             Ok(RandomDerivative {
                 label: row.label.clone(),
                 rms,
@@ -489,18 +499,15 @@ pub fn random_response_vjp(
         sol,
         rows,
         monitors,
+        outputs,
+        grid_index,
     } = prepare(b, sub, s, modes, requests, interpolation)?;
     let n = sol.response.n_modes;
     let r = &sol.response;
     let freqs = &r.frequencies_hz;
     let (w0, w2) = spectral_moment_weights(freqs);
     let n_boxes = sol.surf.box_ids.len();
-    let mut grid_index = vec![None; freqs.len()];
-    for (j, &i) in sol.live.iter().enumerate() {
-        grid_index[i] = Some(j);
-    }
     let ms = super::aero::modal_surface(&sol.surf, &sol.rows, modes, n);
-    let outputs: Vec<Vec<c64>> = rows.iter().map(|row| r.output(row)).collect();
     functionals
         .iter()
         .map(|seeds| {
@@ -523,14 +530,8 @@ pub fn random_response_vjp(
                     continue;
                 }
                 let ys = &outputs[y];
-                let psd: Vec<f64> = ys
-                    .iter()
-                    .zip(freqs)
-                    .map(|(v, &f)| v.norm_sqr() * input.at(f))
-                    .collect();
-                let (m0, m2) = spectral_moments(freqs, &psd);
-                let rms = m0.sqrt();
-                let n0 = if m0 > 0.0 { (m2 / m0).sqrt() } else { 0.0 };
+                let (m0, m2) = spectral_moments(freqs, &psd_of(ys, freqs, &input));
+                let (rms, n0) = rms_and_n0(m0, m2);
                 // RMS = √m₀, N0 = √(m₂/m₀)
                 let mut m0_bar = if rms > 0.0 {
                     rms_bar / (2.0 * rms)
@@ -624,14 +625,7 @@ pub fn random_response_vjp(
                     continue;
                 }
                 let ng = phi_g.nrows();
-                let m_l: Vec<f64> = (0..ng)
-                    .map(|j| {
-                        (0..ng)
-                            .filter(|&i| f.l[i] != 0.0)
-                            .map(|i| f.l[i] * s.m_gg[(i, j)])
-                            .sum()
-                    })
-                    .collect();
+                let m_l = row_of(&f.l, &s.m_gg);
                 for m in 0..n {
                     for j in 0..ng {
                         phi_g[(j, m)] -= m_bar[y][m] * m_l[j];

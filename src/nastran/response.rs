@@ -46,6 +46,15 @@ pub enum KInterpolation {
     LinearOnMkaero(Vec<f64>),
 }
 
+impl KInterpolation {
+    /// The reduced frequencies the GAF table is sampled on.
+    pub fn reduced_frequencies(&self) -> &[f64] {
+        match self {
+            KInterpolation::Dense(k) | KInterpolation::LinearOnMkaero(k) => k,
+        }
+    }
+}
+
 /// A table's value at x, linear between points and constant beyond the ends.
 pub fn table_value(t: &Table, x: f64) -> f64 {
     let p = &t.points;

@@ -280,9 +280,13 @@ struct NastranDesignResults {
     warnings: Vec<String>,
 }
 
-/// The model, its subcase and the design model of a study, every model error named by the
+/// A study's design model, its limits, the reading's warnings and the initial design analysed
+/// (which places each limit on its row of the response), every model error named by the
 /// study's JSON path.
-fn design_model(study: &NastranStudyFile) -> Result<(DesignModel, Vec<Limit>, Vec<String>)> {
+type Designed = (DesignModel, Vec<Limit>, Vec<String>, DesignPoint);
+
+/// The model, its subcase and the design model of a study ([`Designed`]).
+fn design_model(study: &NastranStudyFile) -> Result<Designed> {
     let file = study.model_path();
     let at = |path: &str| format!("{}: {path}", study.file.display());
     let input = Input::read(&file).with_context(|| at("model.nastran"))?;
@@ -398,7 +402,7 @@ fn design_model(study: &NastranStudyFile) -> Result<(DesignModel, Vec<Limit>, Ve
             }
         }
     }
-    Ok((model, limits, warnings))
+    Ok((model, limits, warnings, start))
 }
 
 /// The p-k flutter points of the study's flutter subcase at the initial and final designs.
@@ -466,17 +470,17 @@ fn refined(model: &DesignModel) -> Result<DesignModel> {
     Ok(m)
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    if v.is_empty() {
+/// The median of some timings (0 when there are none), as the wing runs' `Stats` take it.
+fn median(times: &[f64]) -> f64 {
+    if times.is_empty() {
         return 0.0;
     }
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
+    crate::report::results::Stats::of(times.to_vec()).median_s
 }
 
 /// Runs a Nastran design study into reports/<name>/.
 pub fn run(study: &NastranStudyFile, reports: &Path, resume: bool) -> Result<super::Outcome> {
-    let (model, limits, mut warnings) = design_model(study)?;
+    let (model, limits, mut warnings, start) = design_model(study)?;
     for w in &warnings {
         eprintln!("warning: {w}");
     }
@@ -495,9 +499,6 @@ pub fn run(study: &NastranStudyFile, reports: &Path, resume: bool) -> Result<sup
     let final_dir = reports.join(&study.name);
     let folder = crate::report::folder::RunFolder::begin(&final_dir, resume)?;
     let dir = folder.path().to_path_buf();
-    let start = model
-        .analyse(&x0)
-        .with_context(|| format!("{}: the initial design", study.file.display()))?;
     println!(
         "{}: {} design variables, {} constraints on subcase {}, {} modes, {} reduced frequencies; initial mass {:.6e}",
         study.name,
@@ -505,9 +506,7 @@ pub fn run(study: &NastranStudyFile, reports: &Path, resume: bool) -> Result<sup
         limits.len(),
         model.sub.id,
         model.n_modes,
-        match &model.interpolation {
-            KInterpolation::Dense(k) | KInterpolation::LinearOnMkaero(k) => k.len(),
-        },
+        model.interpolation.reduced_frequencies().len(),
         start.mass
     );
     let problem_id = checkpoint_id(study, &model)?;
@@ -729,9 +728,7 @@ fn results(
             refined: value(check, l),
         })
         .collect();
-    let k_count = |m: &DesignModel| match &m.interpolation {
-        KInterpolation::Dense(k) | KInterpolation::LinearOnMkaero(k) => k.len(),
-    };
+    let k_count = |m: &DesignModel| m.interpolation.reduced_frequencies().len();
     NastranDesignResults {
         kind: crate::kind::StudyKind::NastranDesign.name().into(),
         study: study.name.clone(),
@@ -812,8 +809,8 @@ fn results(
                 psd: r.psd.clone(),
             })
             .collect(),
-        function_time_median_s: median(problem.function_times.clone()),
-        gradient_time_median_s: median(problem.gradient_times.clone()),
+        function_time_median_s: median(&problem.function_times),
+        gradient_time_median_s: median(&problem.gradient_times),
         gradient_mode: if problem.reverse() {
             "reverse"
         } else {
