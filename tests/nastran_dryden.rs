@@ -8,11 +8,10 @@
 //! |H|² = a² ω² / (a² + ω²). With the one-sided Dryden spectrum
 //! Φ(ω) = σ² τ/π (1 + 3τ²ω²) / (1 + τ²ω²)², τ = L/V, the acceleration's spectral moments over
 //! the band [ω₀, ω₁] are elementary integrals (partial fractions below): m₀ = ∫ |H|² Φ dω
-//! (= ∫ PSD df in Hz) and m₂ = ∫ f² |H|² Φ dω with f = ω/2π; RMS = √m₀ and N0 = √(m₂/m₀). The DLM's forces approach the
-//! quasi-steady ones as the reduced frequency goes to zero (lift deficiency, apparent mass and the
-//! gust's penetration along the chord are O(k) and O(k²)), so the difference must fall in
-//! proportion to the band's reduced frequencies: the test runs the same dimensionless problem at
-//! two frequency scales ten apart.
+//! (= ∫ PSD df in Hz) and m₂ = ∫ f² |H|² Φ dω with f = ω/2π; RMS = √m₀ and N0 = √(m₂/m₀).
+//! The DLM's forces approach the quasi-steady ones as the reduced frequency goes to zero, so
+//! the difference must fall with the band's reduced frequencies: the test runs the same
+//! dimensionless problem at two frequency scales ten apart.
 
 use gustkit::nastran::bulk::BulkData;
 use gustkit::nastran::random::{random_response, KInterpolation, Quantity};
