@@ -150,6 +150,7 @@ fn design_gradients(repeat: usize) -> anyhow::Result<()> {
             .collect(),
         interpolation: KInterpolation::Dense((0..=40).map(|i| 0.35 * i as f64 / 40.0).collect()),
         n_variables: 32,
+        lfd: None,
     };
     let p = model.analyse(&x0)?;
     println!(

@@ -91,6 +91,7 @@ fn model(
         requests: labels.iter().map(|l| parse_output(l).unwrap()).collect(),
         interpolation: KInterpolation::Dense((0..=40).map(|i| k_max * i as f64 / 40.0).collect()),
         n_variables,
+        lfd: None,
     }
 }
 

@@ -112,6 +112,10 @@ pub struct WingContext<'a> {
     pub flight: &'a FlightCondition,
     /// Where the builder may keep state between runs (the run folder), if anywhere.
     pub cache_dir: Option<&'a std::path::Path>,
+    /// The planform is not designed (a Nastran model's panel): the model need not carry the
+    /// mesh's planform tangents, whose steady sensitivities its reverse mode would otherwise
+    /// solve for.
+    pub fixed_planform: bool,
 }
 
 /// A fidelity's builder for wing studies.

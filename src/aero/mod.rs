@@ -55,6 +55,7 @@ impl AeroModel {
             airfoil,
             flight: &flight,
             cache_dir,
+            fixed_planform: false,
         })?;
         Ok(Self::bind(builder.name(), built, flight, k, plate))
     }

@@ -29,6 +29,7 @@ fn dlm_binding_matches_its_surface() {
         airfoil: &airfoil,
         flight: &flight,
         cache_dir: None,
+        fixed_planform: false,
     };
     let built = aero.fidelity.builder().build(&ctx).unwrap();
     let pts = &built.model.surface().points;
@@ -78,6 +79,7 @@ fn model_without_reverse_mode_is_refused_by_name() {
         airfoil: &airfoil,
         flight: &flight,
         cache_dir: None,
+        fixed_planform: false,
     };
     let mut built = aero.fidelity.builder().build(&ctx).unwrap();
     built.model = Box::new(ForwardOnly(built.model));
@@ -208,6 +210,7 @@ fn strip_binding_matches_its_surface() {
         airfoil: &airfoil,
         flight: &flight,
         cache_dir: None,
+        fixed_planform: false,
     };
     let spec: FidelitySpec =
         serde_json::from_value(serde_json::json!({"strip": {"n_strips": 6, "points": 5}})).unwrap();

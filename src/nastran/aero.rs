@@ -178,8 +178,30 @@ pub fn spline_rows(
 ) -> R<(SplineRows, Vec<u32>)> {
     use gustkit_core::Aerodynamics;
     let n_boxes = surf.box_ids.len();
-    let points = &surf.dlm.surface().points;
+    let owners: Vec<usize> = (0..2 * n_boxes).map(|p| p % n_boxes).collect();
+    spline_rows_at(b, s, surf, &surf.dlm.surface().points, &owners)
+}
+
+/// The splines' matrix from the g-set to any points of the panels (aerodynamic frame), each
+/// moved by the spline of the box that owns it (`owners`, DLM box indices): what another
+/// fidelity's surface points (the LFD's wall nodes on the planform) take from the model.
+pub fn spline_rows_at(
+    b: &BulkData,
+    s: &Structure,
+    surf: &LiftingSurfaces,
+    points: &[[f64; 3]],
+    owners: &[usize],
+) -> R<(SplineRows, Vec<u32>)> {
+    use gustkit_core::Aerodynamics;
+    debug_assert_eq!(points.len(), owners.len());
+    let n_boxes = surf.box_ids.len();
+    let box_points = &surf.dlm.surface().points;
     let normals = &surf.dlm.surface().normals;
+    // the points each box owns
+    let mut owned: Vec<Vec<usize>> = vec![Vec::new(); n_boxes];
+    for (p, &o) in owners.iter().enumerate() {
+        owned[o].push(p);
+    }
     let index: BTreeMap<u32, usize> = surf
         .box_ids
         .iter()
@@ -293,8 +315,11 @@ pub fn spline_rows(
         if sp.usage == "FORCE" {
             continue;
         }
-        // the spline's points (control and doublet point of each of its boxes), in basic
-        let rows_of: Vec<usize> = own.iter().flat_map(|&i| [i, n_boxes + i]).collect();
+        // the spline's points (those its boxes own), in basic
+        let rows_of: Vec<usize> = own.iter().flat_map(|&i| owned[i].iter().copied()).collect();
+        if rows_of.is_empty() {
+            continue;
+        }
         let pts: Vec<[f64; 3]> = rows_of
             .iter()
             .map(|&r| surf.frame.to_basic(points[r]))
@@ -330,7 +355,7 @@ pub fn spline_rows(
                     normal[2] * flow[0] - normal[0] * flow[2],
                     normal[0] * flow[1] - normal[1] * flow[0],
                 ];
-                let origin = surf.frame.to_basic(points[own[0]]);
+                let origin = surf.frame.to_basic(box_points[own[0]]);
                 infinite_plate(s, &grids, origin, [flow, y, normal], &pts, &what)?
             }
         };
@@ -359,7 +384,17 @@ pub fn modal_surface(
     n_modes: usize,
 ) -> ModalSurface {
     use gustkit_core::Aerodynamics;
-    let normals = &surf.dlm.surface().normals;
+    modal_surface_on(&surf.dlm.surface().normals, rows, modes, n_modes)
+}
+
+/// [`modal_surface`] on any points with their spline rows and the normals their displacement
+/// is along.
+pub fn modal_surface_on(
+    normals: &[[f64; 3]],
+    rows: &SplineRows,
+    modes: &RealModes,
+    n_modes: usize,
+) -> ModalSurface {
     let np = normals.len();
     let mut out = ModalSurface::zeros(n_modes, np);
     let ng = rows.value.ncols();
@@ -389,7 +424,15 @@ pub fn modal_surface_vjp(
     seed: &ModalSurface,
 ) -> faer::Mat<f64> {
     use gustkit_core::Aerodynamics;
-    let normals = &surf.dlm.surface().normals;
+    modal_surface_vjp_on(&surf.dlm.surface().normals, rows, seed)
+}
+
+/// The transpose of [`modal_surface_on`].
+pub fn modal_surface_vjp_on(
+    normals: &[[f64; 3]],
+    rows: &SplineRows,
+    seed: &ModalSurface,
+) -> faer::Mat<f64> {
     let ng = rows.value.ncols();
     let n_modes = seed.n_modes();
     let mut out = faer::Mat::<f64>::zeros(ng, n_modes);

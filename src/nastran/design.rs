@@ -12,7 +12,7 @@
 
 use super::bulk::BulkData;
 use super::random::{
-    random_response, random_response_derivatives, random_response_vjp, KInterpolation,
+    random_response_derivatives, random_response_vjp, random_response_with, KInterpolation, Lfd,
     ModeDirection, Quantity, RandomDerivative, RandomRow,
 };
 use super::structure::{
@@ -257,6 +257,9 @@ pub struct DesignModel {
     /// LMODES) keep at the initial design, so the response is one smooth function of the
     /// design (a mode entering the METHOD's range would make it jump).
     pub n_modes: usize,
+    /// The LFD in place of the panels' DLM (built once: the splines follow the grids, which
+    /// sizing does not move).
+    pub lfd: Option<Lfd>,
 }
 
 /// The model analysed at one design.
@@ -299,13 +302,14 @@ impl DesignModel {
         }
         truncate(&mut modes, self.n_modes);
         let mass = translational_mass(&structure, &structure.m_gg);
-        let (rows, warnings) = random_response(
+        let (rows, warnings) = random_response_with(
             &bulk,
             &self.sub,
             &structure,
             &modes,
             &self.requests,
             &self.interpolation,
+            self.lfd.clone(),
         )?;
         Ok(DesignPoint {
             x: x.to_vec(),
@@ -352,6 +356,7 @@ impl DesignModel {
                 &p.modes,
                 &self.requests,
                 &self.interpolation,
+                self.lfd.clone(),
                 &directions,
             )?);
             mass.extend(dks.iter().map(|(_, dm)| translational_mass(s, dm)));
@@ -400,6 +405,7 @@ impl DesignModel {
             &p.modes,
             &self.requests,
             &self.interpolation,
+            self.lfd.clone(),
             functionals,
         )?;
         let which: Vec<usize> = (0..self.n_modes).collect();

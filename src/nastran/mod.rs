@@ -12,6 +12,7 @@ pub mod case_control;
 pub mod deck;
 pub mod design;
 pub mod field;
+pub mod lfd;
 pub mod random;
 pub mod response;
 pub mod spline;

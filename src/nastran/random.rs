@@ -9,12 +9,15 @@
 //! over the FREQ list with the PSD linear between its frequencies ([`spectral_moments`]).
 
 use super::bulk::BulkData;
-use super::response::{gust_frequency_response, table_value};
+use super::response::table_value;
 pub use super::response::{KInterpolation, Quantity};
 use super::structure::{RealModes, Structure};
 use super::{NastranError, Subcase};
 
 type R<T> = Result<T, NastranError>;
+
+/// The LFD in place of the panels' DLM (shared: one model serves every design's response).
+pub type Lfd = std::sync::Arc<super::lfd::NastranLfd>;
 
 /// One output's random response.
 #[derive(Clone, Debug, PartialEq)]
@@ -135,8 +138,23 @@ pub fn random_response(
     requests: &[(u32, u8, Quantity)],
     interpolation: &KInterpolation,
 ) -> R<(Vec<RandomRow>, Vec<String>)> {
+    random_response_with(b, sub, s, modes, requests, interpolation, None)
+}
+
+/// [`random_response`] with the GAFs from the LFD in place of the panels' DLM.
+pub fn random_response_with(
+    b: &BulkData,
+    sub: &Subcase,
+    s: &Structure,
+    modes: &RealModes,
+    requests: &[(u32, u8, Quantity)],
+    interpolation: &KInterpolation,
+    lfd: Option<Lfd>,
+) -> R<(Vec<RandomRow>, Vec<String>)> {
     let input = gust_spectrum(b, sub)?;
-    let response = gust_frequency_response(b, sub, s, modes, interpolation)?;
+    let response =
+        super::response::gust_frequency_solution_with(b, sub, s, modes, interpolation, lfd)?
+            .response;
     let rows = response.rows(b, sub, s, modes, requests)?;
     let freqs = &response.frequencies_hz;
     let out = rows
@@ -203,6 +221,7 @@ pub fn random_response_derivative(
         modes,
         requests,
         interpolation,
+        None,
         std::slice::from_ref(direction),
     )?;
     Ok(all.remove(0))
@@ -217,9 +236,10 @@ pub fn random_response_derivatives(
     modes: &RealModes,
     requests: &[(u32, u8, Quantity)],
     interpolation: &KInterpolation,
+    lfd: Option<Lfd>,
     directions: &[ModeDirection],
 ) -> R<Vec<Vec<RandomDerivative>>> {
-    let prepared = prepare(b, sub, s, modes, requests, interpolation)?;
+    let prepared = prepare(b, sub, s, modes, requests, (interpolation, lfd))?;
     directions
         .iter()
         .map(|d| derivative_along(b, sub, s, modes, requests, &prepared, d))
@@ -247,10 +267,10 @@ fn prepare<'a>(
     s: &Structure,
     modes: &RealModes,
     requests: &[(u32, u8, Quantity)],
-    interpolation: &KInterpolation,
+    (interpolation, lfd): (&KInterpolation, Option<Lfd>),
 ) -> R<Prepared<'a>> {
     let input = gust_spectrum(b, sub)?;
-    let sol = super::response::gust_frequency_solution(b, sub, s, modes, interpolation)?;
+    let sol = super::response::gust_frequency_solution_with(b, sub, s, modes, interpolation, lfd)?;
     let n = sol.response.n_modes;
     check_flat_damping(b, sub, modes, n)?;
     check_mode_norm(b, sub, requests)?;
@@ -393,7 +413,7 @@ fn derivative_along(
         }),
         ..modes.clone()
     };
-    let ms2 = super::aero::modal_surface(&sol.surf, &sol.rows, &both, 2 * n);
+    let ms2 = sol.modal_surface(&both, 2 * n);
     let t2 = sol.gafs_of(b, &ms2)?;
     let mut d_table = t2.clone();
     for i in 0..t2.k.len() {
@@ -491,6 +511,7 @@ pub fn random_response_vjp(
     modes: &RealModes,
     requests: &[(u32, u8, Quantity)],
     interpolation: &KInterpolation,
+    lfd: Option<Lfd>,
     functionals: &[Vec<(f64, f64)>],
 ) -> R<Vec<ModeSeeds>> {
     use faer::c64;
@@ -501,13 +522,13 @@ pub fn random_response_vjp(
         monitors,
         outputs,
         grid_index,
-    } = prepare(b, sub, s, modes, requests, interpolation)?;
+    } = prepare(b, sub, s, modes, requests, (interpolation, lfd))?;
     let n = sol.response.n_modes;
     let r = &sol.response;
     let freqs = &r.frequencies_hz;
     let (w0, w2) = spectral_moment_weights(freqs);
     let n_boxes = sol.surf.box_ids.len();
-    let ms = super::aero::modal_surface(&sol.surf, &sol.rows, modes, n);
+    let ms = sol.modal_surface(modes, n);
     functionals
         .iter()
         .map(|seeds| {
@@ -585,7 +606,7 @@ pub fn random_response_vjp(
                     *t += v;
                 }
             }
-            let mut phi_g = super::aero::modal_surface_vjp(&sol.surf, &sol.rows, &surface_bar);
+            let mut phi_g = sol.modal_surface_vjp(&surface_bar);
             let mut direct = Vec::new();
             for (y, &(grid, comp, quantity)) in requests.iter().enumerate() {
                 if k_bar[y].iter().chain(&m_bar[y]).all(|v| *v == 0.0) {

@@ -250,6 +250,8 @@ pub struct GustSolution {
     /// The FREQ list's indices of the grid's frequencies (those with a load).
     pub live: Vec<usize>,
     fr: crate::gust::response::FrequencyResponse,
+    /// The LFD in place of the panels' DLM, if the study asks for it.
+    pub lfd: Option<std::sync::Arc<super::lfd::NastranLfd>>,
 }
 
 impl GustSolution {
@@ -264,6 +266,23 @@ impl GustSolution {
         )
     }
 
+    /// The modes on the surface of the fidelity the GAFs come from (the DLM's points, or the
+    /// LFD's wall points).
+    pub fn modal_surface(&self, modes: &RealModes, n_modes: usize) -> gustkit_core::ModalSurface {
+        match &self.lfd {
+            Some(l) => l.modal_surface(modes, n_modes),
+            None => super::aero::modal_surface(&self.surf, &self.rows, modes, n_modes),
+        }
+    }
+
+    /// The transpose of [`GustSolution::modal_surface`].
+    pub fn modal_surface_vjp(&self, seed: &gustkit_core::ModalSurface) -> faer::Mat<f64> {
+        match &self.lfd {
+            Some(l) => l.modal_surface_vjp(seed),
+            None => super::aero::modal_surface_vjp(&self.surf, &self.rows, seed),
+        }
+    }
+
     /// The GAF table of any modal surface of this model on the solution's reduced frequencies
     /// (the same k interpolation).
     pub fn gafs_of(
@@ -273,7 +292,7 @@ impl GustSolution {
     ) -> R<gustkit_core::GafTable> {
         gaf_table(
             b,
-            &self.surf,
+            (&self.surf, self.lfd.as_deref()),
             &self.flight,
             ms,
             &self.interpolation,
@@ -291,7 +310,7 @@ impl GustSolution {
     ) -> R<gustkit_core::ModalSurface> {
         gaf_table_vjp(
             b,
-            &self.surf,
+            (&self.surf, self.lfd.as_deref()),
             &self.flight,
             ms,
             (&self.interpolation, self.mach),
@@ -377,18 +396,35 @@ fn modal_problem(
 /// there (dense), or at MKAERO's k at `mach` and linear in k between them.
 fn gaf_table(
     b: &BulkData,
-    surf: &super::aero::LiftingSurfaces,
+    (surf, lfd): (
+        &super::aero::LiftingSurfaces,
+        Option<&super::lfd::NastranLfd>,
+    ),
     flight: &FlightCondition,
     ms: &gustkit_core::ModalSurface,
     interpolation: &KInterpolation,
     mach: f64,
 ) -> R<gustkit_core::GafTable> {
     let dlm_error = |e: gustkit_core::AeroError| NastranError::model("DLM", e.to_string());
+    // the panels' DLM, or the LFD in its mesh's frame (the table keeps the model's x_ref)
+    let gafs = |k: &[f64]| -> R<gustkit_core::GafTable> {
+        match lfd {
+            None => surf.dlm.gafs(flight, ms, k).map_err(dlm_error),
+            Some(l) => {
+                let mut t = l
+                    .model
+                    .gafs(&l.flight(flight), ms, k)
+                    .map_err(|e| NastranError::model("LFD", e.to_string()))?;
+                t.x_ref = flight.x_ref;
+                Ok(t)
+            }
+        }
+    };
     Ok(match interpolation {
-        KInterpolation::Dense(k) => surf.dlm.gafs(flight, ms, k).map_err(dlm_error)?,
+        KInterpolation::Dense(k) => gafs(k)?,
         KInterpolation::LinearOnMkaero(k) => {
             let ks = mkaero_k(b, mach)?;
-            let coarse = surf.dlm.gafs(flight, ms, &ks).map_err(dlm_error)?;
+            let coarse = gafs(&ks)?;
             // every entry comes from the MKAERO table: no DLM solve at the fine k
             gustkit_core::aero::check_reduced_frequencies(k).map_err(dlm_error)?;
             let mut t = gustkit_core::GafTable::zeros(flight, k, ms.n_modes());
@@ -448,7 +484,10 @@ fn mkaero_segment(ks: &[f64], kk: f64) -> (usize, usize, f64) {
 /// reverse mode (and, on MKAERO's k, the transposed linear interpolation).
 fn gaf_table_vjp(
     b: &BulkData,
-    surf: &super::aero::LiftingSurfaces,
+    (surf, lfd): (
+        &super::aero::LiftingSurfaces,
+        Option<&super::lfd::NastranLfd>,
+    ),
     flight: &FlightCondition,
     ms: &gustkit_core::ModalSurface,
     (interpolation, mach): (&KInterpolation, f64),
@@ -456,8 +495,19 @@ fn gaf_table_vjp(
 ) -> R<gustkit_core::ModalSurface> {
     use gustkit_core::AerodynamicsReverse;
     let dlm_error = |e: gustkit_core::AeroError| NastranError::model("DLM", e.to_string());
+    let vjp = |k: &[f64], seed: &gustkit_core::GafTable| match lfd {
+        None => surf.dlm.gafs_vjp(flight, ms, k, seed),
+        Some(l) => {
+            let reverse = l.model.reverse().ok_or_else(|| {
+                gustkit_core::AeroError::Input("the LFD model has no reverse mode".into())
+            })?;
+            let mut seed = seed.clone();
+            seed.x_ref = flight.x_ref - l.x_origin;
+            reverse.gafs_vjp(&l.flight(flight), ms, k, &seed)
+        }
+    };
     let g = match interpolation {
-        KInterpolation::Dense(k) => surf.dlm.gafs_vjp(flight, ms, k, seed),
+        KInterpolation::Dense(k) => vjp(k, seed),
         KInterpolation::LinearOnMkaero(k) => {
             let ks = mkaero_k(b, mach)?;
             let n = ms.n_modes();
@@ -473,10 +523,38 @@ fn gaf_table_vjp(
                     coarse.q_gs[bb][r] += seed.q_gs[i][r] * u;
                 }
             }
-            surf.dlm.gafs_vjp(flight, ms, &ks, &coarse)
+            vjp(&ks, &coarse)
         }
     };
     Ok(g.map_err(dlm_error)?.modes)
+}
+
+/// The flight condition of a subcase's gust response: Mach (PARAM MACH, else the first
+/// MKAERO's), the GUST's velocity and X0, AERO's reference density and semichord.
+pub fn subcase_flight(b: &BulkData, sub: &Subcase) -> R<FlightCondition> {
+    let gust_id = sub.selections.get("GUST").copied().ok_or_else(|| {
+        NastranError::model(
+            "case control",
+            "selects no GUST: a gust response needs GUST and FREQUENCY".into(),
+        )
+    })?;
+    let gust = b.gusts.get(&gust_id).ok_or_else(|| {
+        NastranError::model(
+            &format!("GUST = {gust_id}"),
+            "no GUST card has this id".into(),
+        )
+    })?;
+    let aero = b
+        .aero
+        .as_ref()
+        .ok_or_else(|| NastranError::model("bulk data", "has no AERO card".into()))?;
+    Ok(FlightCondition {
+        mach: real_param(b, "MACH")?.unwrap_or_else(|| b.mkaero.first().map_or(0.0, |m| m.0)),
+        velocity: gust.v,
+        density: aero.rhoref,
+        b_ref: 0.5 * aero.refc,
+        x_ref: gust.x0,
+    })
 }
 
 /// [`gust_frequency_response`] with what it solved kept ([`GustSolution`]).
@@ -486,6 +564,19 @@ pub fn gust_frequency_solution(
     s: &Structure,
     modes: &RealModes,
     interpolation: &KInterpolation,
+) -> R<GustSolution> {
+    gust_frequency_solution_with(b, sub, s, modes, interpolation, None)
+}
+
+/// [`gust_frequency_solution`] with the GAFs from `lfd` in place of the panels' DLM (built for
+/// this model by [`super::lfd::NastranLfd::build`]).
+pub fn gust_frequency_solution_with(
+    b: &BulkData,
+    sub: &Subcase,
+    s: &Structure,
+    modes: &RealModes,
+    interpolation: &KInterpolation,
+    lfd: Option<std::sync::Arc<super::lfd::NastranLfd>>,
 ) -> R<GustSolution> {
     let sel = |name: &str| -> R<u32> {
         sub.selections.get(name).copied().ok_or_else(|| {
@@ -511,7 +602,10 @@ pub fn gust_frequency_solution(
     }
     let surf = lifting_surfaces(b, s)?;
     let (rows, _unmoved) = spline_rows(b, s, &surf)?;
-    let ms = modal_surface(&surf, &rows, modes, n_modes);
+    let ms = match &lfd {
+        Some(l) => l.modal_surface(modes, n_modes),
+        None => modal_surface(&surf, &rows, modes, n_modes),
+    };
     let gust = b.gusts.get(&gust_id).ok_or_else(|| {
         NastranError::model(
             &format!("GUST = {gust_id}"),
@@ -651,7 +745,28 @@ pub fn gust_frequency_solution(
         x_ref: gust.x0,
     };
     let dlm_error = |e: gustkit_core::AeroError| NastranError::model("DLM", e.to_string());
-    let table_gaf = gaf_table(b, &surf, &flight, &ms, interpolation, mach)?;
+    if let Some(l) = &lfd {
+        if (l.mach - mach).abs() > 1e-9 * mach.max(1.0) {
+            return Err(NastranError::model(
+                "PARAM MACH",
+                format!("the subcase's Mach number {mach} is not the {} the LFD's steady state was converged at", l.mach),
+            ));
+        }
+        if !b.monitors.is_empty() {
+            return Err(NastranError::model(
+                "MONPNT1",
+                "monitor loads sum the DLM's box forces; with the LFD fidelity they are not available: remove the monitor points or use the DLM".into(),
+            ));
+        }
+    }
+    let table_gaf = gaf_table(
+        b,
+        (&surf, lfd.as_deref()),
+        &flight,
+        &ms,
+        interpolation,
+        mach,
+    )?;
     let omega_n: Vec<f64> = modes.lambda[..n_modes]
         .iter()
         .map(|l| l.max(0.0).sqrt())
@@ -739,6 +854,7 @@ pub fn gust_frequency_solution(
         grid,
         live,
         fr,
+        lfd,
     })
 }
 

@@ -278,6 +278,9 @@ struct NastranDesignResults {
     gradient_mode: String,
     threads: usize,
     warnings: Vec<String>,
+    /// Where the GAFs come from, in words (the model's DLM, or the study's LFD).
+    #[serde(default)]
+    aerodynamics: String,
 }
 
 /// A study's design model, its limits, the reading's warnings and the initial design analysed
@@ -363,7 +366,19 @@ fn design_model(study: &NastranStudyFile) -> Result<Designed> {
     let requests = labels.iter().map(|l| parse_output(l).unwrap()).collect();
     let n_variables = study.design_variables.len();
     let n_modes = lmodes(&base, modes.lambda.len());
-    let interpolation = dense_k(&base, &sub).with_context(|| at("model.nastran"))?;
+    let (interpolation, lfd) = match &study.aero {
+        None => (
+            dense_k(&base, &sub).with_context(|| at("model.nastran"))?,
+            None,
+        ),
+        Some(a) => {
+            let lfd = nastran_lfd(&base, &sub, &s, a).with_context(|| at("aero"))?;
+            (
+                KInterpolation::Dense(a.reduced_frequencies.clone()),
+                Some(std::sync::Arc::new(lfd)),
+            )
+        }
+    };
     let model = DesignModel {
         base,
         sub,
@@ -372,6 +387,7 @@ fn design_model(study: &NastranStudyFile) -> Result<Designed> {
         interpolation,
         n_variables,
         n_modes,
+        lfd,
     };
     // each limit's row of the response, by its label
     let x0: Vec<f64> = study.design_variables.iter().map(|v| v.initial).collect();
@@ -468,6 +484,60 @@ fn refined(model: &DesignModel) -> Result<DesignModel> {
             KInterpolation::Dense((0..=n).map(|i| k_max * i as f64 / n as f64).collect());
     }
     Ok(m)
+}
+
+/// The LFD of the study's `aero` on the model's panel, at the subcase's Mach number, with its
+/// table reaching the FREQ list's highest reduced frequency.
+fn nastran_lfd(
+    base: &crate::nastran::bulk::BulkData,
+    sub: &Subcase,
+    s: &crate::nastran::structure::Structure,
+    a: &crate::study::nastran::NastranAeroSpec,
+) -> Result<crate::nastran::lfd::NastranLfd> {
+    let flight = crate::nastran::response::subcase_flight(base, sub)?;
+    let k_needed = match dense_k(base, sub)? {
+        // dense_k reaches 5 % beyond the list's last frequency
+        KInterpolation::Dense(k) => k.last().copied().unwrap_or(0.0) / 1.05,
+        KInterpolation::LinearOnMkaero(_) => 0.0,
+    };
+    let k_last = a.reduced_frequencies.last().copied().unwrap_or(0.0);
+    if k_last < k_needed * (1.0 - 1e-9) {
+        bail!(
+            "reduced_frequencies: end at {k_last}, below the FREQ list's highest reduced frequency {k_needed:.4} (ω REFC / 2V): extend the table to it"
+        );
+    }
+    let airfoil = a
+        .airfoil
+        .airfoil()
+        .map_err(|e| anyhow::anyhow!("airfoil: {e}"))?;
+    let surf = crate::nastran::aero::lifting_surfaces(base, s)?;
+    Ok(crate::nastran::lfd::NastranLfd::build(
+        base,
+        s,
+        &surf,
+        (&a.fidelity, &airfoil),
+        &flight,
+        None,
+    )?)
+}
+
+/// Where a design model's GAFs come from, in words.
+fn aerodynamics_words(study: &NastranStudyFile, model: &DesignModel) -> String {
+    let k = model.interpolation.reduced_frequencies().len();
+    match (&model.lfd, &study.aero) {
+        (Some(l), Some(a)) => format!(
+            "the {} about the model's CAERO1 panel (semispan {}, root chord {}, tip chord {}, quarter-chord sweep {:.2}°; the study's section) at M {}, its wall points moved by the model's splines, on the study's {k} reduced frequencies (aero.reduced_frequencies)",
+            a.fidelity.words(),
+            l.planform.span,
+            l.planform.root_chord,
+            l.planform.tip_chord,
+            l.planform.sweep_c4.to_degrees(),
+            l.mach
+        ),
+        _ => format!(
+            "the DLM on the model's CAERO1 boxes, as Nastran's, on {k} reduced frequencies to 5 % beyond the FREQ list's last"
+        ),
+    }
 }
 
 /// The median of some timings (0 when there are none), as the wing runs' `Stats` take it.
@@ -819,6 +889,7 @@ fn results(
         .into(),
         threads: rayon::current_num_threads(),
         warnings,
+        aerodynamics: aerodynamics_words(study, model),
     }
 }
 
@@ -942,8 +1013,13 @@ fn summary(r: &NastranDesignResults) -> String {
         ));
     }
     out.push_str(&format!(
-        "\nThe constraints see {} modes and {} reduced frequencies (the model's METHOD and PARAM LMODES; the DLM on reduced frequencies to 5 % beyond the FREQ list's last); the final design re-analysed with {} modes and {} reduced frequencies moves them by at most {:.2e} of their limits (a refined value more than {:.0} % above its limit is in bold and fails the run). The lattice is the model's CAERO1 boxes, as Nastran's.\n",
-        s.modes, s.reduced_frequencies, s.refined_modes, s.refined_reduced_frequencies, s.largest_change_of_limit, 100.0 * RMS_TOLERANCE
+        "\nThe constraints see {} modes (the model's METHOD and PARAM LMODES) and {} reduced frequencies; the final design re-analysed with {} modes and {} reduced frequencies moves them by at most {:.2e} of their limits (a refined value more than {:.0} % above its limit is in bold and fails the run). Aerodynamics: {}.\n",
+        s.modes, s.reduced_frequencies, s.refined_modes, s.refined_reduced_frequencies, s.largest_change_of_limit, 100.0 * RMS_TOLERANCE,
+        if r.aerodynamics.is_empty() {
+            "the DLM on the model's CAERO1 boxes, as Nastran's"
+        } else {
+            r.aerodynamics.as_str()
+        }
     ));
     if !r.flutter_check.is_empty() {
         out.push_str(

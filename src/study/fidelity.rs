@@ -39,6 +39,7 @@ impl Study {
             airfoil: &airfoil,
             flight: &flight,
             cache_dir: None,
+            fixed_planform: false,
         }))
     }
 

@@ -25,6 +25,10 @@ pub struct NastranStudyFile {
     #[serde(default = "mass")]
     pub objective: String,
     pub constraints: Vec<ConstraintSpec>,
+    /// The LFD in place of the model's DLM (`{"fidelity": {"lfd": {…}}, "airfoil": …,
+    /// "reduced_frequencies": […]}`); the model's own CAERO1 DLM without it.
+    #[serde(default)]
+    pub aero: Option<NastranAeroSpec>,
     #[serde(default)]
     pub optimization: NastranOptimizationSpec,
     /// The study file (set at load).
@@ -78,6 +82,22 @@ pub struct RelationSpec {
     pub terms: BTreeMap<String, f64>,
 }
 
+/// The LFD on the model's lifting surface: the wing mesh about its one CAERO1 panel with the
+/// study's section (Nastran's panels are flat), solved at the reduced frequencies given (the
+/// response interpolates between them, as it does between the DLM's).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NastranAeroSpec {
+    /// `{"lfd": {…}}`, the keys of a wing study's LFD (mesh level or sizes, GMRES and steady
+    /// settings, memory limit); a mesh file's coordinates are in the model's units.
+    pub fidelity: crate::aero::FidelitySpec,
+    /// The section: `"naca65a004"` or `{"name", "x_c", "z_c"}`.
+    pub airfoil: super::AirfoilSpec,
+    /// Reduced frequencies k = ω REFC / 2V of the LFD table, from 0 up to at least the FREQ
+    /// list's highest.
+    pub reduced_frequencies: Vec<f64>,
+}
+
 /// A limit on one output of the random gust response, by Nastran's label.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -124,6 +144,11 @@ impl NastranStudyFile {
     pub fn from_value(file: &Path, doc: &serde_json::Value) -> Result<Self> {
         let mut s: Self = crate::report::from_json(file, doc)?;
         s.file = file.to_path_buf();
+        if let Some(a) = s.aero.as_mut() {
+            // a mesh file's path is relative to the study file, as the model's is
+            a.fidelity
+                .resolve_paths(file.parent().unwrap_or(Path::new(".")));
+        }
         crate::study::check_header(file, s.schema_version, &s.name)?;
         s.check()
             .map_err(|(path, reason)| anyhow::anyhow!("{}: {path}: {reason}", file.display()))?;
@@ -195,6 +220,20 @@ impl NastranStudyFile {
                         v.initial, v.lower, v.upper
                     ),
                 );
+            }
+        }
+        if let Some(a) = &self.aero {
+            if !matches!(a.fidelity, crate::aero::FidelitySpec::Lfd(_)) {
+                return bad(
+                    "aero.fidelity".into(),
+                    "a Nastran model's DLM comes from its CAERO1 cards: the fidelity here may only be {\"lfd\": …} (leave \"aero\" out for the DLM)".into(),
+                );
+            }
+            if let Err(e) = a.airfoil.airfoil() {
+                return bad("aero.airfoil".into(), e);
+            }
+            if let Err(e) = gustkit_core::aero::check_reduced_frequencies(&a.reduced_frequencies) {
+                return bad("aero.reduced_frequencies".into(), e.to_string());
             }
         }
         if self.properties.is_empty() {

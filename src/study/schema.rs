@@ -443,6 +443,22 @@ pub enum AirfoilSpec {
     },
 }
 
+impl AirfoilSpec {
+    /// The section this names, or why it names none.
+    pub fn airfoil(&self) -> Result<crate::wing::Airfoil, String> {
+        match self {
+            AirfoilSpec::Builtin(name) => match name.to_ascii_lowercase().as_str() {
+                "naca65a004" | "naca 65a004" => Ok(crate::wing::Airfoil::naca65a004()),
+                other => Err(format!("unknown built-in airfoil '{other}' (built in: naca65a004; or give {{\"name\", \"x_c\", \"z_c\"}})")),
+            },
+            AirfoilSpec::Table { name, x_c, z_c } => {
+                crate::wing::Airfoil::from_table(name, x_c.clone(), z_c.clone())
+                    .map_err(|e| e.to_string())
+            }
+        }
+    }
+}
+
 /// Orthotropic plate material (SI).
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]

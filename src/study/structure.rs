@@ -30,17 +30,11 @@ impl Study {
 
     /// The airfoil thickness table.
     pub fn airfoil(&self) -> Result<Airfoil, StudyError> {
-        match &self.spec.wing.airfoil {
-            AirfoilSpec::Builtin(name) => match name.to_ascii_lowercase().as_str() {
-                "naca65a004" | "naca 65a004" => Ok(Airfoil::naca65a004()),
-                other => Err(self.err(
-                    "wing.airfoil",
-                    format!("unknown built-in airfoil '{other}' (built in: naca65a004; or give {{\"name\", \"x_c\", \"z_c\"}})"),
-                )),
-            },
-            AirfoilSpec::Table { name, x_c, z_c } => Airfoil::from_table(name, x_c.clone(), z_c.clone())
-                .map_err(|e| self.err("wing.airfoil", e.to_string())),
-        }
+        self.spec
+            .wing
+            .airfoil
+            .airfoil()
+            .map_err(|e| self.err("wing.airfoil", e))
     }
 
     /// The material in SI.

@@ -443,6 +443,15 @@ impl WingBuilder for LfdWingSpec {
         let mut model = model;
         // C_p at the root, mid-span and tip sections among its artifacts (the report draws them)
         model.sections = wall_sections(&mesh);
+        if wing.fixed_planform {
+            return Ok(WingFidelity {
+                model: Box::new(model),
+                binding: SurfaceBinding {
+                    points,
+                    geometry_jacobian: Vec::new(),
+                },
+            });
+        }
         // the planform variables move the mesh (and the deformation radius, a multiple of the
         // root chord): their tangents, for the reverse mode's geometry gradient
         let pd: [Dual<N_PLANFORM>; N_PLANFORM] = std::array::from_fn(|k| Dual::var(p[k], k));
