@@ -303,3 +303,60 @@ fn lfd_nastran_study_runs_and_bad_input_is_named() {
     asym["model"]["nastran"] = plain.display().to_string().into();
     refused("asym", &asym, &["AERO", "SYMXZ = 1"]);
 }
+
+/// An external mesh (`aero.fidelity.lfd.mesh_file`) on a Nastran model: the small built-in
+/// wing mesh about the panel written as SU2 in the model's units (metres here), in the LFD's
+/// frame (x downstream from the panel's root leading edge, y up, z spanwise), gives the built-in
+/// mesh's random response: RMS and N0 to 1e-8 (the same cells; the wall points' planform
+/// coordinates recovered from their positions; the steady state from the free stream instead
+/// of mesh sequencing, both converged).
+#[test]
+fn external_mesh_on_a_nastran_model_gives_the_built_in_response() {
+    let dir = common::scratch("nastran", "lfd-mesh-file");
+    let (input, b, lfd) = read_with_lfd(&dir, 0.0);
+    let sub = input.case_control.subcase(1).unwrap();
+    let (s, modes) = subcase_modes(&b, &sub).unwrap();
+    let requests: Vec<_> = ["15T3", "SPCF 1R1"]
+        .iter()
+        .map(|l| parse_output(l).unwrap())
+        .collect();
+    let how = KInterpolation::Dense(table_k());
+    let planform = lfd.planform.to_array();
+    let (built_in, _) =
+        random_response_with(&b, &sub, &s, &modes, &requests, &how, Some(Arc::new(lfd))).unwrap();
+    let spec = gustkit_cfd::wing_mesh::WingMeshSpec {
+        n_around: 16,
+        n_radial: 6,
+        n_span: 4,
+        n_outboard: 4,
+        far_field_chords: 15.0,
+        first_spacing_chords: 0.02,
+        tip_closure: 0.05,
+    };
+    let airfoil = gustkit::wing::Airfoil::naca65a004();
+    let mesh =
+        gustkit_cfd::wing_mesh::WingMesh::new(planform, &|x| airfoil.half_thickness(x), &spec).mesh;
+    let file = dir.join("wing.su2");
+    std::fs::write(&file, gustkit_cfd::readers::write_su2(&mesh)).unwrap();
+    let external: gustkit::aero::FidelitySpec = serde_json::from_value(serde_json::json!({
+        "lfd": {"gmres_tolerance": 1e-12, "mesh_file": {"path": file.to_string_lossy(),
+            "markers": {"wall": "wall", "farfield": "far_field", "symmetry": "symmetry"}}}
+    }))
+    .unwrap();
+    let surf = lifting_surfaces(&b, &s).unwrap();
+    let flight = subcase_flight(&b, &sub).unwrap();
+    let lfd = NastranLfd::build(&b, &s, &surf, (&external, &airfoil), &flight, None).unwrap();
+    let (from_file, _) =
+        random_response_with(&b, &sub, &s, &modes, &requests, &how, Some(Arc::new(lfd))).unwrap();
+    for (a, f) in built_in.iter().zip(&from_file) {
+        eprintln!(
+            "{}: RMS {:.12e} / {:.12e}, N0 {:.12e} / {:.12e}",
+            a.label, a.rms, f.rms, a.n0_hz, f.n0_hz
+        );
+        assert!(
+            (a.rms / f.rms - 1.0).abs() < 1e-8 && (a.n0_hz / f.n0_hz - 1.0).abs() < 1e-8,
+            "{}",
+            a.label
+        );
+    }
+}
