@@ -177,5 +177,60 @@ fn design_gradients(repeat: usize) -> anyhow::Result<()> {
     })?;
     println!("{}", reverse.line("reverse mode: 2 limits"));
     let _ = std::fs::remove_dir_all(&dir);
+    splines()?;
+    Ok(())
+}
+
+/// SPLINE1 over every grid of an n × n plate (square, 1 m) to the 16 × 16 boxes of a CAERO1
+/// on it: the spline's dense (n² + 3)² system, factored once, is O(n⁶); the model's dense
+/// structure (6 000 components, 1 000 grids) bounds a spline's grids before it does.
+fn splines() -> anyhow::Result<()> {
+    use gustkit::nastran::aero::{lifting_surfaces, spline_rows};
+    use gustkit::nastran::structure::Structure;
+    println!("SPLINE1 over every grid of a plate, to 16 × 16 boxes (1 warm-up, 5 repetitions):");
+    for n in [10usize, 20, 30] {
+        let mut d = String::from(
+            "SOL 145\nCEND\nBEGIN BULK\nMAT1,1,7.0e10,,0.3,2700.\nPSHELL,1,1,0.01,1\n",
+        );
+        for j in 0..=n {
+            for i in 0..=n {
+                d.push_str(&format!(
+                    "GRID,{},,{},{},0.\n",
+                    1 + i + (n + 1) * j,
+                    i as f64 / n as f64,
+                    j as f64 / n as f64
+                ));
+            }
+        }
+        for j in 0..n {
+            for i in 0..n {
+                let g = 1 + i + (n + 1) * j;
+                d.push_str(&format!(
+                    "CQUAD4,{},1,{g},{},{},{}\n",
+                    1 + i + n * j,
+                    g + 1,
+                    g + n + 2,
+                    g + n + 1
+                ));
+            }
+        }
+        let grids = (n + 1) * (n + 1);
+        d.push_str("AERO,0,100.,1.,1.2\nCAERO1,100001,1000,,16,16,,,1,+CA\n+CA,0.,0.,0.,1.,0.,1.,0.,1.\nPAERO1,1000\n");
+        d.push_str(&format!(
+            "SPLINE1,100,100001,100001,100256,10\nSET1,10,1,THRU,{grids}\nENDDATA\n"
+        ));
+        let file = std::env::temp_dir().join(format!("gustkit-bench-spline-{n}.bdf"));
+        std::fs::write(&file, d)?;
+        let (b, _) = load(&file)?;
+        let _ = std::fs::remove_file(&file);
+        let s = Structure::assemble(&b, None)?;
+        let surf = lifting_surfaces(&b, &s)?;
+        let t = measure(5, || {
+            let t0 = Instant::now();
+            spline_rows(&b, &s, &surf)?;
+            Ok(t0.elapsed().as_secs_f64())
+        })?;
+        println!("{}", t.line(&format!("{grids} grids ({n} × {n} elements)")));
+    }
     Ok(())
 }
