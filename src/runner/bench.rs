@@ -162,6 +162,23 @@ pub fn bench(study: &Study, repeat: Option<usize>, optimization: bool) -> Result
             "  reverse / function (medians): {:.2} (paper: 146.4 / 70.5 min = 2.08 on 400 cores)",
             t.vjp.median_s / t.gafs.median_s
         );
+        let w = bench_lfd_warm_start(&study)?;
+        println!(
+            "  the function at a neighbouring design (every thickness × 1.01), GMRES from zero      {:>9.2} s, {} iterations ({:.1} a right-hand side)",
+            w.cold_s, w.cold_iterations, w.cold_iterations as f64 / w.rhs as f64
+        );
+        println!(
+            "  the same, GMRES from the previous design's solutions                             {:>9.2} s, {} iterations ({:.1} a right-hand side)",
+            w.warm_s, w.warm_iterations, w.warm_iterations as f64 / w.rhs as f64
+        );
+        println!(
+            "  its gradient (the first output's RMS), adjoint GMRES from zero                     {:>9.2} s, {} iterations",
+            w.gradient_cold_s, w.gradient_cold_iterations
+        );
+        println!(
+            "  the same, adjoint GMRES from the previous design's adjoint solutions              {:>9.2} s, {} iterations",
+            w.gradient_warm_s, w.gradient_warm_iterations
+        );
         return Ok(());
     }
     if study.spec.gust.is_some() {
@@ -296,6 +313,110 @@ pub fn bench_lfd(study: &Study, repeat: usize) -> Result<LfdTimings> {
         vjp_first_s,
         vjp,
     })
+}
+
+/// The LFD function (modes, GAFs, response) at a design next to the initial one, its GMRES
+/// started from zero and from the initial design's solutions.
+#[derive(Debug, Serialize)]
+pub struct WarmStartTimings {
+    /// Right-hand sides of a GAF table (k × (modes + gust)).
+    pub rhs: usize,
+    pub cold_s: f64,
+    pub cold_iterations: usize,
+    pub warm_s: f64,
+    pub warm_iterations: usize,
+    /// The gradient (the first output's RMS) there: adjoint GMRES from zero and from the
+    /// previous design's adjoint solutions.
+    pub gradient_cold_s: f64,
+    pub gradient_cold_iterations: usize,
+    pub gradient_warm_s: f64,
+    pub gradient_warm_iterations: usize,
+}
+
+/// See [`WarmStartTimings`]: the pipeline's function in two fresh scratch run folders, one
+/// that first evaluated the initial design (its steady state and LFD solutions are the next
+/// design's start) and one that did not (its steady state cached beforehand, so that only the
+/// GAF table's start differs).
+pub fn bench_lfd_warm_start(study: &Study) -> Result<WarmStartTimings> {
+    let settings = study.gust_settings()?;
+    let design = study.initial_design()?;
+    let n_t = design.thickness.len();
+    let x0 = design.to_vec();
+    let mut x1 = x0.clone();
+    for t in x1.iter_mut().take(n_t) {
+        *t *= 1.01;
+    }
+    let scratch = |name: &str| {
+        let d =
+            std::env::temp_dir().join(format!("gustkit-bench-warm-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).map(|_| d)
+    };
+    let case_in = |dir: &std::path::Path| -> Result<crate::case::Case> {
+        let mut s = study.clone();
+        s.cache_dir = Some(dir.to_path_buf());
+        Ok(s.resolve()?)
+    };
+    // the function, then the gradient of the first output's RMS: (function s, gradient s)
+    let timed = |case: &crate::case::Case, x: &[f64]| -> Result<(f64, f64)> {
+        let t = Instant::now();
+        let ev = crate::pipeline::evaluate(case, &settings, x)?;
+        let function = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let seeds = crate::pipeline::OutputSeeds {
+            rms: (0..ev.rms_m.len())
+                .map(|i| if i == 0 { 1.0 } else { 0.0 })
+                .collect(),
+            ..Default::default()
+        };
+        crate::pipeline::gradient(&ev, &seeds)?;
+        Ok((function, t.elapsed().as_secs_f64()))
+    };
+    let (warm_dir, cold_dir) = (scratch("warm")?, scratch("cold")?);
+    let warm_case = case_in(&warm_dir)?;
+    timed(&warm_case, &x0)?;
+    let (warm_s, gradient_warm_s) = timed(&warm_case, &x1)?;
+    let store = |d: &std::path::Path| {
+        let s = crate::aero::lfd::warm_start_store(d);
+        let w = s.lock().unwrap_or_else(|e| e.into_inner());
+        (w.last_iterations, w.last_adjoint_iterations)
+    };
+    // the gradient's reverse sweep reuses the function's forward solutions (no table of its
+    // own): the store's last table is the function's
+    let (warm_iterations, gradient_warm_iterations) = store(&warm_dir);
+    // the cold folder: the next design's steady state solved first, its GMRES store then
+    // emptied
+    let cold_case = case_in(&cold_dir)?;
+    timed(&cold_case, &x1)?;
+    crate::aero::lfd::clear_warm_start(&cold_dir);
+    let (cold_s, gradient_cold_s) = timed(&cold_case, &x1)?;
+    let (cold_iterations, gradient_cold_iterations) = store(&cold_dir);
+    let modes = settings_modes(study)?;
+    let n_k = study
+        .spec
+        .aero
+        .as_ref()
+        .map_or(0, |a| a.reduced_frequencies.len());
+    for d in [&warm_dir, &cold_dir] {
+        let _ = std::fs::remove_dir_all(d);
+        crate::aero::lfd::clear_warm_start(d);
+    }
+    Ok(WarmStartTimings {
+        rhs: n_k * (modes + 1),
+        cold_s,
+        cold_iterations,
+        warm_s,
+        warm_iterations,
+        gradient_cold_s,
+        gradient_cold_iterations,
+        gradient_warm_s,
+        gradient_warm_iterations,
+    })
+}
+
+/// The modes the study's initial design retains.
+fn settings_modes(study: &Study) -> Result<usize> {
+    Ok(analyze(study)?.1.len())
 }
 
 /// Timings of the aerodynamic chain for a study.

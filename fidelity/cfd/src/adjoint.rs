@@ -22,7 +22,7 @@
 //! so q₀ and the LFD operator (second derivatives of the residual); that part is not here.
 
 use crate::gas::NVAR;
-use crate::krylov::{gmres, GmresInfo};
+use crate::krylov::{gmres_from, GmresInfo};
 use crate::lfd::{Factored, Field, LfdError, LfdOperator};
 use crate::mesh::{Boundary, Side};
 use crate::residual::State;
@@ -239,6 +239,18 @@ impl LfdReverse {
         f: &Factored,
         rhs: &[Field],
     ) -> Result<Vec<(Field, GmresInfo)>, LfdError> {
+        self.solve_transpose_from(lfd, f, rhs, &[])
+    }
+
+    /// [`LfdReverse::solve_transpose`] from initial guesses, each scaled by the complex factor
+    /// that minimizes its residual (see [`LfdOperator::solve_from`]).
+    pub fn solve_transpose_from(
+        &self,
+        lfd: &LfdOperator,
+        f: &Factored,
+        rhs: &[Field],
+        guesses: &[Option<&Field>],
+    ) -> Result<Vec<(Field, GmresInfo)>, LfdError> {
         lfd.params.validate().map_err(LfdError::Input)?;
         let prec = |v: &[C64]| lfd.precondition_transpose(f, v);
         let op = |v: &[C64]| lfd.apply_transpose(f.s, v);
@@ -246,12 +258,25 @@ impl LfdReverse {
             .enumerate()
             .map(|(index, b)| {
                 let p = &lfd.params;
-                gmres(&op, &prec, b, p.tolerance, p.restart, p.max_iterations).map_err(|source| {
-                    LfdError::Gmres {
-                        omega: f.omega,
-                        rhs: index,
-                        source,
-                    }
+                let x0 = guesses
+                    .get(index)
+                    .copied()
+                    .flatten()
+                    .filter(|g| g.len() == b.len())
+                    .map(|g| crate::lfd::scaled_guess(&op, g, b));
+                gmres_from(
+                    &op,
+                    &prec,
+                    b,
+                    x0.as_deref(),
+                    p.tolerance,
+                    p.restart,
+                    p.max_iterations,
+                )
+                .map_err(|source| LfdError::Gmres {
+                    omega: f.omega,
+                    rhs: index,
+                    source,
                 })
             })
             .collect()

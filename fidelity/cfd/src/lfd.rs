@@ -10,7 +10,7 @@
 use crate::gas::NVAR;
 use crate::ilu::{BlockIlu, IluParams};
 use crate::jacobian::{BlockRows, Blocks};
-use crate::krylov::{gmres, GmresError, GmresInfo};
+use crate::krylov::{gmres_from, GmresError, GmresInfo};
 use crate::residual::{Euler, State};
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::Lu;
@@ -160,6 +160,24 @@ enum Factors {
 /// A complex field of cell states, flattened (cell-major, 5 per cell).
 pub type Field = Vec<C64>;
 
+/// The initial guess α g for A x = b with α minimizing ‖b − α A g‖ (one product with A): a
+/// guess of the wrong sign or size starts no worse than zero.
+pub fn scaled_guess(op: &dyn Fn(&[C64]) -> Field, g: &[C64], b: &[C64]) -> Field {
+    let ag = op(g);
+    let (num, den) = ag
+        .iter()
+        .zip(b)
+        .fold((C64::new(0.0, 0.0), 0.0), |(n, d), (a, r)| {
+            (n + a.conj() * r, d + a.norm_sqr())
+        });
+    let alpha = if den > 0.0 {
+        num / den
+    } else {
+        C64::new(0.0, 0.0)
+    };
+    g.iter().map(|v| v * alpha).collect()
+}
+
 impl LfdOperator {
     /// The LFD problem of `euler` (static mesh, no gust) about its steady state `q0`, with the
     /// exact Jacobian as preconditioner.
@@ -247,6 +265,20 @@ impl LfdOperator {
     /// Solves (s V + ∂R/∂q) q̂ = −b for every right-hand side b with one factorization (the
     /// right-hand sides in parallel).
     pub fn solve(&self, f: &Factored, rhs: &[Field]) -> Result<Vec<(Field, GmresInfo)>, LfdError> {
+        self.solve_from(f, rhs, &[])
+    }
+
+    /// [`LfdOperator::solve`] with initial guesses (`guesses[i]` for right-hand side i, where
+    /// given): each scaled by the complex factor that minimizes its residual (one product
+    /// with the operator), so that a guess of the wrong sign or size — a mode shape that
+    /// flipped between designs — starts no worse than zero. The tolerance stays relative to
+    /// the right-hand side: the same accuracy as from zero.
+    pub fn solve_from(
+        &self,
+        f: &Factored,
+        rhs: &[Field],
+        guesses: &[Option<&Field>],
+    ) -> Result<Vec<(Field, GmresInfo)>, LfdError> {
         self.params.validate().map_err(LfdError::Input)?;
         let prec = |v: &[C64]| self.precondition(f, v);
         let op = |v: &[C64]| self.apply(f.s, v);
@@ -255,10 +287,17 @@ impl LfdOperator {
             .map(|(index, b)| {
                 let minus_b: Vec<C64> = b.iter().map(|x| -x).collect();
                 let p = &self.params;
-                gmres(
+                let x0 = guesses
+                    .get(index)
+                    .copied()
+                    .flatten()
+                    .filter(|g| g.len() == b.len())
+                    .map(|g| scaled_guess(&op, g, &minus_b));
+                gmres_from(
                     &op,
                     &prec,
                     &minus_b,
+                    x0.as_deref(),
                     p.tolerance,
                     p.restart,
                     p.max_iterations,

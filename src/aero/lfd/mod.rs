@@ -404,12 +404,15 @@ impl WingBuilder for LfdWingSpec {
         };
         let mut op = LfdOperator::with_preconditioner(e, q0, self.preconditioner.preconditioner());
         op.params = self.params();
-        let model = Lfd::new(
+        let mut model = Lfd::new(
             op,
             1.0,
             1.0,
             self.deform_radius_chords * wing.planform.root_chord,
         );
+        // the designs of one run (one run folder) start their GMRES from the previous design's
+        // solutions
+        model.warm_start = wing.cache_dir.map(steady_cache::warm_start_store);
         let Some(mesh) = built_in else {
             // an external mesh: its wall nodes placed on the planform, or why they do not fit
             let unit = self

@@ -108,3 +108,34 @@ pub(super) fn save_state(
 
 /// File-name prefix of the cached steady states (`steady_lfd_<hash>.bin`).
 pub const STEADY_PREFIX: &str = "steady_lfd_";
+
+/// The GMRES warm-start store of the run whose folder is `dir`, shared by every LFD model built
+/// for it in this process (the designs of one optimization); created empty on first use.
+pub(crate) fn warm_start_store(
+    dir: &Path,
+) -> std::sync::Arc<std::sync::Mutex<gustkit_cfd::lfd_model::WarmStart>> {
+    use std::collections::BTreeMap;
+    use std::sync::{Arc, Mutex, OnceLock};
+    type Store = Arc<Mutex<gustkit_cfd::lfd_model::WarmStart>>;
+    static STORES: OnceLock<Mutex<BTreeMap<std::path::PathBuf, Store>>> = OnceLock::new();
+    let mut stores = STORES
+        .get_or_init(Default::default)
+        .lock()
+        .unwrap_or_else(|e| e.into_inner());
+    stores.entry(dir.to_path_buf()).or_default().clone()
+}
+
+/// The GMRES iterations of the last GAF table of the run folder `dir`, and of the one before
+/// (zeros without a store).
+pub fn warm_start_iterations(dir: &Path) -> (usize, usize) {
+    let s = warm_start_store(dir);
+    let w = s.lock().unwrap_or_else(|e| e.into_inner());
+    (w.last_iterations, w.previous_iterations)
+}
+
+/// Empties the GMRES warm-start store of the run folder `dir` (its next table starts from zero).
+pub fn clear_warm_start(dir: &Path) {
+    let s = warm_start_store(dir);
+    let mut w = s.lock().unwrap_or_else(|e| e.into_inner());
+    *w = Default::default();
+}
