@@ -6,6 +6,8 @@
 use gustkit::study::Study;
 use std::path::Path;
 
+mod common;
+
 /// The flagship study with the 6 modes these tests were sized for (the shipped study retains the
 /// 11 below its cutoff, which the small LFD meshes here do not need).
 fn flagship() -> serde_json::Value {
@@ -883,15 +885,7 @@ fn external_wing_mesh_gives_the_built_in_gafs() {
         .unwrap();
     // the same mesh as the study builds, written in inches
     let (planform, airfoil) = (study.planform().unwrap(), study.airfoil().unwrap());
-    let spec = gustkit_cfd::wing_mesh::WingMeshSpec {
-        n_around: 16,
-        n_radial: 6,
-        n_span: 4,
-        n_outboard: 4,
-        far_field_chords: 15.0,
-        first_spacing_chords: 0.02,
-        tip_closure: 0.05,
-    };
+    let spec = common::small_wing_mesh_spec();
     let mut mesh = gustkit_cfd::wing_mesh::WingMesh::new(
         planform.to_array(),
         &|x| airfoil.half_thickness(x),

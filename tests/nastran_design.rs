@@ -18,47 +18,10 @@ fn bar_wing() -> PathBuf {
 }
 
 /// A cantilever plate wing of 2 × 4 CQUAD4 (two PSHELLs, root and tip halves) with a tip mass,
-/// one CAERO1 of 4 × 4 boxes on an infinite-plate SPLINE1, the bar wing's gust cards.
+/// one CAERO1 of 4 × 4 boxes on an infinite-plate SPLINE1, the bar wing's gust cards
+/// (`common::plate_wing_gust_deck`: 6 modes, no symmetry, X0 at the panel's leading edge).
 fn plate_wing_deck() -> String {
-    let mut d = String::from(
-        "SOL 146\nCEND\nSPC = 1\nMETHOD = 1\nFREQ = 40\nRANDOM = 31\nGUST = 32\nSDAMP = 20\nBEGIN BULK\n",
-    );
-    d.push_str("EIGRL,1,,,6\nMAT1,1,7.0e10,,0.3,2700.\nPSHELL,1,1,0.012,1\nPSHELL,2,1,0.008,1\n");
-    for iy in 0..5 {
-        for ix in 0..3 {
-            d.push_str(&format!(
-                "GRID,{},,{},{},0.\n",
-                1 + ix + 3 * iy,
-                0.25 * ix as f64,
-                0.5 * iy as f64
-            ));
-        }
-    }
-    let mut e = 1;
-    for iy in 0..4 {
-        for ix in 0..2 {
-            let g = 1 + ix + 3 * iy;
-            let pid = if iy < 2 { 1 } else { 2 };
-            d.push_str(&format!(
-                "CQUAD4,{e},{pid},{g},{},{},{}\n",
-                g + 1,
-                g + 4,
-                g + 3
-            ));
-            e += 1;
-        }
-    }
-    d.push_str("CONM2,201,15,,0.5\nSPC1,1,123456,1,2,3\n");
-    d.push_str("AERO,0,100.,0.5,0.4\nPARAM,MACH,0.3\n");
-    d.push_str("CAERO1,1001,1000,,4,4,,,1,+CA\n+CA,0.,0.,0.,0.5,0.,2.,0.,0.5\nPAERO1,1000\n");
-    d.push_str("SPLINE1,100,1001,1001,1016,10\nSET1,10,1,THRU,15\n");
-    d.push_str("MKAERO1,0.3,,,,,,,,+MK\n+MK,0.01,0.1,0.5,1.0\n");
-    d.push_str("GUST,32,33,0.01,0.,100.\nRLOAD1,33,34,,,35\nDAREA,34,1,3,1.\n");
-    d.push_str("TABLED1,35,,,,,,,,+TB\n+TB,0.,1.,1000.,1.,ENDT\n");
-    d.push_str("FREQ1,40,0.1,0.25,79\nRANDPS,31,1,1,1.,,36\n");
-    d.push_str("TABRND1,36,,,,,,,,+TR\n+TR,0.,1.,1000.,1.,ENDT\n");
-    d.push_str("TABDMP1,20,CRIT,,,,,,,+TD\n+TD,0.,0.02,1000.,0.02,ENDT\nENDDATA\n");
-    d
+    common::plate_wing_gust_deck(0.0, 6, false, 0.0)
 }
 
 /// One DVPREL1-like relation: card, property id, field, C0, (variable, coefficient) terms.

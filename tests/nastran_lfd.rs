@@ -14,55 +14,10 @@ use std::sync::Arc;
 
 mod common;
 
-/// A cantilever plate wing of 2 × 4 CQUAD4 (two PSHELLs, root and tip halves, chord 0.5 m,
-/// semispan 2 m) with a tip mass, one CAERO1 of 4 × 4 boxes from the symmetry plane (AERO
-/// SYMXZ = 1) on an infinite-plate SPLINE1, a random gust at M 0.3; everything moved by `dx`
-/// along the flow (grids, panel, the gust's X0).
+/// The plate wing (`common::plate_wing_gust_deck`) as a half wing (AERO SYMXZ = 1) with 4
+/// modes, the gust's X0 0.3 m ahead of the panel, everything moved by `dx` along the flow.
 fn plate_wing_deck(dx: f64) -> String {
-    let mut d = String::from(
-        "SOL 146\nCEND\nSPC = 1\nMETHOD = 1\nFREQ = 40\nRANDOM = 31\nGUST = 32\nSDAMP = 20\nBEGIN BULK\n",
-    );
-    d.push_str("EIGRL,1,,,4\nMAT1,1,7.0e10,,0.3,2700.\nPSHELL,1,1,0.012,1\nPSHELL,2,1,0.008,1\n");
-    for iy in 0..5 {
-        for ix in 0..3 {
-            d.push_str(&format!(
-                "GRID,{},,{},{},0.\n",
-                1 + ix + 3 * iy,
-                dx + 0.25 * ix as f64,
-                0.5 * iy as f64
-            ));
-        }
-    }
-    let mut e = 1;
-    for iy in 0..4 {
-        for ix in 0..2 {
-            let g = 1 + ix + 3 * iy;
-            let pid = if iy < 2 { 1 } else { 2 };
-            d.push_str(&format!(
-                "CQUAD4,{e},{pid},{g},{},{},{}\n",
-                g + 1,
-                g + 4,
-                g + 3
-            ));
-            e += 1;
-        }
-    }
-    d.push_str("CONM2,201,15,,0.5\nSPC1,1,123456,1,2,3\n");
-    d.push_str("AERO,0,100.,0.5,0.4,1\nPARAM,MACH,0.3\n");
-    d.push_str(&format!(
-        "CAERO1,1001,1000,,4,4,,,1,+CA\n+CA,{dx},0.,0.,0.5,{dx},2.,0.,0.5\nPAERO1,1000\n"
-    ));
-    d.push_str("SPLINE1,100,1001,1001,1016,10\nSET1,10,1,THRU,15\n");
-    d.push_str("MKAERO1,0.3,,,,,,,,+MK\n+MK,0.01,0.1,0.5,1.0\n");
-    d.push_str(&format!(
-        "GUST,32,33,0.01,{},100.\nRLOAD1,33,34,,,35\nDAREA,34,1,3,1.\n",
-        dx - 0.3
-    ));
-    d.push_str("TABLED1,35,,,,,,,,+TB\n+TB,0.,1.,1000.,1.,ENDT\n");
-    d.push_str("FREQ1,40,0.1,0.25,79\nRANDPS,31,1,1,1.,,36\n");
-    d.push_str("TABRND1,36,,,,,,,,+TR\n+TR,0.,1.,1000.,1.,ENDT\n");
-    d.push_str("TABDMP1,20,CRIT,,,,,,,+TD\n+TD,0.,0.02,1000.,0.02,ENDT\nENDDATA\n");
-    d
+    common::plate_wing_gust_deck(dx, 4, true, -0.3)
 }
 
 /// The small built-in wing mesh (768 cells) with LFD solves to 1e-12.
@@ -324,15 +279,7 @@ fn external_mesh_on_a_nastran_model_gives_the_built_in_response() {
     let planform = lfd.planform.to_array();
     let (built_in, _) =
         random_response_with(&b, &sub, &s, &modes, &requests, &how, Some(Arc::new(lfd))).unwrap();
-    let spec = gustkit_cfd::wing_mesh::WingMeshSpec {
-        n_around: 16,
-        n_radial: 6,
-        n_span: 4,
-        n_outboard: 4,
-        far_field_chords: 15.0,
-        first_spacing_chords: 0.02,
-        tip_closure: 0.05,
-    };
+    let spec = common::small_wing_mesh_spec();
     let airfoil = gustkit::wing::Airfoil::naca65a004();
     let mesh =
         gustkit_cfd::wing_mesh::WingMesh::new(planform, &|x| airfoil.half_thickness(x), &spec).mesh;

@@ -153,3 +153,74 @@ pub fn plate_bulk_data(plate: &PlateModel, rot: &dyn Fn([f64; 3]) -> [f64; 3]) -
     }
     deck
 }
+
+/// A cantilever plate wing of 2 × 4 CQUAD4 (two PSHELLs, root and tip halves; chord 0.5 m,
+/// semispan 2 m) with a tip mass, one CAERO1 of 4 × 4 boxes on an infinite-plate SPLINE1, a
+/// random gust at M 0.3 on 0.1–19.85 Hz with 2 % modal damping: EIGRL keeps `modes`,
+/// `half_wing` sets AERO's SYMXZ = 1, and everything moves by `dx` along the flow (grids, panel,
+/// the gust's X0 = dx + `gust_x0`).
+pub fn plate_wing_gust_deck(dx: f64, modes: usize, half_wing: bool, gust_x0: f64) -> String {
+    let mut d = String::from(
+        "SOL 146\nCEND\nSPC = 1\nMETHOD = 1\nFREQ = 40\nRANDOM = 31\nGUST = 32\nSDAMP = 20\nBEGIN BULK\n",
+    );
+    d.push_str(&format!(
+        "EIGRL,1,,,{modes}\nMAT1,1,7.0e10,,0.3,2700.\nPSHELL,1,1,0.012,1\nPSHELL,2,1,0.008,1\n"
+    ));
+    for iy in 0..5 {
+        for ix in 0..3 {
+            d.push_str(&format!(
+                "GRID,{},,{},{},0.\n",
+                1 + ix + 3 * iy,
+                dx + 0.25 * ix as f64,
+                0.5 * iy as f64
+            ));
+        }
+    }
+    let mut e = 1;
+    for iy in 0..4 {
+        for ix in 0..2 {
+            let g = 1 + ix + 3 * iy;
+            let pid = if iy < 2 { 1 } else { 2 };
+            d.push_str(&format!(
+                "CQUAD4,{e},{pid},{g},{},{},{}\n",
+                g + 1,
+                g + 4,
+                g + 3
+            ));
+            e += 1;
+        }
+    }
+    d.push_str("CONM2,201,15,,0.5\nSPC1,1,123456,1,2,3\n");
+    d.push_str(if half_wing {
+        "AERO,0,100.,0.5,0.4,1\nPARAM,MACH,0.3\n"
+    } else {
+        "AERO,0,100.,0.5,0.4\nPARAM,MACH,0.3\n"
+    });
+    d.push_str(&format!(
+        "CAERO1,1001,1000,,4,4,,,1,+CA\n+CA,{dx},0.,0.,0.5,{dx},2.,0.,0.5\nPAERO1,1000\n"
+    ));
+    d.push_str("SPLINE1,100,1001,1001,1016,10\nSET1,10,1,THRU,15\n");
+    d.push_str("MKAERO1,0.3,,,,,,,,+MK\n+MK,0.01,0.1,0.5,1.0\n");
+    d.push_str(&format!(
+        "GUST,32,33,0.01,{},100.\nRLOAD1,33,34,,,35\nDAREA,34,1,3,1.\n",
+        dx + gust_x0
+    ));
+    d.push_str("TABLED1,35,,,,,,,,+TB\n+TB,0.,1.,1000.,1.,ENDT\n");
+    d.push_str("FREQ1,40,0.1,0.25,79\nRANDPS,31,1,1,1.,,36\n");
+    d.push_str("TABRND1,36,,,,,,,,+TR\n+TR,0.,1.,1000.,1.,ENDT\n");
+    d.push_str("TABDMP1,20,CRIT,,,,,,,+TD\n+TD,0.,0.02,1000.,0.02,ENDT\nENDDATA\n");
+    d
+}
+
+/// The small built-in wing mesh of the LFD tests (768 cells: 16 around, 6 radial, 4 + 4 spanwise).
+pub fn small_wing_mesh_spec() -> gustkit_cfd::wing_mesh::WingMeshSpec {
+    gustkit_cfd::wing_mesh::WingMeshSpec {
+        n_around: 16,
+        n_radial: 6,
+        n_span: 4,
+        n_outboard: 4,
+        far_field_chords: 15.0,
+        first_spacing_chords: 0.02,
+        tip_closure: 0.05,
+    }
+}

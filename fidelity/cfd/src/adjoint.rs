@@ -22,14 +22,13 @@
 //! so q₀ and the LFD operator (second derivatives of the residual); that part is not here.
 
 use crate::gas::NVAR;
-use crate::krylov::{gmres_from, GmresInfo};
+use crate::krylov::GmresInfo;
 use crate::lfd::{Factored, Field, LfdError, LfdOperator};
 use crate::mesh::{Boundary, Side};
 use crate::residual::State;
 use gustkit_core::scalar::{Dual, Scalar};
 use gustkit_core::tape::{Rev, Tape, BYTES_PER_ENTRY};
 use num_complex::Complex64 as C64;
-use rayon::prelude::*;
 
 /// A recorded kernel: its tape, its inputs and its outputs, in fixed orders.
 pub(crate) struct Recorded {
@@ -251,35 +250,9 @@ impl LfdReverse {
         rhs: &[Field],
         guesses: &[Option<&Field>],
     ) -> Result<Vec<(Field, GmresInfo)>, LfdError> {
-        lfd.params.validate().map_err(LfdError::Input)?;
         let prec = |v: &[C64]| lfd.precondition_transpose(f, v);
         let op = |v: &[C64]| lfd.apply_transpose(f.s, v);
-        rhs.par_iter()
-            .enumerate()
-            .map(|(index, b)| {
-                let p = &lfd.params;
-                let x0 = guesses
-                    .get(index)
-                    .copied()
-                    .flatten()
-                    .filter(|g| g.len() == b.len())
-                    .map(|g| crate::lfd::scaled_guess(&op, g, b));
-                gmres_from(
-                    &op,
-                    &prec,
-                    b,
-                    x0.as_deref(),
-                    p.tolerance,
-                    p.restart,
-                    p.max_iterations,
-                )
-                .map_err(|source| LfdError::Gmres {
-                    omega: f.omega,
-                    rhs: index,
-                    source,
-                })
-            })
-            .collect()
+        crate::lfd::solve_each(&op, &prec, rhs, guesses, (&lfd.params, f.omega), false)
     }
 }
 

@@ -160,6 +160,49 @@ enum Factors {
 /// A complex field of cell states, flattened (cell-major, 5 per cell).
 pub type Field = Vec<C64>;
 
+/// GMRES on every right-hand side (in parallel; `negate`: for A x = −b) from its guess where
+/// given ([`scaled_guess`]), to the tolerance of `params` relative to the right-hand side.
+pub(crate) fn solve_each(
+    op: &(dyn Fn(&[C64]) -> Field + Sync),
+    prec: &(dyn Fn(&[C64]) -> Field + Sync),
+    rhs: &[Field],
+    guesses: &[Option<&Field>],
+    (params, omega): (&LfdParams, f64),
+    negate: bool,
+) -> Result<Vec<(Field, GmresInfo)>, LfdError> {
+    params.validate().map_err(LfdError::Input)?;
+    rhs.par_iter()
+        .enumerate()
+        .map(|(index, b)| {
+            let b: std::borrow::Cow<[C64]> = if negate {
+                b.iter().map(|x| -x).collect::<Field>().into()
+            } else {
+                b.as_slice().into()
+            };
+            let x0 = guesses
+                .get(index)
+                .copied()
+                .flatten()
+                .filter(|g| g.len() == b.len())
+                .map(|g| scaled_guess(op, g, &b));
+            gmres_from(
+                op,
+                prec,
+                &b,
+                x0.as_deref(),
+                params.tolerance,
+                params.restart,
+                params.max_iterations,
+            )
+            .map_err(|source| LfdError::Gmres {
+                omega,
+                rhs: index,
+                source,
+            })
+        })
+        .collect()
+}
+
 /// The initial guess α g for A x = b with α minimizing ‖b − α A g‖ (one product with A): a
 /// guess of the wrong sign or size starts no worse than zero.
 pub fn scaled_guess(op: &dyn Fn(&[C64]) -> Field, g: &[C64], b: &[C64]) -> Field {
@@ -279,36 +322,9 @@ impl LfdOperator {
         rhs: &[Field],
         guesses: &[Option<&Field>],
     ) -> Result<Vec<(Field, GmresInfo)>, LfdError> {
-        self.params.validate().map_err(LfdError::Input)?;
         let prec = |v: &[C64]| self.precondition(f, v);
         let op = |v: &[C64]| self.apply(f.s, v);
-        rhs.par_iter()
-            .enumerate()
-            .map(|(index, b)| {
-                let minus_b: Vec<C64> = b.iter().map(|x| -x).collect();
-                let p = &self.params;
-                let x0 = guesses
-                    .get(index)
-                    .copied()
-                    .flatten()
-                    .filter(|g| g.len() == b.len())
-                    .map(|g| scaled_guess(&op, g, &minus_b));
-                gmres_from(
-                    &op,
-                    &prec,
-                    &minus_b,
-                    x0.as_deref(),
-                    p.tolerance,
-                    p.restart,
-                    p.max_iterations,
-                )
-                .map_err(|source| LfdError::Gmres {
-                    omega: f.omega,
-                    rhs: index,
-                    source,
-                })
-            })
-            .collect()
+        solve_each(&op, &prec, rhs, guesses, (&self.params, f.omega), true)
     }
 
     /// The gust right-hand side b = ∂R/∂u_G û_G at ω: the face volume fluxes of the harmonic gust

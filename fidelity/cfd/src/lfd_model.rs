@@ -85,11 +85,44 @@ impl WarmStart {
         Self::find(&self.adjoints, self.n, k, n)
     }
 
-    /// Single-precision solutions in double precision.
-    fn single(x: &[C64]) -> Vec<num_complex::Complex32> {
-        x.iter()
-            .map(|v| num_complex::Complex32::new(v.re as f32, v.im as f32))
-            .collect()
+    /// Keeps the solutions of a table (`adjoint`: of a reverse sweep) per reduced frequency, in
+    /// single precision, for a mesh of `n` unknowns (another mesh's are dropped); returns their
+    /// GMRES iterations.
+    fn keep<'a>(
+        &mut self,
+        n: usize,
+        k: &[f64],
+        solved: impl Iterator<Item = &'a [Solution]>,
+        adjoint: bool,
+    ) -> usize {
+        if self.n != n {
+            self.tables.clear();
+            self.adjoints.clear();
+        }
+        self.n = n;
+        let mut iterations = 0;
+        let kept = k
+            .iter()
+            .zip(solved)
+            .map(|(&kk, s)| {
+                iterations += s.iter().map(|(_, i)| i.iterations).sum::<usize>();
+                let single = s
+                    .iter()
+                    .map(|(x, _)| {
+                        x.iter()
+                            .map(|v| num_complex::Complex32::new(v.re as f32, v.im as f32))
+                            .collect()
+                    })
+                    .collect();
+                (kk, single)
+            })
+            .collect();
+        if adjoint {
+            self.adjoints = kept;
+        } else {
+            self.tables = kept;
+        }
+        iterations
     }
 
     fn find(
@@ -510,17 +543,9 @@ impl Aerodynamics for Lfd {
         let solved = solved?;
         if let Some(w) = &self.warm_start {
             let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
-            if w.n != n {
-                w.adjoints.clear();
-            }
-            w.n = n;
-            w.tables = k
-                .iter()
-                .zip(&solved)
-                .map(|(&kk, s)| (kk, s.iter().map(|(x, _)| WarmStart::single(x)).collect()))
-                .collect();
+            let iterations = w.keep(n, k, solved.iter().map(Vec::as_slice), false);
             w.previous_iterations = w.last_iterations;
-            w.last_iterations = solved.iter().flatten().map(|(_, i)| i.iterations).sum();
+            w.last_iterations = iterations;
         }
         let parts: Result<Vec<_>, AeroError> = k
             .par_iter()
@@ -704,19 +729,7 @@ impl AerodynamicsReverse for Lfd {
         drop(warm);
         if let Some(w) = &self.warm_start {
             let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
-            if w.n != n {
-                w.tables.clear();
-            }
-            w.n = n;
-            w.adjoints = k
-                .iter()
-                .zip(&swept)
-                .map(|(&kk, (_, l))| (kk, l.iter().map(|(x, _)| WarmStart::single(x)).collect()))
-                .collect();
-            w.last_adjoint_iterations = swept
-                .iter()
-                .flat_map(|(_, l)| l.iter().map(|(_, i)| i.iterations))
-                .sum();
+            w.last_adjoint_iterations = w.keep(n, k, swept.iter().map(|(_, l)| l.as_slice()), true);
         }
         let per_k = swept.into_iter().map(|(p, _)| p).collect();
         Ok(self.sum_over_frequencies(per_k, nm, seeds.len()))
