@@ -257,6 +257,18 @@ fn lfd_nastran_study_runs_and_bad_input_is_named() {
     let mut asym = v.clone();
     asym["model"]["nastran"] = plain.display().to_string().into();
     refused("asym", &asym, &["AERO", "SYMXZ = 1"]);
+    // a mesh file in another unit than the model's
+    let mut inches = v.clone();
+    inches["aero"]["fidelity"] = serde_json::json!({"lfd": {"mesh_file": {"path": "wing.su2",
+        "markers": {"wall": "wall"}, "length_unit": "in"}}});
+    refused(
+        "inches",
+        &inches,
+        &[
+            "aero.fidelity.lfd.mesh_file.length_unit",
+            "model's own units",
+        ],
+    );
 }
 
 /// An external mesh (`aero.fidelity.lfd.mesh_file`) on a Nastran model: the small built-in

@@ -229,6 +229,16 @@ impl NastranStudyFile {
                     "a Nastran model's DLM comes from its CAERO1 cards: the fidelity here may only be {\"lfd\": …} (leave \"aero\" out for the DLM)".into(),
                 );
             }
+            if let crate::aero::FidelitySpec::Lfd(l) = &a.fidelity {
+                if let Some(f) = &l.mesh_file {
+                    if f.length_unit != crate::aero::lfd::MeshUnit::M {
+                        return bad(
+                            "aero.fidelity.lfd.mesh_file.length_unit".into(),
+                            format!("\"{}\": a Nastran model's mesh file is in the model's own units (gustkit converts nothing in a Nastran model): leave length_unit out", f.length_unit.name()),
+                        );
+                    }
+                }
+            }
             if let Err(e) = a.airfoil.airfoil() {
                 return bad("aero.airfoil".into(), e);
             }
