@@ -87,7 +87,7 @@ fn sizes_beyond_the_machine() {
         "aero.fidelity.dlm.n_chord",
         100000.into(),
         "aero.fidelity.dlm.n_chord",
-        &["2400000 boxes", "GB"],
+        &["1500000 boxes", "GB"],
     );
     refused(
         "run",
