@@ -702,10 +702,9 @@ pub fn gust_frequency_solution_with(
     let mut freqs = freqs.clone();
     freqs.sort_by(f64::total_cmp);
     freqs.dedup();
-    let aero = b.aero.as_ref().expect("lifting_surfaces checked AERO");
-    let velocity = gust.v;
-    let q = real_param(b, "Q")?.unwrap_or(0.5 * aero.rhoref * velocity * velocity);
-    let mach = real_param(b, "MACH")?.unwrap_or_else(|| b.mkaero.first().map_or(0.0, |m| m.0));
+    let flight = subcase_flight(b, sub)?;
+    let (velocity, mach) = (flight.velocity, flight.mach);
+    let q = real_param(b, "Q")?.unwrap_or(0.5 * flight.density * velocity * velocity);
     // modal damping ζ = g(f_n)/2 from the SDAMP table
     let g_of = |f: f64| -> R<f64> {
         match sub.selections.get("SDAMPING") {
@@ -737,13 +736,6 @@ pub fn gust_frequency_solution_with(
     if zetas.windows(2).any(|w| (w[1] - w[0]).abs() > 1e-12) {
         return Err(NastranError::model("SDAMP", "modal damping that differs between modes is not read yet: give one value over the modes' frequencies".into()));
     }
-    let flight = FlightCondition {
-        mach,
-        velocity,
-        density: aero.rhoref,
-        b_ref: surf.b_ref,
-        x_ref: gust.x0,
-    };
     let dlm_error = |e: gustkit_core::AeroError| NastranError::model("DLM", e.to_string());
     if let Some(l) = &lfd {
         if (l.mach - mach).abs() > 1e-9 * mach.max(1.0) {
