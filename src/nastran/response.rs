@@ -501,9 +501,7 @@ fn gaf_table_vjp(
             let reverse = l.model.reverse().ok_or_else(|| {
                 gustkit_core::AeroError::Input("the LFD model has no reverse mode".into())
             })?;
-            let mut seed = seed.clone();
-            seed.x_ref = flight.x_ref - l.x_origin;
-            reverse.gafs_vjp(&l.flight(flight), ms, k, &seed)
+            reverse.gafs_vjp(&l.flight(flight), ms, k, seed)
         }
     };
     let g = match interpolation {

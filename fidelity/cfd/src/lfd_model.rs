@@ -67,9 +67,8 @@ pub struct WarmStart {
     tables: Vec<(f64, Vec<Vec<num_complex::Complex32>>)>,
     /// (k, the adjoint solutions of the last reverse sweep, seed by seed and column by column).
     adjoints: Vec<(f64, Vec<Vec<num_complex::Complex32>>)>,
-    /// GMRES iterations of the last table, and of the table before it.
+    /// GMRES iterations of the last table.
     pub last_iterations: usize,
-    pub previous_iterations: usize,
     /// GMRES iterations of the last reverse sweep's adjoint solves.
     pub last_adjoint_iterations: usize,
 }
@@ -543,9 +542,7 @@ impl Aerodynamics for Lfd {
         let solved = solved?;
         if let Some(w) = &self.warm_start {
             let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
-            let iterations = w.keep(n, k, solved.iter().map(Vec::as_slice), false);
-            w.previous_iterations = w.last_iterations;
-            w.last_iterations = iterations;
+            w.last_iterations = w.keep(n, k, solved.iter().map(Vec::as_slice), false);
         }
         let parts: Result<Vec<_>, AeroError> = k
             .par_iter()

@@ -125,14 +125,6 @@ pub(crate) fn warm_start_store(
     stores.entry(dir.to_path_buf()).or_default().clone()
 }
 
-/// The GMRES iterations of the last GAF table of the run folder `dir`, and of the one before
-/// (zeros without a store).
-pub fn warm_start_iterations(dir: &Path) -> (usize, usize) {
-    let s = warm_start_store(dir);
-    let w = s.lock().unwrap_or_else(|e| e.into_inner());
-    (w.last_iterations, w.previous_iterations)
-}
-
 /// Empties the GMRES warm-start store of the run folder `dir` (its next table starts from zero).
 pub fn clear_warm_start(dir: &Path) {
     let s = warm_start_store(dir);
