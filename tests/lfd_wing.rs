@@ -858,7 +858,7 @@ fn lfd_bench_prints_repetitions() {
         timed.iter().any(|l| l.contains("GAF table (the function"))
             && timed
                 .iter()
-                .any(|l| l.contains("GAF reverse, tapes reused")),
+                .any(|l| l.contains("GAF reverse, Jacobians reused")),
         "{out}"
     );
     std::fs::remove_dir_all(&dir).unwrap();

@@ -132,8 +132,8 @@ pub fn bench(study: &Study, repeat: Option<usize>, optimization: bool) -> Result
     if let Some(crate::study::FidelitySpec::Lfd(spec)) =
         study.spec.aero.as_ref().map(|a| &a.fidelity)
     {
-        // the first GAF table and the first reverse call (which records the tapes) are the
-        // warm-up runs, printed on their own
+        // the first GAF table and the first reverse call (which assembles the reverse mode's
+        // Jacobians) are the warm-up runs, printed on their own
         let t = bench_lfd(&study, repeat)?;
         println!(
             "aerodynamics (LFD, {} cells, {} reduced frequencies, {} modes + gust):",
@@ -154,10 +154,23 @@ pub fn bench(study: &Study, repeat: Option<usize>, optimization: bool) -> Result
             t.gafs.line_s("GAF table (the function's aerodynamics)")
         );
         println!(
-            "  GAF reverse, first call (records the tapes), all 104 variables {:>7.2} s",
+            "  GAF reverse, first call (assembles the Jacobians), all variables {:>7.2} s",
             t.vjp_first_s
         );
-        println!("{}", t.vjp.line_s("GAF reverse, tapes reused"));
+        println!("{}", t.vjp.line_s("GAF reverse, Jacobians reused"));
+        let cells = spec.mesh_spec().n_cells() as f64;
+        for (what, peak) in [
+            ("model (mesh, steady state, Jacobians)", t.peak_build_gb),
+            ("GAF table", t.peak_gafs_gb),
+            ("GAF reverse", t.peak_vjp_gb),
+        ] {
+            if let Some(gb) = peak {
+                println!(
+                    "  peak resident memory, {what:<38} {gb:>6.2} GB ({:.1} kB a cell)",
+                    gb * 1e6 / cells
+                );
+            }
+        }
         println!(
             "  reverse / function (medians): {:.2} (paper: 146.4 / 70.5 min = 2.08 on 400 cores)",
             t.vjp.median_s / t.gafs.median_s
@@ -261,10 +274,31 @@ pub struct LfdTimings {
     pub gafs_first_s: f64,
     /// The timed GAF tables after it.
     pub gafs: Stats,
-    /// The first reverse call (it records the tapes) with a seed on every GAF entry.
+    /// The first reverse call (it assembles the reverse mode's Jacobians) with a seed on every
+    /// GAF entry.
     pub vjp_first_s: f64,
-    /// The timed reverse calls after it (tapes reused).
+    /// The timed reverse calls after it (Jacobians reused).
     pub vjp: Stats,
+    /// Peak resident memory of the process over the model's build, the GAF tables and the
+    /// reverse calls (GB; where the system reports it: Linux).
+    pub peak_build_gb: Option<f64>,
+    pub peak_gafs_gb: Option<f64>,
+    pub peak_vjp_gb: Option<f64>,
+}
+
+/// The process's peak resident memory since the last [`reset_peak_memory`], GB (Linux's VmHWM;
+/// None elsewhere).
+pub fn peak_memory_gb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024.0 / 1e9)
+}
+
+/// Restarts the peak resident memory from the present one (Linux: `/proc/self/clear_refs`), so
+/// that each stage's peak is its own.
+pub fn reset_peak_memory() {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
 }
 
 /// The LFD stages on the study's initial design (no steady-state cache), see [`LfdTimings`].
@@ -272,9 +306,12 @@ pub fn bench_lfd(study: &Study, repeat: usize) -> Result<LfdTimings> {
     let (plate, modes, _) = analyze(study)?;
     let mut study = study.clone();
     study.cache_dir = None;
+    reset_peak_memory();
     let t = Instant::now();
     let aero = study.aero_model(&plate)?;
     let build_s = t.elapsed().as_secs_f64();
+    let peak_build_gb = peak_memory_gb();
+    reset_peak_memory();
     let mut table = None;
     let mut gafs = || -> Result<f64> {
         let t = Instant::now();
@@ -286,6 +323,8 @@ pub fn bench_lfd(study: &Study, repeat: usize) -> Result<LfdTimings> {
     };
     let gafs_first_s = gafs()?;
     let gafs = Stats::of((0..repeat.max(1)).map(|_| gafs()).collect::<Result<_>>()?);
+    let peak_gafs_gb = peak_memory_gb();
+    reset_peak_memory();
     let mut seed = table.expect("computed above");
     let (n_k, n_modes) = (seed.k.len(), seed.n_modes());
     for q in seed.q_ss.iter_mut().flatten().flatten() {
@@ -304,6 +343,7 @@ pub fn bench_lfd(study: &Study, repeat: usize) -> Result<LfdTimings> {
     };
     let vjp_first_s = vjp()?;
     let vjp = Stats::of((0..repeat.max(1)).map(|_| vjp()).collect::<Result<_>>()?);
+    let peak_vjp_gb = peak_memory_gb();
     Ok(LfdTimings {
         n_k,
         n_modes,
@@ -312,6 +352,9 @@ pub fn bench_lfd(study: &Study, repeat: usize) -> Result<LfdTimings> {
         gafs,
         vjp_first_s,
         vjp,
+        peak_build_gb,
+        peak_gafs_gb,
+        peak_vjp_gb,
     })
 }
 

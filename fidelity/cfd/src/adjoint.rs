@@ -1,16 +1,15 @@
 //! The transposes of the LFD's linearizations (paper Sec. III), for the adjoint of the GAFs with
 //! respect to the mode shapes.
 //!
-//! Method: the residual and the wall forces are written once over [`Scalar`]; recorded on an
-//! operation tape ([`gustkit_core::tape`]) at the steady state q₀ on the static mesh, one backward
-//! sweep gives the transposed product of each linearization for any (complex) seed:
+//! Method: the Jacobians of the residual, the cell volumes and the wall forces with respect to
+//! the node positions, the face volume fluxes and the state are assembled once about the steady
+//! state q₀ on the static mesh, by colouring ([`crate::lfd_jacobians`]); their transposed
+//! products serve any (complex) seed:
 //! - ∂R/∂qᵀ ψ (the adjoint LFD operator (s V + ∂R/∂q)ᵀ) from the operator's assembled exact
 //!   Jacobian ([`LfdOperator::apply_transpose`]);
 //! - Bᵀ ψ of the mode-motion right-hand side B x̂ = ∂R/∂x x̂ + s ∂R/∂v_G L x̂ + s V̂(x̂) q₀ (node
-//!   positions, face volume fluxes through the swept-volume linearization L, cell volumes): one
-//!   tape of the residual and the volumes over the nodes and the face volume fluxes;
-//! - F_qᵀ u and F_xᵀ u of the linearized wall forces f̂ = F_q q̂ + F_x x̂: one tape of the wall
-//!   forces over q and the nodes.
+//!   positions, face volume fluxes through the swept-volume linearization L, cell volumes);
+//! - F_qᵀ u and F_xᵀ u of the linearized wall forces f̂ = F_q q̂ + F_x x̂.
 //!
 //! The adjoint LFD systems (s V + ∂R/∂q)ᵀ λ = r are solved by GMRES on that transposed operator,
 //! preconditioned by the transposed factors of the same frequency's preconditioner (the sparse LU's
@@ -24,133 +23,37 @@
 use crate::gas::NVAR;
 use crate::krylov::GmresInfo;
 use crate::lfd::{Factored, Field, LfdError, LfdOperator};
-use crate::mesh::{Boundary, Side};
+use crate::lfd_jacobians::{ForceJacobian, MotionJacobian};
 use crate::residual::State;
 use gustkit_core::scalar::{Dual, Scalar};
-use gustkit_core::tape::{Rev, Tape, BYTES_PER_ENTRY};
 use num_complex::Complex64 as C64;
-
-/// A recorded kernel: its tape, its inputs and its outputs, in fixed orders.
-pub(crate) struct Recorded {
-    tape: Tape,
-    inputs: Vec<Rev>,
-    outputs: Vec<Rev>,
-}
-
-impl Recorded {
-    /// wᵀ ∂(outputs)/∂(inputs) for seeds w aligned with the outputs.
-    pub(crate) fn vjp(&self, w: &[C64]) -> Vec<C64> {
-        debug_assert_eq!(w.len(), self.outputs.len());
-        let adj = self
-            .tape
-            .sweep(self.outputs.iter().zip(w).map(|(r, w)| (*r, *w)));
-        self.inputs.iter().map(|x| adj.of(*x)).collect()
-    }
-
-    /// Memory of the tape and of one sweep's adjoints, bytes.
-    fn bytes(&self) -> usize {
-        self.tape.bytes() + self.tape.len() * std::mem::size_of::<C64>()
-    }
-}
 
 /// The transposed linearizations of an [`LfdOperator`] about its steady state.
 pub struct LfdReverse {
-    /// The residual and the cell volumes over the node positions and the face volume fluxes.
-    pub(crate) geometry: Recorded,
-    /// The wall forces over q and the node positions.
-    forces: Recorded,
+    /// ∂R/∂x, ∂V/∂x and ∂R/∂v_G: the mode-motion right-hand side's parts.
+    pub motion: MotionJacobian,
+    /// ∂f/∂q and ∂f/∂x of the wall forces.
+    pub forces: ForceJacobian,
     /// The wall faces of the forces, in the order of [`LfdOperator::wall_face_forces`].
     pub wall_faces: Vec<usize>,
     /// Per face, per face node: ∂(swept volume)/∂(node displacement), the linearization L.
     swept: Vec<Vec<[f64; 3]>>,
     n_nodes: usize,
-    n_faces: usize,
+    n_cells: usize,
 }
 
-/// Operations recorded per cell, with room for the adjoint vectors of two concurrent sweeps (used
-/// to refuse a recording that would not fit): measured 2 368 for the geometry tape and 462 for
-/// the forces' on a small wing mesh (576 cells, many of them at the wall), 2 586 and 509 on a
-/// 2-D O-mesh of 192 cells.
-pub const TAPE_ENTRIES_PER_CELL: usize = 4000;
+/// Bytes per cell of [`LfdReverse`] (used to refuse a mesh that would not fit): measured 13.6 kB
+/// on the coarse wing mesh (7 168 cells, second order), most of it ∂R/∂x (about 90 cells a node,
+/// a 5 × 3 block each); the operation tapes it replaced took about 190 kB.
+pub const BYTES_PER_CELL: usize = 16_000;
 
 impl LfdReverse {
-    /// Records the tapes of `lfd` at its steady state.
+    /// Assembles the linearizations of `lfd` at its steady state.
     pub fn new(lfd: &LfdOperator) -> Self {
         let e = &lfd.euler;
-        let order = e.order;
         let mesh = &e.mesh;
-        let (n_nodes, n_faces) = (mesh.nodes.len(), mesh.faces.len());
-        let ((inputs, outputs), tape) = Tape::record(|| {
-            let nodes: Vec<[Rev; 3]> = mesh.nodes.iter().map(|p| p.map(Rev::input)).collect();
-            let vg: Vec<Rev> = e.face_vg.iter().map(|v| Rev::input(*v)).collect();
-            let q: Vec<State<Rev>> = lfd.q0.iter().map(|s| s.map(Rev::cst)).collect();
-            let geom = e.geometry_at(&nodes, vg.clone(), order);
-            let r = e.residual_in(&q, &geom).0;
-            let v = mesh.volumes_at(&nodes);
-            let mut inputs: Vec<Rev> = nodes.into_iter().flatten().collect();
-            inputs.extend(vg);
-            let mut outputs: Vec<Rev> = r.into_iter().flatten().collect();
-            outputs.extend(v);
-            (inputs, outputs)
-        });
-        let geometry = Recorded {
-            tape,
-            inputs,
-            outputs,
-        };
-        // the wall forces depend on the wall cells' states and reconstruction only: the states
-        // of the wall cells and their face neighbours, the nodes of those cells; everything else
-        // enters as a constant and is not recorded
-        let mut near = vec![false; mesh.n_cells];
-        for f in &mesh.faces {
-            if f.right == Side::Boundary(Boundary::Wall) {
-                near[f.left] = true;
-            }
-        }
-        let wall_cells = near.clone();
-        for f in &mesh.faces {
-            if let Side::Cell(r) = f.right {
-                if wall_cells[f.left] || wall_cells[r] {
-                    near[f.left] = true;
-                    near[r] = true;
-                }
-            }
-        }
-        let mut node_near = vec![false; n_nodes];
-        for f in &mesh.faces {
-            let touches = near[f.left] || matches!(f.right, Side::Cell(r) if near[r]);
-            if touches {
-                for &n in &f.nodes {
-                    node_near[n] = true;
-                }
-            }
-        }
-        let ((inputs, outputs, wall_faces), tape) = Tape::record(|| {
-            let q: Vec<State<Rev>> = lfd
-                .q0
-                .iter()
-                .zip(&near)
-                .map(|(s, &v)| s.map(|x| if v { Rev::input(x) } else { Rev::cst(x) }))
-                .collect();
-            let nodes: Vec<[Rev; 3]> = mesh
-                .nodes
-                .iter()
-                .zip(&node_near)
-                .map(|(p, &v)| p.map(|x| if v { Rev::input(x) } else { Rev::cst(x) }))
-                .collect();
-            let geom = e.geometry_at(&nodes, vec![Rev::cst(0.0); n_faces], order);
-            let f = e.wall_face_forces(&q, &geom);
-            let mut inputs: Vec<Rev> = q.into_iter().flatten().collect();
-            inputs.extend(nodes.into_iter().flatten());
-            let wall_faces = f.iter().map(|(fi, _)| *fi).collect();
-            let outputs = f.into_iter().flat_map(|(_, v)| v).collect();
-            (inputs, outputs, wall_faces)
-        });
-        let forces = Recorded {
-            tape,
-            inputs,
-            outputs,
-        };
+        let motion = MotionJacobian::new(e, &lfd.q0);
+        let forces = ForceJacobian::new(e, &lfd.q0);
         // L: the swept volume of each face moving from x₀ to x₀ + ε x̂, differentiated per node
         let swept = mesh
             .faces
@@ -171,41 +74,38 @@ impl LfdReverse {
             })
             .collect();
         Self {
-            geometry,
+            wall_faces: forces.wall_faces.clone(),
+            motion,
             forces,
-            wall_faces,
             swept,
-            n_nodes,
-            n_faces,
+            n_nodes: mesh.nodes.len(),
+            n_cells: mesh.n_cells,
         }
     }
 
-    /// Memory held by the tapes and one sweep of each, bytes.
+    /// Memory held, bytes.
     pub fn bytes(&self) -> usize {
-        self.geometry.bytes() + self.forces.bytes()
+        self.motion.bytes()
+            + self.forces.bytes()
+            + self.swept.iter().map(|s| 24 + s.len() * 24).sum::<usize>()
     }
 
     /// Estimated memory of [`LfdReverse::new`] for a mesh of `n_cells` cells, bytes.
     pub fn estimate_bytes(n_cells: usize) -> usize {
-        n_cells * TAPE_ENTRIES_PER_CELL * (BYTES_PER_ENTRY + std::mem::size_of::<C64>())
+        n_cells * BYTES_PER_CELL
     }
 
     /// Bᵀ w: the transpose of [`LfdOperator::motion_rhs`] at s, a seed per node (mesh frame).
     pub fn motion_rhs_transpose(&self, lfd: &LfdOperator, s: C64, w: &[C64]) -> Vec<[C64; 3]> {
         let n_cells = lfd.euler.mesh.n_cells;
-        let mut seeds = w.to_vec();
         // the s V̂ q₀ term: seed s Σ_k w_ck q₀_ck on each cell's volume
-        seeds.extend((0..n_cells).map(|c| {
+        let seeds: Vec<C64> = (0..n_cells).map(|c| {
             s * (0..NVAR)
                 .map(|k| w[c * NVAR + k] * lfd.q0[c][k])
                 .sum::<C64>()
-        }));
-        let adj = self.geometry.vjp(&seeds);
-        let mut nodes: Vec<[C64; 3]> = (0..self.n_nodes)
-            .map(|n| std::array::from_fn(|k| adj[3 * n + k]))
-            .collect();
+        }).collect();
+        let (mut nodes, vg) = self.motion.transpose(&lfd.euler.mesh, w, &seeds);
         // the grid-velocity term s ∂R/∂v_G L x̂: Lᵀ (s ∂R/∂v_Gᵀ w)
-        let vg = &adj[3 * self.n_nodes..3 * self.n_nodes + self.n_faces];
         for (fi, f) in lfd.euler.mesh.faces.iter().enumerate() {
             let g = s * vg[fi];
             for (j, &n) in f.nodes.iter().enumerate() {
@@ -221,13 +121,7 @@ impl LfdReverse {
     /// seed on each wall face's force (in the order of `wall_faces`), the seeds F_qᵀ u on the
     /// state and F_xᵀ u on the node displacements.
     pub fn wall_forces_transpose(&self, u: &[[C64; 3]]) -> (Field, Vec<[C64; 3]>) {
-        let w: Vec<C64> = u.iter().flatten().copied().collect();
-        let adj = self.forces.vjp(&w);
-        let n_q = adj.len() - 3 * self.n_nodes;
-        let nodes = (0..self.n_nodes)
-            .map(|n| std::array::from_fn(|k| adj[n_q + 3 * n + k]))
-            .collect();
-        (adj[..n_q].to_vec(), nodes)
+        self.forces.transpose(u, self.n_cells, self.n_nodes)
     }
 
     /// Solves the adjoint LFD systems (s V + ∂R/∂q)ᵀ λ = r for every r with the factorization of
@@ -496,19 +390,17 @@ impl<'a> Probes<'a> {
     fn volume_flux_rhs(&self) -> gustkit_core::LinearizationCheck {
         let (lfd, w, g) = (self.lfd, &self.w, &self.g);
         let mesh = &lfd.euler.mesh;
-        let nn = mesh.nodes.len();
         let zero = C64::new(0.0, 0.0);
-        let adj = self.rev.geometry.vjp(&{
-            let mut s = complex(w);
-            s.extend(std::iter::repeat_n(zero, mesh.n_cells));
-            s
-        });
+        let adj = self
+            .rev
+            .motion
+            .transpose(mesh, &complex(w), &vec![zero; mesh.n_cells])
+            .1;
         row(
             "dR/dv_G (grid-velocity and gust fluxes)",
             dot_re(w, &real(&lfd.volume_flux_rhs(&complex(g)))),
             Some(
-                adj[3 * nn..3 * nn + mesh.faces.len()]
-                    .iter()
+                adj.iter()
                     .zip(g)
                     .map(|(a, b)| a.re * b)
                     .sum(),
@@ -543,17 +435,17 @@ impl<'a> Probes<'a> {
                 .map(|(a, b)| a.d[0] * b)
                 .sum()
         };
-        let adj = self.rev.geometry.vjp(&{
-            let mut s = vec![C64::new(0.0, 0.0); self.lfd.n()];
-            s.extend(complex(wv));
-            s
-        });
+        let adj = self
+            .rev
+            .motion
+            .transpose(mesh, &vec![C64::new(0.0, 0.0); self.lfd.n()], &complex(wv))
+            .0;
         row(
             "dV/dx_G (cell volumes)",
             forward,
             Some(
-                adj[..3 * mesh.nodes.len()]
-                    .iter()
+                adj.iter()
+                    .flatten()
                     .zip(x)
                     .map(|(a, b)| a.re * b)
                     .sum(),
@@ -783,12 +675,14 @@ mod tests {
             let (a, b) = (dot(&w, &x[0].0), dot(&y[0].0, &v));
             assert!(agree(a, b) < 1e-11, "{preconditioner:?} solve: {a} {b}");
             eprintln!(
-                "tape entries per cell: geometry {}, forces {}",
-                rev.geometry.tape.len() / lfd.euler.mesh.n_cells,
-                rev.forces.tape.len() / lfd.euler.mesh.n_cells
+                "linearizations per cell: motion {} B, forces {} B ({} + {} evaluations)",
+                rev.motion.bytes() / lfd.euler.mesh.n_cells,
+                rev.forces.bytes() / lfd.euler.mesh.n_cells,
+                rev.motion.evaluations,
+                rev.forces.evaluations
             );
             eprintln!(
-                "{preconditioner:?}: adjoint GMRES {} iterations (forward {}); tapes {:.1} MB for {} cells",
+                "{preconditioner:?}: adjoint GMRES {} iterations (forward {}); linearizations {:.1} MB for {} cells",
                 y[0].1.iterations,
                 x[0].1.iterations,
                 rev.bytes() as f64 / 1e6,

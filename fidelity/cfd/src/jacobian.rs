@@ -204,33 +204,48 @@ impl Euler {
     pub fn jacobian_colored(&self, q: &[State<f64>], coloring: &Coloring, order: Order) -> Blocks {
         let n = self.mesh.n_cells;
         let geom = self.geometry::<Dual<NVAR>>(order);
-        // per colour: the derivative of every residual along the seeds of that colour
-        let columns: Vec<Vec<State<Dual<NVAR>>>> = (0..coloring.n_colors)
-            .into_par_iter()
-            .map(|col| {
-                let qd: Vec<State<Dual<NVAR>>> = (0..n)
-                    .map(|c| {
-                        std::array::from_fn(|k| {
-                            if coloring.color[c] == col {
-                                Dual::var(q[c][k], k)
-                            } else {
-                                Dual::new(q[c][k], [0.0; NVAR])
-                            }
-                        })
-                    })
-                    .collect();
-                self.residual_in(&qd, &geom).0
-            })
-            .collect();
         let mut blocks: Blocks = Vec::with_capacity(coloring.deps.iter().map(Vec::len).sum());
+        // the cells of every colour, and where each cell's column blocks go
+        let mut members = vec![Vec::new(); coloring.n_colors];
+        for (j, &col) in coloring.color.iter().enumerate() {
+            members[col].push(j);
+        }
+        let mut cells_of: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n];
         for (i, deps) in coloring.deps.iter().enumerate() {
             for &j in deps {
-                let r = &columns[coloring.color[j]][i];
-                blocks.push((
-                    i,
-                    j,
-                    std::array::from_fn(|a| std::array::from_fn(|b| r[a].d[b])),
-                ));
+                cells_of[j].push((i, blocks.len()));
+                blocks.push((i, j, [[0.0; NVAR]; NVAR]));
+            }
+        }
+        // per colour: the derivative of every residual along the seeds of that colour, read
+        // into its blocks as each round of colours (one a thread) ends: no more than a round's
+        // dual-number residuals are held at once
+        let colors: Vec<usize> = (0..coloring.n_colors).collect();
+        for round in colors.chunks(rayon::current_num_threads().max(1)) {
+            let columns: Vec<Vec<State<Dual<NVAR>>>> = round
+                .par_iter()
+                .map(|&col| {
+                    let qd: Vec<State<Dual<NVAR>>> = (0..n)
+                        .map(|c| {
+                            std::array::from_fn(|k| {
+                                if coloring.color[c] == col {
+                                    Dual::var(q[c][k], k)
+                                } else {
+                                    Dual::new(q[c][k], [0.0; NVAR])
+                                }
+                            })
+                        })
+                        .collect();
+                    self.residual_in(&qd, &geom).0
+                })
+                .collect();
+            for (&col, r) in round.iter().zip(&columns) {
+                for &j in &members[col] {
+                    for &(i, at) in &cells_of[j] {
+                        let ri = &r[i];
+                        blocks[at].2 = std::array::from_fn(|a| std::array::from_fn(|b| ri[a].d[b]));
+                    }
+                }
             }
         }
         blocks

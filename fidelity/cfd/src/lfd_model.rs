@@ -37,8 +37,8 @@ pub struct Lfd {
     pub area_m2: f64,
     /// Free-stream Mach number of the steady state.
     pub mach: f64,
-    /// The tapes of the reverse mode, recorded at the first gradient (they hold about 100 kB a
-    /// cell, so a model that only supplies GAFs never pays for them).
+    /// The reverse mode's Jacobians, assembled at the first gradient (about 14 kB a cell, so a
+    /// model that only supplies GAFs never pays for them).
     reverse: std::sync::OnceLock<LfdReverse>,
     /// The mesh motions of the geometry parameters (the builder's planform variables), whose
     /// derivatives the reverse mode gives in [`GafGradient::geometry`]; none for a fixed mesh.
@@ -84,44 +84,42 @@ impl WarmStart {
         Self::find(&self.adjoints, self.n, k, n)
     }
 
+    /// One frequency's solutions in single precision, and their GMRES iterations.
+    fn single(solved: &[Solution]) -> (Vec<Vec<num_complex::Complex32>>, usize) {
+        let iterations = solved.iter().map(|(_, i)| i.iterations).sum();
+        let single = solved
+            .iter()
+            .map(|(x, _)| {
+                x.iter()
+                    .map(|v| num_complex::Complex32::new(v.re as f32, v.im as f32))
+                    .collect()
+            })
+            .collect();
+        (single, iterations)
+    }
+
     /// Keeps the solutions of a table (`adjoint`: of a reverse sweep) per reduced frequency, in
-    /// single precision, for a mesh of `n` unknowns (another mesh's are dropped); returns their
-    /// GMRES iterations.
-    fn keep<'a>(
+    /// single precision ([`WarmStart::single`]), for a mesh of `n` unknowns (another mesh's are
+    /// dropped), with their GMRES iterations.
+    fn keep(
         &mut self,
         n: usize,
-        k: &[f64],
-        solved: impl Iterator<Item = &'a [Solution]>,
+        kept: Vec<(f64, Vec<Vec<num_complex::Complex32>>)>,
+        iterations: usize,
         adjoint: bool,
-    ) -> usize {
+    ) {
         if self.n != n {
             self.tables.clear();
             self.adjoints.clear();
         }
         self.n = n;
-        let mut iterations = 0;
-        let kept = k
-            .iter()
-            .zip(solved)
-            .map(|(&kk, s)| {
-                iterations += s.iter().map(|(_, i)| i.iterations).sum::<usize>();
-                let single = s
-                    .iter()
-                    .map(|(x, _)| {
-                        x.iter()
-                            .map(|v| num_complex::Complex32::new(v.re as f32, v.im as f32))
-                            .collect()
-                    })
-                    .collect();
-                (kk, single)
-            })
-            .collect();
         if adjoint {
             self.adjoints = kept;
+            self.last_adjoint_iterations = iterations;
         } else {
             self.tables = kept;
+            self.last_iterations = iterations;
         }
-        iterations
     }
 
     fn find(
@@ -476,8 +474,8 @@ impl Lfd {
             .map_err(|e| solver_error(e, kk, n_modes))
     }
 
-    /// The reverse mode's tapes, recorded at the first call.
-    pub fn reverse_tapes(&self) -> &LfdReverse {
+    /// The reverse mode's Jacobians, assembled at the first call.
+    pub fn reverse_linearizations(&self) -> &LfdReverse {
         self.reverse.get_or_init(|| LfdReverse::new(&self.lfd))
     }
 
@@ -531,18 +529,31 @@ impl Aerodynamics for Lfd {
             .warm_start
             .as_ref()
             .map(|w| w.lock().unwrap_or_else(|e| e.into_inner()));
-        let solved: Result<Vec<Vec<Solution>>, AeroError> = k
-            .par_iter()
-            .map(|&kk| {
-                let guesses = warm.as_ref().and_then(|w| w.guesses(kk, n));
-                Ok(self.forward_from(flight, kk, &x_hat, guesses.as_ref())?.1)
-            })
-            .collect();
+        // the frequencies in rounds of one a thread: the factorizations and right-hand sides
+        // of one round only are held at once
+        let mut solved: Vec<Vec<Solution>> = Vec::with_capacity(k.len());
+        for round in k.chunks(rayon::current_num_threads().max(1)) {
+            let part: Result<Vec<Vec<Solution>>, AeroError> = round
+                .par_iter()
+                .map(|&kk| {
+                    let guesses = warm.as_ref().and_then(|w| w.guesses(kk, n));
+                    Ok(self.forward_from(flight, kk, &x_hat, guesses.as_ref())?.1)
+                })
+                .collect();
+            solved.extend(part?);
+        }
         drop(warm);
-        let solved = solved?;
         if let Some(w) = &self.warm_start {
+            let (kept, iterations) = k.iter().zip(&solved).fold(
+                (Vec::new(), 0),
+                |(mut kept, it), (&kk, s)| {
+                    let (single, i) = WarmStart::single(s);
+                    kept.push((kk, single));
+                    (kept, it + i)
+                },
+            );
             let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
-            w.last_iterations = w.keep(n, k, solved.iter().map(Vec::as_slice), false);
+            w.keep(n, kept, iterations, false);
         }
         let parts: Result<Vec<_>, AeroError> = k
             .par_iter()
@@ -643,7 +654,7 @@ impl Aerodynamics for Lfd {
     }
 
     fn linearization_checks(&self) -> Vec<gustkit_core::LinearizationCheck> {
-        crate::adjoint::linearization_table(&self.lfd, self.reverse_tapes(), &self.deform, 7)
+        crate::adjoint::linearization_table(&self.lfd, self.reverse_linearizations(), &self.deform, 7)
     }
 }
 
@@ -686,17 +697,18 @@ impl AerodynamicsReverse for Lfd {
         }
         gustkit_core::aero::check_seeds(seeds, k.len(), nm)?;
         let (x_hat, shapes) = self.mode_motion(modes);
-        // the forward solutions of the last GAF table, when it was this one
-        let cached: Option<Vec<Vec<Solution>>> = self
-            .last_forward
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .as_ref()
-            .filter(|c| c.flight == *flight && c.k == k && c.modes == *modes)
-            .map(|c| c.solutions.clone());
+        // the forward solutions of the last GAF table, when it was this one (taken out of the
+        // cache for the sweep and put back after it, not copied)
+        let cached: Option<ForwardCache> = {
+            let mut last = self.last_forward.lock().unwrap_or_else(|e| e.into_inner());
+            match last.as_ref() {
+                Some(c) if c.flight == *flight && c.k == k && c.modes == *modes => last.take(),
+                _ => None,
+            }
+        };
         let sweep = SeedSweep {
             model: self,
-            rev: self.reverse_tapes(),
+            rev: self.reverse_linearizations(),
             flight,
             face_shape: self.face_means(&shapes),
             // the geometry directions: steady tangents δq₀ and the spread shapes' tangents δx̂
@@ -711,25 +723,59 @@ impl AerodynamicsReverse for Lfd {
             .warm_start
             .as_ref()
             .map(|w| w.lock().unwrap_or_else(|e| e.into_inner()));
-        let swept: Vec<(PerFrequency, Vec<Solution>)> = k
-            .par_iter()
-            .enumerate()
-            .map(|(ik, &kk)| {
-                let (f, sol) = match cached.as_ref() {
-                    Some(c) => (self.factor_at(flight, kk, nm)?, c[ik].clone()),
-                    None => self.forward(flight, kk, &sweep.x_hat)?,
-                };
-                let guesses = warm.as_ref().and_then(|w| w.adjoint_guesses(kk, n));
-                sweep.at_frequency(ik, kk, &f, &sol, seeds, guesses.as_ref())
-            })
-            .collect::<Result<_, AeroError>>()?;
+        // the frequencies in rounds of one a thread, each round's node seeds added to the sums
+        // in the frequencies' order (deterministic) before the next round starts: one round's
+        // factorizations, adjoint solutions and node seeds are held at once
+        let mut sum = FrequencySum::new(seeds.len(), nm, self.lfd.euler.mesh.nodes.len());
+        let mut adjoints = Vec::with_capacity(k.len());
+        let mut adjoint_iterations = 0;
+        let indices: Vec<usize> = (0..k.len()).collect();
+        let mut result = Ok(());
+        for round in indices.chunks(rayon::current_num_threads().max(1)) {
+            let swept: Result<Vec<(PerFrequency, Vec<Solution>)>, AeroError> = round
+                .par_iter()
+                .map(|&ik| {
+                    let kk = k[ik];
+                    let fresh;
+                    let (f, sol): (Factored, &[Solution]) = match cached.as_ref() {
+                        Some(c) => (self.factor_at(flight, kk, nm)?, &c.solutions[ik]),
+                        None => {
+                            let (f, s) = self.forward(flight, kk, &sweep.x_hat)?;
+                            fresh = s;
+                            (f, &fresh)
+                        }
+                    };
+                    let guesses = warm.as_ref().and_then(|w| w.adjoint_guesses(kk, n));
+                    sweep.at_frequency(ik, kk, &f, sol, seeds, guesses.as_ref())
+                })
+                .collect();
+            match swept {
+                Ok(swept) => {
+                    for ((part, lambda), &ik) in swept.into_iter().zip(round) {
+                        sum.add(part);
+                        if self.warm_start.is_some() {
+                            let (single, i) = WarmStart::single(&lambda);
+                            adjoints.push((k[ik], single));
+                            adjoint_iterations += i;
+                        }
+                    }
+                }
+                Err(e) => {
+                    result = Err(e);
+                    break;
+                }
+            }
+        }
         drop(warm);
+        if let Some(c) = cached {
+            *self.last_forward.lock().unwrap_or_else(|e| e.into_inner()) = Some(c);
+        }
+        result?;
         if let Some(w) = &self.warm_start {
             let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
-            w.last_adjoint_iterations = w.keep(n, k, swept.iter().map(|(_, l)| l.as_slice()), true);
+            w.keep(n, adjoints, adjoint_iterations, true);
         }
-        let per_k = swept.into_iter().map(|(p, _)| p).collect();
-        Ok(self.sum_over_frequencies(per_k, nm, seeds.len()))
+        Ok(self.finish_gradients(sum, nm))
     }
 }
 
@@ -737,6 +783,50 @@ impl AerodynamicsReverse for Lfd {
 /// force projection, per metre of shape, and from the mode motion, per mesh unit), and the
 /// geometry gradient.
 type PerFrequency = (Vec<NodeSeeds>, Vec<Vec<f64>>);
+
+/// The reverse sweep's parts summed over the frequencies: per seed, the node seeds of every
+/// mode and the geometry gradient.
+struct FrequencySum {
+    nodes: Vec<NodeSeeds>,
+    geometry: Vec<Vec<f64>>,
+}
+
+impl FrequencySum {
+    fn new(n_seeds: usize, nm: usize, n_nodes: usize) -> Self {
+        Self {
+            nodes: (0..n_seeds)
+                .map(|_| {
+                    (
+                        vec![vec![[0.0; 3]; n_nodes]; nm],
+                        vec![vec![[0.0; 3]; n_nodes]; nm],
+                    )
+                })
+                .collect(),
+            geometry: vec![Vec::new(); n_seeds],
+        }
+    }
+
+    /// Adds one frequency's part (in the frequencies' order: the sums are deterministic).
+    fn add(&mut self, (nodes, geometry): PerFrequency) {
+        for (acc, part) in self.nodes.iter_mut().zip(nodes) {
+            for (a, p) in acc.0.iter_mut().zip(&part.0).chain(acc.1.iter_mut().zip(&part.1)) {
+                for (x, y) in a.iter_mut().zip(p) {
+                    for c in 0..3 {
+                        x[c] += y[c];
+                    }
+                }
+            }
+        }
+        for (acc, g) in self.geometry.iter_mut().zip(geometry) {
+            if acc.is_empty() {
+                acc.resize(g.len(), 0.0);
+            }
+            for (a, v) in acc.iter_mut().zip(g) {
+                *a += v;
+            }
+        }
+    }
+}
 
 /// What the reverse sweep of one GAF table shares across its frequencies.
 struct SeedSweep<'a> {
@@ -946,10 +1036,10 @@ impl SeedSweep<'_> {
 }
 
 impl Lfd {
-    /// φ̄ of every shape on each wall face of the reverse tapes: the mean of its nodes' values.
+    /// φ̄ of every shape on each wall face of the reverse mode's force Jacobian: the mean of its nodes' values.
     fn face_means(&self, shapes: &[Vec<[f64; 3]>]) -> Vec<Vec<[f64; 3]>> {
         let mesh = &self.lfd.euler.mesh;
-        let wall_faces = &self.reverse_tapes().wall_faces;
+        let wall_faces = &self.reverse_linearizations().wall_faces;
         shapes
             .iter()
             .map(|phi| {
@@ -965,45 +1055,32 @@ impl Lfd {
             .collect()
     }
 
-    /// Every seed's gradient: its node seeds summed over the frequencies in their order
-    /// (deterministic), the motion part carried to the wall through the mesh deformation's
-    /// transpose, and the geometry gradients summed likewise.
-    fn sum_over_frequencies(
-        &self,
-        per_k: Vec<PerFrequency>,
-        nm: usize,
-        n_seeds: usize,
-    ) -> Vec<GafGradient> {
-        let (per_k, geo_k): (Vec<_>, Vec<_>) = per_k.into_iter().unzip();
-        let n_nodes = self.lfd.euler.mesh.nodes.len();
+    /// Every seed's gradient from its sums over the frequencies: the motion part carried to the
+    /// wall through the mesh deformation's transpose.
+    fn finish_gradients(&self, sum: FrequencySum, nm: usize) -> Vec<GafGradient> {
         let wall = self.wall_nodes();
         let l = self.length_m;
-        (0..n_seeds)
-            .map(|si| {
+        sum.nodes
+            .into_iter()
+            .zip(sum.geometry)
+            .map(|((proj, motion), geometry)| {
                 let mut grad = ModalSurface::zeros(nm, wall.len());
                 for m in 0..nm {
-                    let mut proj = vec![[0.0; 3]; n_nodes];
-                    let mut motion = vec![[0.0; 3]; n_nodes];
-                    for part in &per_k {
-                        for n in 0..n_nodes {
-                            for c in 0..3 {
-                                proj[n][c] += part[si].0[m][n][c];
-                                motion[n][c] += part[si].1[m][n][c];
-                            }
-                        }
-                    }
-                    let through_mesh = self.deform.apply_transpose(&motion);
+                    let through_mesh = self.deform.apply_transpose(&motion[m]);
                     for (w, &n) in wall.iter().enumerate() {
                         let v: [f64; 3] =
-                            std::array::from_fn(|c| proj[n][c] + through_mesh[w][c] / l);
+                            std::array::from_fn(|c| proj[m][n][c] + through_mesh[w][c] / l);
                         grad.disp[m][w] = swap_yz(v);
                     }
                 }
+                let geometry = if geometry.is_empty() {
+                    vec![0.0; self.tangents.len()]
+                } else {
+                    geometry
+                };
                 GafGradient {
                     modes: grad,
-                    geometry: (0..self.tangents.len())
-                        .map(|d| geo_k.iter().map(|g| g[si][d]).sum())
-                        .collect(),
+                    geometry,
                 }
             })
             .collect()

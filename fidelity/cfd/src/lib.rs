@@ -11,7 +11,8 @@
 //! steady Newton solver ([`steady`]), the BDF2 time domain on moving meshes ([`unsteady`]), the
 //! LFD equations for gusts and mode motion ([`lfd`]), mesh deformation for mode shapes
 //! ([`deform`]), the `Aerodynamics` implementation ([`lfd_model`]) and the transposed linearizations of
-//! its reverse mode, recorded on an operation tape ([`adjoint`]).
+//! its reverse mode ([`adjoint`]), from the right-hand sides' and forces' Jacobians assembled by
+//! colouring ([`lfd_jacobians`]).
 
 pub mod adjoint;
 pub mod airfoil;
@@ -22,6 +23,7 @@ pub mod ilu;
 pub mod jacobian;
 pub mod krylov;
 pub mod lfd;
+pub mod lfd_jacobians;
 pub mod lfd_model;
 pub mod mesh;
 pub mod mesh_sensitivity;

@@ -301,7 +301,7 @@ impl WingBuilder for LfdWingSpec {
                     "mesh".into()
                 },
                 reason: format!(
-                    "gradients on the {} mesh ({cells} cells) need about {gb:.1} GB with the reverse mode's tapes, above memory_limit_gb = {}: choose a coarser mesh or raise the limit",
+                    "gradients on the {} mesh ({cells} cells) need about {gb:.1} GB with the reverse mode's Jacobians, above memory_limit_gb = {}: choose a coarser mesh or raise the limit",
                     if self.mesh_sizes.is_some() { "given" } else { self.mesh.name() },
                     self.memory_limit_gb
                 ),
