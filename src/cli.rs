@@ -125,6 +125,20 @@ pub enum Command {
         json: bool,
     },
     /// Time the structural chain (assembly, modes, all sensitivities) of a study.
+    /// The LFD analysis of the study's initial design on the built-in mesh levels: RMS, GAF
+    /// differences to the DLM of `aero.compare_with`, model-build and GAF-table times, peak
+    /// memory, and over three levels the Richardson extrapolate (mesh_study.json, a figure and
+    /// summary.md in reports/<study name>/; levels already in the file are kept, so each level
+    /// can run on its own)
+    MeshStudy {
+        study: PathBuf,
+        /// Comma-separated levels: coarse, medium, fine.
+        #[arg(long, value_delimiter = ',', default_value = "coarse,medium,fine")]
+        levels: Vec<String>,
+        /// Folder that holds the per-study report folders (the study's is <reports>/<study name>).
+        #[arg(long, default_value = "reports")]
+        reports: PathBuf,
+    },
     Bench {
         study: PathBuf,
         /// Timed repetitions of each line after one warm-up run (median, min and max are
@@ -134,6 +148,10 @@ pub enum Command {
         /// Also time the study's whole optimization once (from scratch, no checkpoint).
         #[arg(long)]
         optimization: bool,
+        /// An LFD study's built-in mesh level instead of its own (coarse, medium, fine): the
+        /// per-level figures of the same study.
+        #[arg(long)]
+        mesh: Option<String>,
     },
 }
 
@@ -192,15 +210,27 @@ pub fn dispatch(cli: Cli) -> Result<runner::Outcome> {
                 json,
             ))
         }
+        Command::MeshStudy {
+            study,
+            levels,
+            reports,
+        } => {
+            let study = wing(&study, "mesh-study")?;
+            let dir = reports.join(&study.spec.name);
+            done(runner::wing::mesh_study::mesh_study(&study, &levels, &dir))
+        }
         Command::Bench {
             study,
             repeat,
             optimization,
-        } => done(runner::bench::bench(
-            &wing(&study, "bench")?,
-            repeat,
-            optimization,
-        )),
+            mesh,
+        } => {
+            let mut study = wing(&study, "bench")?;
+            if let Some(level) = mesh {
+                runner::wing::mesh_study::set_level(&mut study, &level)?;
+            }
+            done(runner::bench::bench(&study, repeat, optimization))
+        }
     }
 }
 

@@ -77,7 +77,7 @@ fn with_residual<'a>(modes: &'a Modes, shapes: &'a [Vec<f64>]) -> Vec<&'a [f64]>
 
 /// The GAF table of the modes and, with mode acceleration, the residual rows, from one call of
 /// the aerodynamic model (its factorizations shared).
-fn tables(
+pub(crate) fn tables(
     plate: &PlateModel,
     modes: &Modes,
     aero: &AeroModel,

@@ -9,6 +9,12 @@ use anyhow::{Context, Result};
 use serde::Serialize;
 use std::time::Instant;
 
+/// The paper's LFD costs: function and gradient wall minutes on its cores, and its mesh's nodes.
+const PAPER_FUNCTION_MIN: f64 = 70.5;
+const PAPER_GRADIENT_MIN: f64 = 146.4;
+const PAPER_CORES: f64 = 400.0;
+const PAPER_NODES: f64 = 219_555.0;
+
 /// Warm-up runs before any timing (discarded: page faults, caches, the thread pool's start).
 pub const WARMUP: usize = 1;
 
@@ -175,6 +181,14 @@ pub fn bench(study: &Study, repeat: Option<usize>, optimization: bool) -> Result
             "  reverse / function (medians): {:.2} (paper: 146.4 / 70.5 min = 2.08 on 400 cores)",
             t.vjp.median_s / t.gafs.median_s
         );
+        let threads = rayon::current_num_threads() as f64;
+        println!(
+            "  core-seconds a cell: function {:.4}, reverse {:.4} (paper: {:.1} and {:.1} a node: 70.5 and 146.4 min on 400 cores, 219 555 nodes)",
+            t.gafs.median_s * threads / cells,
+            t.vjp.median_s * threads / cells,
+            PAPER_FUNCTION_MIN * 60.0 * PAPER_CORES / PAPER_NODES,
+            PAPER_GRADIENT_MIN * 60.0 * PAPER_CORES / PAPER_NODES
+        );
         let w = bench_lfd_warm_start(&study)?;
         println!(
             "  the function at a neighbouring design (every thickness × 1.01), GMRES from zero      {:>9.2} s, {} iterations ({:.1} a right-hand side)",
@@ -291,6 +305,14 @@ pub struct LfdTimings {
 pub fn peak_memory_gb() -> Option<f64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024.0 / 1e9)
+}
+
+/// The process's present resident memory, GB (Linux's VmRSS; None elsewhere).
+pub fn resident_memory_gb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
     let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb * 1024.0 / 1e9)
 }

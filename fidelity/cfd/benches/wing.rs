@@ -5,7 +5,8 @@
 //! default), the GMRES iterations and time of one right-hand side, the same right-hand side at
 //! k = 0.98 with other ILU settings, and the whole GAF table (11 reduced frequencies × (6 modes + the gust), frequencies and right-hand sides in
 //! parallel), with core-seconds per cell beside the paper's 70.5 min on 400 cores for 219 555
-//! nodes. Each figure is one run (these solves take seconds to minutes); the thread count is
+//! nodes; then the reverse mode (its Jacobians by colouring, every GAF entry seeded) with its
+//! memory. Each figure is one run (these solves take seconds to minutes); the thread count is
 //! printed. `cargo bench -p gustkit-cfd --bench wing` runs the coarse level;
 //! `WING_LEVELS=coarse,medium` adds the medium one (about 10 minutes, 3.5 GB).
 
@@ -15,7 +16,7 @@ use gustkit_cfd::lfd_model::Lfd;
 use gustkit_cfd::residual::{free_stream, Euler};
 use gustkit_cfd::steady::{NewtonLinearSolver, SteadyParams};
 use gustkit_cfd::wing_mesh::{WingMesh, WingMeshSpec};
-use gustkit_core::{Aerodynamics, FlightCondition, ModalSurface};
+use gustkit_core::{Aerodynamics, AerodynamicsReverse, FlightCondition, ModalSurface};
 use std::time::Instant;
 
 /// Peak resident memory of this process, GB (Linux), or NaN.
@@ -28,6 +29,12 @@ fn peak_gb() -> f64 {
                 .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
         })
         .map_or(f64::NAN, |kb| kb / 1e6)
+}
+
+/// Restarts the peak resident memory from the present one (Linux), so that each stage's peak is
+/// its own.
+fn reset_peak() {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
 }
 
 /// NACA 65A004 half-thickness by linear interpolation of its ordinates.
@@ -178,9 +185,28 @@ fn main() {
         let k = [
             0.0, 0.02, 0.08, 0.18, 0.32, 0.5, 0.72, 0.98, 1.28, 1.62, 2.0,
         ];
+        let peak_build = peak_gb();
+        reset_peak();
         let t = Instant::now();
-        model.gafs(&flight, &modes, &k).expect("GAF table");
+        let mut seed = model.gafs(&flight, &modes, &k).expect("GAF table");
         let t_table = t.elapsed().as_secs_f64();
+        let peak_table = peak_gb();
+        reset_peak();
+        // the reverse mode: its Jacobians once, then every GAF entry seeded
+        let t = Instant::now();
+        let rev = model.reverse_linearizations();
+        let t_rev = t.elapsed().as_secs_f64();
+        for q in seed.q_ss.iter_mut().flatten().flatten() {
+            *q = num_complex::Complex64::new(1.0, 0.5);
+        }
+        for q in seed.q_gs.iter_mut().flatten() {
+            *q = num_complex::Complex64::new(0.5, -1.0);
+        }
+        let t = Instant::now();
+        model
+            .gafs_vjp(&flight, &modes, &k, &seed)
+            .expect("GAF reverse");
+        let t_vjp = t.elapsed().as_secs_f64();
         println!(
             "{level}: {n} cells (quality: min volume {:.2e} m³, aspect ratio ≤ {:.0}, non-orthogonality ≤ {:.1}°); mesh {t_mesh:.2} s; steady {t_steady:.1} s ({} Newton iterations to {:.1e}); Jacobian {t_jac:.2} s; first-order block ILU(1), RCM, at k = 0.5 {t_fac:.2} s; one right-hand side {t_rhs:.2} s ({} GMRES iterations); GAF table (11 k × 7 right-hand sides) {t_table:.1} s = {:.4} core-s per cell; peak memory {:.2} GB",
             q.min_volume,
@@ -190,11 +216,22 @@ fn main() {
             info.residual_history.last().unwrap_or(&f64::NAN),
             sol[0].1.iterations,
             t_table * threads as f64 / n as f64,
-            peak_gb()
+            peak_build.max(peak_table)
+        );
+        println!(
+            "{level}: reverse mode: Jacobians (dR/dx, dV/dx, dR/dv_G, df/dq, df/dx) {t_rev:.2} s, {:.0} B a cell ({} + {} coloured evaluations); GAF reverse (every entry seeded) {t_vjp:.1} s = {:.4} core-s per cell; peak memory: model {peak_build:.2} GB, GAF table {peak_table:.2} GB ({:.1} kB a cell), reverse {:.2} GB ({:.1} kB a cell)",
+            rev.bytes() as f64 / n as f64,
+            rev.motion.evaluations,
+            rev.forces.evaluations,
+            t_vjp * threads as f64 / n as f64,
+            peak_table * 1e6 / n as f64,
+            peak_gb(),
+            peak_gb() * 1e6 / n as f64
         );
     }
     println!(
-        "paper (FUN3D LFD, 219 555 nodes, 400 cores): 70.5 min = {:.2} core-s per node",
-        70.5 * 60.0 * 400.0 / 219_555.0
+        "paper (FUN3D LFD, 219 555 nodes, 400 cores): function 70.5 min = {:.2} core-s per node, gradient 146.4 min = {:.2}",
+        70.5 * 60.0 * 400.0 / 219_555.0,
+        146.4 * 60.0 * 400.0 / 219_555.0
     );
 }

@@ -99,11 +99,13 @@ impl LfdReverse {
     pub fn motion_rhs_transpose(&self, lfd: &LfdOperator, s: C64, w: &[C64]) -> Vec<[C64; 3]> {
         let n_cells = lfd.euler.mesh.n_cells;
         // the s V̂ q₀ term: seed s Σ_k w_ck q₀_ck on each cell's volume
-        let seeds: Vec<C64> = (0..n_cells).map(|c| {
-            s * (0..NVAR)
-                .map(|k| w[c * NVAR + k] * lfd.q0[c][k])
-                .sum::<C64>()
-        }).collect();
+        let seeds: Vec<C64> = (0..n_cells)
+            .map(|c| {
+                s * (0..NVAR)
+                    .map(|k| w[c * NVAR + k] * lfd.q0[c][k])
+                    .sum::<C64>()
+            })
+            .collect();
         let (mut nodes, vg) = self.motion.transpose(&lfd.euler.mesh, w, &seeds);
         // the grid-velocity term s ∂R/∂v_G L x̂: Lᵀ (s ∂R/∂v_Gᵀ w)
         for (fi, f) in lfd.euler.mesh.faces.iter().enumerate() {
@@ -399,12 +401,7 @@ impl<'a> Probes<'a> {
         row(
             "dR/dv_G (grid-velocity and gust fluxes)",
             dot_re(w, &real(&lfd.volume_flux_rhs(&complex(g)))),
-            Some(
-                adj.iter()
-                    .zip(g)
-                    .map(|(a, b)| a.re * b)
-                    .sum(),
-            ),
+            Some(adj.iter().zip(g).map(|(a, b)| a.re * b).sum()),
             differences(&|h| {
                 let vg: Vec<f64> = lfd
                     .euler
@@ -443,13 +440,7 @@ impl<'a> Probes<'a> {
         row(
             "dV/dx_G (cell volumes)",
             forward,
-            Some(
-                adj.iter()
-                    .flatten()
-                    .zip(x)
-                    .map(|(a, b)| a.re * b)
-                    .sum(),
-            ),
+            Some(adj.iter().flatten().zip(x).map(|(a, b)| a.re * b).sum()),
             differences(&|h| {
                 mesh.volumes_at(&self.moved(h))
                     .iter()

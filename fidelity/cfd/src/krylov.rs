@@ -144,17 +144,17 @@ pub fn gmres_from<T: Field>(
                 },
             ));
         }
+        // the Arnoldi basis only: the preconditioner is the same at every step, so x moves by
+        // M⁻¹ (V y) at the end of a cycle and the preconditioned vectors M⁻¹ vⱼ are not kept
+        // (half the memory of flexible GMRES, one more preconditioner application a cycle)
         let mut v: Vec<Vec<T>> = vec![r.iter().map(|a| *a * (1.0 / beta)).collect()];
-        let mut z: Vec<Vec<T>> = Vec::new();
         let mut h: Vec<Vec<T>> = Vec::new(); // h[j] is column j (length j + 2)
                                              // complex Givens rotations [[c, s], [−s̄, c]] with c real
         let (mut cs, mut sn): (Vec<f64>, Vec<T>) = (Vec::new(), Vec::new());
         let mut g = vec![T::from_re(beta)];
         let mut converged = false;
         for j in 0..restart {
-            let zj = prec(&v[j]);
-            let mut w = op(&zj);
-            z.push(zj);
+            let mut w = op(&prec(&v[j]));
             let mut col = vec![T::zero(); j + 2];
             for i in 0..=j {
                 col[i] = dot(&w, &v[i]);
@@ -199,7 +199,7 @@ pub fn gmres_from<T: Field>(
                 break;
             }
         }
-        // y from the triangular system, x += Z y
+        // y from the triangular system, x += M⁻¹ (V y)
         let m = h.len();
         let mut y = vec![T::zero(); m];
         for i in (0..m).rev() {
@@ -209,10 +209,14 @@ pub fn gmres_from<T: Field>(
             }
             y[i] = s / h[i][i];
         }
-        for (yk, zk) in y.iter().zip(&z) {
-            for (xi, zi) in x.iter_mut().zip(zk) {
-                *xi = *xi + *yk * *zi;
+        let mut vy = vec![T::zero(); n];
+        for (yk, vk) in y.iter().zip(&v) {
+            for (a, vi) in vy.iter_mut().zip(vk) {
+                *a = *a + *yk * *vi;
             }
+        }
+        for (xi, d) in x.iter_mut().zip(prec(&vy)) {
+            *xi = *xi + d;
         }
         if converged {
             return Ok((

@@ -201,49 +201,49 @@ impl MotionJacobian {
         // (one a thread) ends, so that no more than a round's evaluations are held at once
         let mut dr_dx = vec![[[0.0; 3]; NVAR]; node_rows.rows.len()];
         for round in node_classes.chunks(rayon::current_num_threads().max(1)) {
-        let per_class: Vec<Vec<[[f64; 3]; NVAR]>> = round
-            .par_iter()
-            .map(|class| {
-                let mut seeded = vec![false; mesh.nodes.len()];
-                for &n in class {
-                    seeded[n as usize] = true;
-                }
-                let nodes: Vec<[Dual<3>; 3]> = mesh
-                    .nodes
-                    .iter()
-                    .zip(&seeded)
-                    .map(|(p, &s)| {
-                        std::array::from_fn(|k| {
-                            if s {
-                                Dual::var(p[k], k)
-                            } else {
-                                Dual::cst(p[k])
-                            }
+            let per_class: Vec<Vec<[[f64; 3]; NVAR]>> = round
+                .par_iter()
+                .map(|class| {
+                    let mut seeded = vec![false; mesh.nodes.len()];
+                    for &n in class {
+                        seeded[n as usize] = true;
+                    }
+                    let nodes: Vec<[Dual<3>; 3]> = mesh
+                        .nodes
+                        .iter()
+                        .zip(&seeded)
+                        .map(|(p, &s)| {
+                            std::array::from_fn(|k| {
+                                if s {
+                                    Dual::var(p[k], k)
+                                } else {
+                                    Dual::cst(p[k])
+                                }
+                            })
                         })
-                    })
-                    .collect();
-                let vg: Vec<Dual<3>> = vg0.iter().map(|v| Dual::cst(*v)).collect();
-                let geom = euler.geometry_at(&nodes, vg, order);
-                let r = euler.residual_in(&q, &geom).0;
-                let mut out = Vec::new();
+                        .collect();
+                    let vg: Vec<Dual<3>> = vg0.iter().map(|v| Dual::cst(*v)).collect();
+                    let geom = euler.geometry_at(&nodes, vg, order);
+                    let r = euler.residual_in(&q, &geom).0;
+                    let mut out = Vec::new();
+                    for &n in class {
+                        for &c in node_rows.of(n as usize) {
+                            let rc = &r[c as usize];
+                            out.push(std::array::from_fn(|i| std::array::from_fn(|k| rc[i].d[k])));
+                        }
+                    }
+                    out
+                })
+                .collect();
+            for (class, vals) in round.iter().zip(per_class) {
+                let mut it = vals.into_iter();
                 for &n in class {
-                    for &c in node_rows.of(n as usize) {
-                        let rc = &r[c as usize];
-                        out.push(std::array::from_fn(|i| std::array::from_fn(|k| rc[i].d[k])));
+                    let n = n as usize;
+                    for slot in &mut dr_dx[node_rows.start[n]..node_rows.start[n + 1]] {
+                        *slot = it.next().expect("one block per row");
                     }
                 }
-                out
-            })
-            .collect();
-        for (class, vals) in round.iter().zip(per_class) {
-            let mut it = vals.into_iter();
-            for &n in class {
-                let n = n as usize;
-                for slot in &mut dr_dx[node_rows.start[n]..node_rows.start[n + 1]] {
-                    *slot = it.next().expect("one block per row");
-                }
             }
-        }
         }
         // the volumes: each node's cells, by the same colouring's classes (one cheap pass each)
         let mut dv_dx = vec![[0.0; 3]; volume_rows.rows.len()];
@@ -258,7 +258,13 @@ impl MotionJacobian {
                 .iter()
                 .zip(&seeded)
                 .map(|(p, &s)| {
-                    std::array::from_fn(|k| if s { Dual::var(p[k], k) } else { Dual::cst(p[k]) })
+                    std::array::from_fn(|k| {
+                        if s {
+                            Dual::var(p[k], k)
+                        } else {
+                            Dual::cst(p[k])
+                        }
+                    })
                 })
                 .collect();
             let v = mesh.volumes_at(&nodes);
@@ -410,7 +416,13 @@ impl ForceJacobian {
         let mut cell_lists: Vec<Vec<u32>> = vec![Vec::new(); mesh.n_cells];
         let mut node_lists: Vec<Vec<u32>> = vec![Vec::new(); mesh.nodes.len()];
         for (w, &fi) in wall_faces.iter().enumerate() {
-            let cells = dilate(&nb, &[mesh.faces[fi].left as u32], depth, &mut mark, w as u32);
+            let cells = dilate(
+                &nb,
+                &[mesh.faces[fi].left as u32],
+                depth,
+                &mut mark,
+                w as u32,
+            );
             let mut nodes: Vec<u32> = cells
                 .iter()
                 .flat_map(|&c| cell_nodes[c as usize].iter().copied())
@@ -604,7 +616,12 @@ mod tests {
             outputs.extend(v);
             (inputs, outputs)
         });
-        let adj = tape.sweep(outputs.iter().zip(w.iter().chain(wv)).map(|(r, w)| (*r, *w)));
+        let adj = tape.sweep(
+            outputs
+                .iter()
+                .zip(w.iter().chain(wv))
+                .map(|(r, w)| (*r, *w)),
+        );
         let motion: Vec<C64> = inputs.iter().map(|x| adj.of(*x)).collect();
         let ((inputs, outputs), tape) = Tape::record(|| {
             let q: Vec<State<Rev>> = q0.iter().map(|s| s.map(Rev::input)).collect();
@@ -616,7 +633,12 @@ mod tests {
             let outputs: Vec<Rev> = f.into_iter().flat_map(|(_, v)| v).collect();
             (inputs, outputs)
         });
-        let adj = tape.sweep(outputs.iter().zip(u.iter().flatten()).map(|(r, w)| (*r, *w)));
+        let adj = tape.sweep(
+            outputs
+                .iter()
+                .zip(u.iter().flatten())
+                .map(|(r, w)| (*r, *w)),
+        );
         let all: Vec<C64> = inputs.iter().map(|x| adj.of(*x)).collect();
         let n_q = mesh.n_cells * NVAR;
         (motion, all[..n_q].to_vec(), all[n_q..].to_vec())
@@ -625,7 +647,10 @@ mod tests {
     fn assert_close(name: &str, a: &[C64], b: &[C64]) {
         assert_eq!(a.len(), b.len(), "{name}");
         let scale = b.iter().fold(0.0f64, |m, v| m.max(v.norm()));
-        let err = a.iter().zip(b).fold(0.0f64, |m, (p, q)| m.max((p - q).norm()));
+        let err = a
+            .iter()
+            .zip(b)
+            .fold(0.0f64, |m, (p, q)| m.max((p - q).norm()));
         assert!(scale > 0.0, "{name}: all zero");
         assert!(err <= 1e-12 * scale, "{name}: {err:e} of {scale:e}");
     }

@@ -544,14 +544,14 @@ impl Aerodynamics for Lfd {
         }
         drop(warm);
         if let Some(w) = &self.warm_start {
-            let (kept, iterations) = k.iter().zip(&solved).fold(
-                (Vec::new(), 0),
-                |(mut kept, it), (&kk, s)| {
-                    let (single, i) = WarmStart::single(s);
-                    kept.push((kk, single));
-                    (kept, it + i)
-                },
-            );
+            let (kept, iterations) =
+                k.iter()
+                    .zip(&solved)
+                    .fold((Vec::new(), 0), |(mut kept, it), (&kk, s)| {
+                        let (single, i) = WarmStart::single(s);
+                        kept.push((kk, single));
+                        (kept, it + i)
+                    });
             let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
             w.keep(n, kept, iterations, false);
         }
@@ -654,7 +654,12 @@ impl Aerodynamics for Lfd {
     }
 
     fn linearization_checks(&self) -> Vec<gustkit_core::LinearizationCheck> {
-        crate::adjoint::linearization_table(&self.lfd, self.reverse_linearizations(), &self.deform, 7)
+        crate::adjoint::linearization_table(
+            &self.lfd,
+            self.reverse_linearizations(),
+            &self.deform,
+            7,
+        )
     }
 }
 
@@ -809,7 +814,12 @@ impl FrequencySum {
     /// Adds one frequency's part (in the frequencies' order: the sums are deterministic).
     fn add(&mut self, (nodes, geometry): PerFrequency) {
         for (acc, part) in self.nodes.iter_mut().zip(nodes) {
-            for (a, p) in acc.0.iter_mut().zip(&part.0).chain(acc.1.iter_mut().zip(&part.1)) {
+            for (a, p) in acc
+                .0
+                .iter_mut()
+                .zip(&part.0)
+                .chain(acc.1.iter_mut().zip(&part.1))
+            {
                 for (x, y) in a.iter_mut().zip(p) {
                     for c in 0..3 {
                         x[c] += y[c];

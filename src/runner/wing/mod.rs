@@ -8,6 +8,7 @@ mod fidelities;
 pub mod flutter;
 pub mod gradient;
 pub mod gust;
+pub mod mesh_study;
 pub mod optimize;
 pub mod resolution;
 

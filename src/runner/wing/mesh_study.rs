@@ -1,0 +1,448 @@
+//! `gustkit mesh-study`: the LFD analysis of a study's initial design on the built-in mesh levels
+//! (coarse, medium, fine: each 8× the cells of the previous), with what each level costs (model
+//! build, GAF table, peak memory) and how far its answer lies from the DLM of `aero.compare_with`;
+//! over three levels the RMS's observed order of convergence and its Richardson extrapolate.
+//!
+//! Each level's row is written to `mesh_study.json` as soon as it is done, and a rerun keeps the
+//! rows already there: a level that takes longer than a session (the fine one) runs on its own.
+
+use crate::aero::lfd::WingMeshLevel;
+use crate::pipeline::{aeroelastic, analyse, Aeroelastic};
+use crate::report::figures::{line_plot, Series};
+use crate::report::results::FidelityComparison;
+use crate::report::{save_figure, write_atomic};
+use crate::runner::bench::{peak_memory_gb, reset_peak_memory};
+use crate::study::{FidelitySpec, Study};
+use anyhow::{bail, Context, Result};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use std::time::Instant;
+
+/// The largest GAF difference to the DLM at one reduced frequency, of the largest entry.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+pub struct GafDifference {
+    pub k: f64,
+    /// Motion GAFs Q_ss.
+    pub motion: f64,
+    /// Gust GAFs Q_gs.
+    pub gust: f64,
+}
+
+/// One mesh level's analysis.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+pub struct MeshStudyRow {
+    pub level: String,
+    pub cells: usize,
+    /// RMS of the study's first gust output, m.
+    pub rms: f64,
+    /// RMS of every output, SI.
+    pub rms_outputs: Vec<f64>,
+    /// Peak resident memory of the process over the model build and the GAF table, GB.
+    pub peak_memory_gb: Option<f64>,
+    /// The process's resident memory when the level started (the DLM's and the structure's,
+    /// and what the allocator kept of earlier levels), GB: the level's own peak is the
+    /// difference.
+    #[serde(default)]
+    pub baseline_memory_gb: Option<f64>,
+    /// The GAF table (every k, every mode and the gust), s.
+    pub gaf_table_s: f64,
+    /// The model build: mesh, steady Newton solve from the free stream, Jacobians, s.
+    pub steady_s: f64,
+    pub threads: usize,
+    /// The largest GAF difference to the DLM at k = 0, 0.5, 1 and 2 (those in the table).
+    pub gaf_difference_to_dlm: Vec<GafDifference>,
+}
+
+/// Richardson extrapolation of the RMS over three levels of constant refinement ratio.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+pub struct Richardson {
+    /// Observed order p = ln(|r₂ − r₁| / |r₃ − r₂|) / ln(ratio).
+    pub order: f64,
+    /// r₃ + (r₃ − r₂) / (ratio^p − 1), m.
+    pub extrapolate: f64,
+    /// The DLM's RMS against the extrapolate, %.
+    pub dlm_difference_percent: f64,
+}
+
+/// `mesh_study.json`.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+pub struct MeshStudy {
+    pub study: String,
+    pub output: String,
+    /// The DLM's RMS of the first output (the study's `aero.compare_with`), m.
+    pub dlm_rms: f64,
+    pub dlm_model: String,
+    pub rows: Vec<MeshStudyRow>,
+    pub richardson: Option<Richardson>,
+}
+
+/// The reduced frequencies at which the GAF differences are reported.
+const REPORTED_K: [f64; 4] = [0.0, 0.5, 1.0, 2.0];
+
+/// Cells refine by 2 in each direction from one level to the next.
+const REFINEMENT_RATIO: f64 = 2.0;
+
+/// Runs the levels of `levels` (names) that `dir/mesh_study.json` does not hold yet.
+pub fn mesh_study(study: &Study, levels: &[String], dir: &Path) -> Result<()> {
+    let file = study.file.display().to_string();
+    let Some(crate::study::AeroSpec {
+        fidelity: FidelitySpec::Lfd(_),
+        ..
+    }) = study.spec.aero.as_ref()
+    else {
+        bail!("{file}: aero.fidelity: the mesh study needs the LFD fidelity");
+    };
+    let other = study.compare_study()?.with_context(|| {
+        format!("{file}: aero.compare_with: the mesh study compares with a DLM: give one")
+    })?;
+    let parsed: Vec<WingMeshLevel> = levels
+        .iter()
+        .map(|l| parse_level(l).map_err(|e| anyhow::anyhow!("--levels: {e}")))
+        .collect::<Result<_>>()?;
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let path = dir.join("mesh_study.json");
+    let settings = study.gust_settings()?;
+    let output = settings
+        .outputs
+        .first()
+        .map(|o| o.name.clone())
+        .unwrap_or_default();
+    let mut doc: MeshStudy = match std::fs::read_to_string(&path) {
+        Ok(text) => serde_json::from_str(&text)
+            .with_context(|| format!("{}: not a mesh study", path.display()))?,
+        Err(_) => {
+            // the DLM once: its RMS and GAFs are the reference of every level
+            let x = other.resolve()?.initial.to_vec();
+            let model = aeroelastic(&other.resolve()?, &x).context("the DLM")?;
+            let rms = first_rms(model, &settings).context("the DLM's gust response")?;
+            MeshStudy {
+                study: study.spec.name.clone(),
+                output: output.clone(),
+                dlm_rms: rms[0],
+                dlm_model: other
+                    .spec
+                    .aero
+                    .as_ref()
+                    .map_or(String::new(), |a| a.fidelity.words()),
+                rows: Vec::new(),
+                richardson: None,
+            }
+        }
+    };
+    let case_other = other.resolve()?;
+    let dlm_table = aeroelastic(&case_other, &case_other.initial.to_vec())
+        .context("the DLM")?
+        .table;
+    for level in parsed {
+        if doc.rows.iter().any(|r| r.level == level.name()) {
+            println!("{}: already in {}", level.name(), path.display());
+            continue;
+        }
+        let row = run_level(study, level, &settings, &dlm_table)?;
+        println!(
+            "{}: {} cells, RMS {:.6e} m, GAF table {:.1} s, model {:.1} s, peak {:.2} GB (from {:.2} GB at the start)",
+            row.level,
+            row.cells,
+            row.rms,
+            row.gaf_table_s,
+            row.steady_s,
+            row.peak_memory_gb.unwrap_or(f64::NAN),
+            row.baseline_memory_gb.unwrap_or(f64::NAN)
+        );
+        doc.rows.push(row);
+        doc.rows.sort_by_key(|r| r.cells);
+        doc.richardson = richardson(&doc);
+        write_atomic(&path, serde_json::to_string_pretty(&doc)?.as_bytes())?;
+    }
+    save_figure(dir, "mesh_study_rms", &figure(&doc))?;
+    write_atomic(&dir.join("summary.md"), summary(&doc).as_bytes())?;
+    Ok(())
+}
+
+/// A built-in mesh level by name.
+fn parse_level(name: &str) -> Result<WingMeshLevel> {
+    serde_json::from_value(serde_json::Value::String(name.into()))
+        .map_err(|_| anyhow::anyhow!("unknown mesh level {name:?} (coarse, medium or fine)"))
+}
+
+/// Puts an LFD study on the built-in mesh level `name` (its own sizes or mesh file dropped).
+pub fn set_level(study: &mut Study, name: &str) -> Result<()> {
+    let level = parse_level(name).map_err(|e| anyhow::anyhow!("--mesh: {e}"))?;
+    put_on_level(study, level)
+        .map(|_| ())
+        .map_err(|e| anyhow::anyhow!("--mesh: {e}"))
+}
+
+/// Puts an LFD study on a built-in mesh level; its cells.
+fn put_on_level(study: &mut Study, level: WingMeshLevel) -> Result<usize> {
+    match study.spec.aero.as_mut().map(|a| &mut a.fidelity) {
+        Some(FidelitySpec::Lfd(spec)) => {
+            spec.mesh = level;
+            spec.mesh_sizes = None;
+            spec.mesh_file = None;
+            Ok(spec.mesh_spec().n_cells())
+        }
+        _ => bail!(
+            "{}: the study's fidelity is not the LFD",
+            study.file.display()
+        ),
+    }
+}
+
+/// The RMS of every output of an aeroelastic model.
+fn first_rms(model: Aeroelastic, settings: &crate::gust::GustSettings) -> Result<Vec<f64>> {
+    let analysis = analyse(model, settings)?;
+    let ev = analysis
+        .response()
+        .map_err(|reason| anyhow::anyhow!("unstable: {reason}"))?;
+    Ok(ev.rms_m.clone())
+}
+
+fn run_level(
+    study: &Study,
+    level: WingMeshLevel,
+    settings: &crate::gust::GustSettings,
+    dlm: &gustkit_core::GafTable,
+) -> Result<MeshStudyRow> {
+    let mut s = study.clone();
+    let cells = put_on_level(&mut s, level)?;
+    s.spec.aero.as_mut().expect("an LFD study").compare_with = None;
+    // the steady state from the free stream every time (its time is part of the row)
+    s.cache_dir = None;
+    // refused before any allocation when the level does not fit memory_limit_gb
+    s.validate_fidelity().map_err(|e| {
+        anyhow::anyhow!("{}: level {}: {}", s.file.display(), level.name(), e.reason)
+    })?;
+    let case = s.resolve()?;
+    let x = case.initial.to_vec();
+    let plate = case
+        .model_at(crate::wing::DesignVector::from_slice(&x))
+        .map_err(|e| anyhow::anyhow!("design: {}", e.reason))?;
+    let modes = case.solve_modes(&plate).context("modal analysis")?;
+    reset_peak_memory();
+    let baseline_memory_gb = crate::runner::bench::resident_memory_gb();
+    let t = Instant::now();
+    let aero = case.aero_model(&plate)?;
+    let steady_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let (table, residual) = crate::pipeline::tables(&plate, &modes, &aero, Some(settings))?;
+    let gaf_table_s = t.elapsed().as_secs_f64();
+    let peak_memory_gb = peak_memory_gb();
+    let (ss, gs) = FidelityComparison::differences(&table, dlm);
+    let gaf_difference_to_dlm = REPORTED_K
+        .iter()
+        .filter_map(|&k| {
+            let i = table.k.iter().position(|&t| (t - k).abs() < 1e-9)?;
+            Some(GafDifference {
+                k,
+                motion: ss[i],
+                gust: gs[i],
+            })
+        })
+        .collect();
+    let rms = first_rms(
+        Aeroelastic {
+            x,
+            plate,
+            modes,
+            aero,
+            table,
+            residual,
+        },
+        settings,
+    )?;
+    Ok(MeshStudyRow {
+        level: level.name().into(),
+        cells,
+        rms: rms[0],
+        rms_outputs: rms,
+        peak_memory_gb,
+        baseline_memory_gb,
+        gaf_table_s,
+        steady_s,
+        threads: rayon::current_num_threads(),
+        gaf_difference_to_dlm,
+    })
+}
+
+/// The extrapolate of the finest three rows (each 8× the cells of the previous).
+fn richardson(doc: &MeshStudy) -> Option<Richardson> {
+    let n = doc.rows.len();
+    if n < 3 {
+        return None;
+    }
+    let (r1, r2, r3) = (
+        doc.rows[n - 3].rms,
+        doc.rows[n - 2].rms,
+        doc.rows[n - 1].rms,
+    );
+    let ratio = ((r2 - r1) / (r3 - r2)).abs();
+    // converging monotonically at a finite order (equal finest levels give no order)
+    if !(ratio > 1.0 && ratio.is_finite()) {
+        return None;
+    }
+    let order = ratio.ln() / REFINEMENT_RATIO.ln();
+    let extrapolate = r3 + (r3 - r2) / (REFINEMENT_RATIO.powf(order) - 1.0);
+    Some(Richardson {
+        order,
+        extrapolate,
+        dlm_difference_percent: 100.0 * (doc.dlm_rms / extrapolate - 1.0),
+    })
+}
+
+/// Cell size relative to the coarse level's: (coarse cells / cells)^(1/3).
+fn relative_h(doc: &MeshStudy, cells: usize) -> f64 {
+    let coarse = doc.rows.first().map_or(cells, |r| r.cells) as f64;
+    (coarse / cells as f64).cbrt()
+}
+
+fn figure(doc: &MeshStudy) -> crate::report::figures::LinePlot {
+    let to_in = 1.0 / 0.0254;
+    let lfd: Vec<(f64, f64)> = doc
+        .rows
+        .iter()
+        .map(|r| (relative_h(doc, r.cells), r.rms * to_in))
+        .collect();
+    let mut series: Vec<Series> = vec![(
+        format!(
+            "LFD ({})",
+            doc.rows
+                .iter()
+                .map(|r| r.level.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        lfd,
+    )];
+    series.push((
+        format!("DLM ({})", doc.dlm_model),
+        vec![(0.0, doc.dlm_rms * to_in), (1.0, doc.dlm_rms * to_in)],
+    ));
+    let mut dotted = vec![0];
+    if let (Some(r), Some(last)) = (&doc.richardson, doc.rows.last()) {
+        series.push((
+            format!("Richardson extrapolate (observed order {:.2})", r.order),
+            vec![
+                (0.0, r.extrapolate * to_in),
+                (relative_h(doc, last.cells), last.rms * to_in),
+            ],
+        ));
+        dotted.push(2);
+    }
+    let mut plot = line_plot(
+        format!("{}: RMS of {} against cell size", doc.study, doc.output),
+        "cell size / coarse cell size",
+        "RMS (in)",
+        series,
+    );
+    plot.dotted = dotted;
+    plot
+}
+
+fn summary(doc: &MeshStudy) -> String {
+    let to_in = 1.0 / 0.0254;
+    let mut s = format!(
+        "# Mesh study: {}\n\nRMS of `{}` on the built-in LFD mesh levels; the DLM ({}) gives {:.4} in.\n\n| level | cells | RMS (in) | vs DLM | model build (s) | GAF table (s) | peak memory (GB) | threads |\n|---|---|---|---|---|---|---|---|\n",
+        doc.study,
+        doc.output,
+        doc.dlm_model,
+        doc.dlm_rms * to_in
+    );
+    for r in &doc.rows {
+        s += &format!(
+            "| {} | {} | {:.4} | {:+.1} % | {:.1} | {:.1} | {} | {} |\n",
+            r.level,
+            r.cells,
+            r.rms * to_in,
+            100.0 * (r.rms / doc.dlm_rms - 1.0),
+            r.steady_s,
+            r.gaf_table_s,
+            r.peak_memory_gb.map_or("—".into(), |g| format!("{g:.2}")),
+            r.threads
+        );
+    }
+    s += "\nLargest GAF difference to the DLM (of the largest entry), motion / gust:\n\n| level |";
+    for k in REPORTED_K {
+        s += &format!(" k = {k} |");
+    }
+    s += "\n|---|---|---|---|---|\n";
+    for r in &doc.rows {
+        s += &format!("| {} |", r.level);
+        for d in &r.gaf_difference_to_dlm {
+            s += &format!(" {:.1} % / {:.1} % |", 100.0 * d.motion, 100.0 * d.gust);
+        }
+        s += "\n";
+    }
+    match &doc.richardson {
+        Some(r) => {
+            s += &format!(
+                "\nRichardson extrapolate of the three levels: {:.4} in (observed order {:.2}); the DLM lies {:+.1} % from it (the paper: DLM 1.94 in against its LFD's 1.88 in, the LFD −3.1 %).\n",
+                r.extrapolate * to_in,
+                r.order,
+                r.dlm_difference_percent
+            )
+        }
+        None => s += "\nNo extrapolate: it needs three levels converging monotonically.\n",
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(level: &str, cells: usize, rms: f64) -> MeshStudyRow {
+        MeshStudyRow {
+            level: level.into(),
+            cells,
+            rms,
+            rms_outputs: vec![rms],
+            peak_memory_gb: None,
+            baseline_memory_gb: None,
+            gaf_table_s: 0.0,
+            steady_s: 0.0,
+            threads: 1,
+            gaf_difference_to_dlm: Vec::new(),
+        }
+    }
+
+    /// A sequence r(h) = r₀ + C hᵖ on h = 1, ½, ¼ (cells × 8 a level) gives back p and r₀ to
+    /// round-off, for p = 1 and 2 and either sign of C; two levels, or an oscillating sequence,
+    /// give none.
+    #[test]
+    fn richardson_recovers_the_order_and_the_limit() {
+        for (p, c) in [(2.0, 0.3), (1.0, -0.05), (1.5, 0.1)] {
+            let r = |h: f64| 0.05 + c * f64::powf(h, p);
+            let mut doc = MeshStudy {
+                study: "s".into(),
+                output: "o".into(),
+                dlm_rms: 0.048,
+                dlm_model: "DLM".into(),
+                rows: vec![row("coarse", 1000, r(1.0)), row("medium", 8000, r(0.5))],
+                richardson: None,
+            };
+            assert!(richardson(&doc).is_none());
+            doc.rows.push(row("fine", 64000, r(0.25)));
+            let e = richardson(&doc).expect("three converging levels");
+            assert!((e.order - p).abs() < 1e-10, "{p}: {}", e.order);
+            assert!((e.extrapolate - 0.05).abs() < 1e-13, "{}", e.extrapolate);
+            assert!((e.dlm_difference_percent - (100.0 * (0.048 / 0.05 - 1.0))).abs() < 1e-9);
+            assert!((relative_h(&doc, 64000) - 0.25).abs() < 1e-15);
+        }
+        let mut doc = MeshStudy {
+            study: "s".into(),
+            output: "o".into(),
+            dlm_rms: 0.048,
+            dlm_model: "DLM".into(),
+            rows: vec![
+                row("coarse", 1000, 0.05),
+                row("medium", 8000, 0.051),
+                row("fine", 64000, 0.049),
+            ],
+            richardson: None,
+        };
+        assert!(richardson(&doc).is_none(), "diverging differences");
+        doc.rows[2].rms = 0.051;
+        assert!(richardson(&doc).is_none(), "no change");
+    }
+}
