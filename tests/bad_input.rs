@@ -414,3 +414,47 @@ fn flutter_without_a_flutter_section_names_what_to_add() {
     }
     assert!(!dir.join("minimal_wing").exists());
 }
+
+/// `gustkit mesh-study` refuses, with exit status 1 and nothing written: a study that is not an
+/// LFD one, an unknown level, and a level whose memory estimate is above the study's
+/// `memory_limit_gb` (named with the estimate and the limit, before anything runs).
+#[test]
+fn mesh_study_refuses_what_it_cannot_run() {
+    let dir = scratch().join("mesh-study");
+    let _ = std::fs::remove_dir_all(&dir);
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let g = |study: &Path, levels: &str| {
+        Command::new(env!("CARGO_BIN_EXE_gustkit"))
+            .arg("mesh-study")
+            .arg(study)
+            .args(["--levels", levels, "--reports"])
+            .arg(&dir)
+            .output()
+            .unwrap()
+    };
+    let o = g(&root.join("studies/agard445_dlm.json"), "coarse");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("needs the LFD fidelity"), "{err}");
+    let lfd = root.join("studies/agard445_lfd_mesh_study.json");
+    let o = g(&lfd, "coarse,finest");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("unknown mesh level \"finest\""), "{err}");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&lfd).unwrap()).unwrap();
+    set(&mut v, "aero.fidelity.lfd.memory_limit_gb", 4.0.into());
+    let small = scratch().join("mesh_study_4gb.json");
+    std::fs::write(&small, v.to_string()).unwrap();
+    let o = g(&small, "coarse,fine");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("level fine")
+            && err.contains("458752 cells")
+            && err.contains("memory_limit_gb = 4"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(!dir.exists(), "nothing written");
+}

@@ -148,7 +148,13 @@ fn shipped_studies_end_as_the_readme_says() {
             row.study
         );
         assert!(
-            ["gustkit run", "gustkit flutter", "gustkit sweep"].contains(&row.command.as_str()),
+            [
+                "gustkit run",
+                "gustkit flutter",
+                "gustkit sweep",
+                "gustkit mesh-study",
+            ]
+            .contains(&row.command.as_str()),
             "{}: command {}",
             row.study,
             row.command

@@ -133,21 +133,23 @@ fn default_memory_limit() -> f64 {
     12.0
 }
 
-/// Bytes per cell of the LFD wing model on `threads` threads (each holds a frequency's solver
-/// state), from its parts: the mesh, geometry,
-/// states and deformation (≈ 8 kB), the exact second-order Jacobian (≈ 12 kB), per concurrent
-/// frequency its complex block ILU(0) (≈ 24 kB) and the fill blocks of ILU(k), and per
-/// concurrent right-hand side the GMRES
-/// basis (restart + 1 complex vectors of 5 unknowns), and the forward solutions of one GAF table
-/// kept for the reverse sweep (≈ 7 kB: 11 k × 7 columns × 80 B). 88 kB a cell at restart 80;
-/// measured on the medium wing mesh: 3.94 GB peak for 57 344 cells (69 kB a cell, before the
-/// solutions were kept).
+/// Bytes per cell of the LFD wing model on `threads` threads (each works on one frequency at a
+/// time, with its factorization and one right-hand side's GMRES basis), from its parts: shared by
+/// the threads, the mesh, geometry, states and deformation, the exact second-order Jacobian
+/// (25 blocks a row, 5.2 kB) and the preconditioner's first-order blocks, and the forward
+/// solutions of one GAF table kept for the reverse sweep (11 k × 7 columns × 80 B) — 12 kB in
+/// all; per thread the block ILU(k) of one frequency (6.9 blocks a row for ILU(0) and
+/// the fill blocks of ILU(k), 408 B each), the GMRES basis of one right-hand side (restart + 1
+/// complex vectors of 5 unknowns; the preconditioned vectors are not kept) and the frequency's
+/// right-hand sides and dual-number geometry (3 kB). 41 kB a cell on 2 threads at restart 80
+/// with ILU(1); measured on the medium wing mesh (57 344 cells, 2 threads, 6 modes): 2.05 GB
+/// above the process's start, 35.7 kB a cell (49 kB with the preconditioned vectors kept).
 fn bytes_per_cell(restart: usize, ilu_fill: usize, threads: usize) -> f64 {
     let threads = threads.max(1) as f64;
-    // the fill blocks beyond ILU(0)'s, per cell (measured on the medium wing mesh: 6.9, 12.7,
-    // 22.1 and 33.2 blocks a row for ILU(0) to ILU(3)), 400 B a complex block and its column
-    let fill_blocks = [0.0, 5.8, 15.2, 26.3][ilu_fill.min(3)];
-    8e3 + 12e3 + 7e3 + threads * (24e3 + fill_blocks * 408.0 + (restart as f64 + 1.0) * 5.0 * 16.0)
+    // the blocks a row of ILU(k) (measured on the medium wing mesh: 6.9, 12.7, 22.1 and 33.2
+    // for ILU(0) to ILU(3)), 408 B a complex block and its column
+    let ilu_blocks = [6.9, 12.7, 22.1, 33.2][ilu_fill.min(3)];
+    12e3 + threads * (ilu_blocks * 408.0 + (restart as f64 + 1.0) * 5.0 * 16.0 + 3e3)
 }
 
 impl LfdWingSpec {

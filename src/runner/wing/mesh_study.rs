@@ -99,6 +99,10 @@ pub fn mesh_study(study: &Study, levels: &[String], dir: &Path) -> Result<()> {
         .iter()
         .map(|l| parse_level(l).map_err(|e| anyhow::anyhow!("--levels: {e}")))
         .collect::<Result<_>>()?;
+    // every level is checked (its memory estimate against memory_limit_gb) before anything runs
+    for &level in &parsed {
+        level_study(study, level)?;
+    }
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let path = dir.join("mesh_study.json");
     let settings = study.gust_settings()?;
@@ -204,15 +208,7 @@ fn run_level(
     settings: &crate::gust::GustSettings,
     dlm: &gustkit_core::GafTable,
 ) -> Result<MeshStudyRow> {
-    let mut s = study.clone();
-    let cells = put_on_level(&mut s, level)?;
-    s.spec.aero.as_mut().expect("an LFD study").compare_with = None;
-    // the steady state from the free stream every time (its time is part of the row)
-    s.cache_dir = None;
-    // refused before any allocation when the level does not fit memory_limit_gb
-    s.validate_fidelity().map_err(|e| {
-        anyhow::anyhow!("{}: level {}: {}", s.file.display(), level.name(), e.reason)
-    })?;
+    let (s, cells) = level_study(study, level)?;
     let case = s.resolve()?;
     let x = case.initial.to_vec();
     let plate = case
@@ -265,6 +261,28 @@ fn run_level(
     })
 }
 
+/// The study on `level` alone (no second fidelity, no steady-state cache: the steady state from
+/// the free stream every time, its time part of the row) and its cells; refused, naming the
+/// level, when its memory estimate is above the study's `memory_limit_gb`.
+fn level_study(study: &Study, level: WingMeshLevel) -> Result<(Study, usize)> {
+    let mut s = study.clone();
+    let cells = put_on_level(&mut s, level)?;
+    if let Some(aero) = s.spec.aero.as_mut() {
+        aero.compare_with = None;
+    }
+    s.cache_dir = None;
+    s.validate_fidelity().map_err(|e| {
+        anyhow::anyhow!(
+            "{}: level {}: {}: {}",
+            s.file.display(),
+            level.name(),
+            e.path,
+            e.reason
+        )
+    })?;
+    Ok((s, cells))
+}
+
 /// The extrapolate of the finest three rows (each 8× the cells of the previous).
 fn richardson(doc: &MeshStudy) -> Option<Richardson> {
     let n = doc.rows.len();
@@ -315,17 +333,14 @@ fn figure(doc: &MeshStudy) -> crate::report::figures::LinePlot {
         lfd,
     )];
     series.push((
-        format!("DLM ({})", doc.dlm_model),
+        doc.dlm_model.clone(),
         vec![(0.0, doc.dlm_rms * to_in), (1.0, doc.dlm_rms * to_in)],
     ));
     let mut dotted = vec![0];
-    if let (Some(r), Some(last)) = (&doc.richardson, doc.rows.last()) {
+    if let Some(r) = &doc.richardson {
         series.push((
             format!("Richardson extrapolate (observed order {:.2})", r.order),
-            vec![
-                (0.0, r.extrapolate * to_in),
-                (relative_h(doc, last.cells), last.rms * to_in),
-            ],
+            vec![(0.0, r.extrapolate * to_in)],
         ));
         dotted.push(2);
     }
