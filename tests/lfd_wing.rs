@@ -1073,3 +1073,50 @@ fn solver_failure_reaches_the_edge_typed() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A steady-state file of another mesh in the report folder (what a run of another mesh level
+/// leaves there) is never trusted: `gustkit flutter` says in a line that it is not used, solves
+/// the steady state of its own mesh and ends normally.
+#[test]
+fn a_steady_state_of_another_mesh_is_ignored_with_a_line() {
+    let dir = std::env::temp_dir().join(format!("gustkit-foreign-steady-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut v = flagship();
+    v.as_object_mut().unwrap().remove("optimization");
+    v["name"] = "foreign_steady".into();
+    v["structure"]["modes"] = 3.into();
+    v["aero"]["reduced_frequencies"] = serde_json::json!([0.0, 0.3, 1.0, 2.0]);
+    v["aero"]["fidelity"] = serde_json::json!({"lfd": {"mesh_sizes": {
+        "n_around": 16, "n_radial": 6, "n_span": 4, "n_outboard": 2, "first_spacing_chords": 0.02
+    }}});
+    v["flutter"] =
+        serde_json::json!({"velocity_min_m_s": 100.0, "velocity_max_m_s": 200.0, "points": 5});
+    let folder = dir.join("foreign_steady");
+    std::fs::create_dir_all(&folder).unwrap();
+    // 7 cells' worth of a state: another mesh
+    let foreign = folder.join("steady_lfd_00000000deadbeef.bin");
+    std::fs::write(&foreign, vec![0u8; 7 * 40]).unwrap();
+    let file = dir.join("foreign_steady.json");
+    std::fs::write(&file, v.to_string()).unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_gustkit"))
+        .arg("flutter")
+        .arg(&file)
+        .arg("--reports")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{out}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        out.lines()
+            .any(|l| l.contains("steady_lfd_00000000deadbeef.bin")
+                && l.contains("another mesh (35 values")
+                && l.contains("not used")),
+        "{out}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

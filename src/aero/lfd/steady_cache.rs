@@ -26,12 +26,18 @@ impl LfdWingSpec {
 }
 
 /// A state read from `file` if it is one of this mesh (length) and physical (finite, positive
-/// density); `None` for anything else.
+/// density); `None` for anything else, with a line saying why when the file is there but not
+/// this mesh's or not a flow state (it is never trusted).
 pub(super) fn read_state(e: &Euler, file: &Path) -> Option<Vec<gustkit_cfd::residual::State<f64>>> {
     let bytes = std::fs::read(file).ok()?;
     let n = e.mesh.n_cells;
     let nvar = gustkit_cfd::gas::NVAR;
     if bytes.len() != 8 * nvar * n {
+        println!(
+            "{}: a steady state of another mesh ({} values, this mesh has {n} cells × {nvar}): not used",
+            file.display(),
+            bytes.len() / 8
+        );
         return None;
     }
     let vals: Vec<f64> = bytes
@@ -43,6 +49,10 @@ pub(super) fn read_state(e: &Euler, file: &Path) -> Option<Vec<gustkit_cfd::resi
         .map(|c| std::array::from_fn(|k| c[k]))
         .collect();
     if q.iter().flatten().any(|v| !v.is_finite()) || q.iter().any(|s| !(s[0] > 0.0)) {
+        println!(
+            "{}: not a flow state (non-finite values or a density not above zero): not used",
+            file.display()
+        );
         return None;
     }
     Some(q)
