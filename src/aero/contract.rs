@@ -70,7 +70,7 @@ pub struct ModelFootprint {
 pub struct Sizing {
     /// Reduced frequencies of the GAF table.
     pub n_k: usize,
-    /// Whether the reverse mode will run (its derivatives and tapes).
+    /// Whether the reverse mode will run (its derivatives and the Jacobians they need).
     pub gradients: bool,
     /// The threads the model will run on (each frequency in flight holds its own solver state).
     pub threads: usize,

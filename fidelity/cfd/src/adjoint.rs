@@ -42,9 +42,11 @@ pub struct LfdReverse {
     n_cells: usize,
 }
 
-/// Bytes per cell of [`LfdReverse`] (used to refuse a mesh that would not fit): measured 13.6 kB
-/// on the coarse wing mesh (7 168 cells, second order), most of it ∂R/∂x (about 90 cells a node,
-/// a 5 × 3 block each); the operation tapes it replaced took about 190 kB.
+/// Bytes per cell of [`LfdReverse`] (used to refuse a mesh that would not fit), with a margin:
+/// most of it is ∂R/∂x, a 5 × 3 block for each of the 80 cells within two face-neighbour steps
+/// of an interior node's eight cells (10.7 kB a node of a hexahedral mesh with the rest);
+/// measured 9.2 kB a cell on a small wing mesh (560 cells). The operation tapes it replaced
+/// took about 2 800 entries of 40 bytes a cell (113 kB, up to twice that in their buffers).
 pub const BYTES_PER_CELL: usize = 16_000;
 
 impl LfdReverse {

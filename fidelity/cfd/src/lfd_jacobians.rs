@@ -154,6 +154,15 @@ fn dilate(nb: &[Vec<u32>], seeds: &[u32], depth: usize, mark: &mut [u32], stamp:
     out
 }
 
+/// The node positions in `Dual<3>`, the nodes of `seeded` along their three coordinates.
+fn seeded_nodes(mesh: &Mesh, seeded: impl Iterator<Item = usize>) -> Vec<[Dual<3>; 3]> {
+    let mut x: Vec<[Dual<3>; 3]> = mesh.nodes.iter().map(|p| p.map(Dual::cst)).collect();
+    for n in seeded {
+        x[n] = std::array::from_fn(|k| Dual::var(mesh.nodes[n][k], k));
+    }
+    x
+}
+
 /// Face-neighbour steps from a moved node (or a wall cell) that its effect reaches: the second
 /// order's least-squares weights use the centres of the neighbours, and its face states the
 /// gradients of both sides.
@@ -204,24 +213,7 @@ impl MotionJacobian {
             let per_class: Vec<Vec<[[f64; 3]; NVAR]>> = round
                 .par_iter()
                 .map(|class| {
-                    let mut seeded = vec![false; mesh.nodes.len()];
-                    for &n in class {
-                        seeded[n as usize] = true;
-                    }
-                    let nodes: Vec<[Dual<3>; 3]> = mesh
-                        .nodes
-                        .iter()
-                        .zip(&seeded)
-                        .map(|(p, &s)| {
-                            std::array::from_fn(|k| {
-                                if s {
-                                    Dual::var(p[k], k)
-                                } else {
-                                    Dual::cst(p[k])
-                                }
-                            })
-                        })
-                        .collect();
+                    let nodes = seeded_nodes(mesh, class.iter().map(|&n| n as usize));
                     let vg: Vec<Dual<3>> = vg0.iter().map(|v| Dual::cst(*v)).collect();
                     let geom = euler.geometry_at(&nodes, vg, order);
                     let r = euler.residual_in(&q, &geom).0;
@@ -249,24 +241,7 @@ impl MotionJacobian {
         let mut dv_dx = vec![[0.0; 3]; volume_rows.rows.len()];
         let volume_classes = color_groups(&volume_rows, mesh.n_cells);
         for class in &volume_classes {
-            let mut seeded = vec![false; mesh.nodes.len()];
-            for &n in class {
-                seeded[n as usize] = true;
-            }
-            let nodes: Vec<[Dual<3>; 3]> = mesh
-                .nodes
-                .iter()
-                .zip(&seeded)
-                .map(|(p, &s)| {
-                    std::array::from_fn(|k| {
-                        if s {
-                            Dual::var(p[k], k)
-                        } else {
-                            Dual::cst(p[k])
-                        }
-                    })
-                })
-                .collect();
+            let nodes = seeded_nodes(mesh, class.iter().map(|&n| n as usize));
             let v = mesh.volumes_at(&nodes);
             for &n in class {
                 let n = n as usize;
@@ -484,12 +459,7 @@ impl ForceJacobian {
         let by_node: Vec<Vec<[[f64; 3]; 3]>> = node_classes
             .par_iter()
             .map(|class| {
-                let mut x: Vec<[Dual<3>; 3]> =
-                    mesh.nodes.iter().map(|p| p.map(Dual::cst)).collect();
-                for &g in class {
-                    let n = nodes[g as usize] as usize;
-                    x[n] = std::array::from_fn(|k| Dual::var(mesh.nodes[n][k], k));
-                }
+                let x = seeded_nodes(mesh, class.iter().map(|&g| nodes[g as usize] as usize));
                 let geom = euler.geometry_at(&x, vec![Dual::cst(0.0); mesh.faces.len()], order);
                 let f = euler.wall_face_forces(&q3, &geom);
                 let mut out = Vec::new();

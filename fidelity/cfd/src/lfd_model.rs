@@ -37,7 +37,7 @@ pub struct Lfd {
     pub area_m2: f64,
     /// Free-stream Mach number of the steady state.
     pub mach: f64,
-    /// The reverse mode's Jacobians, assembled at the first gradient (about 14 kB a cell, so a
+    /// The reverse mode's Jacobians, assembled at the first gradient (about 11 kB a cell, so a
     /// model that only supplies GAFs never pays for them).
     reverse: std::sync::OnceLock<LfdReverse>,
     /// The mesh motions of the geometry parameters (the builder's planform variables), whose
