@@ -2,6 +2,7 @@
 //! and optionally of its whole optimization. Every timing is taken after a warm-up run and
 //! reported as the median, minimum and maximum of its repetitions, with the thread count in use.
 
+use crate::runner::memory::{peak_memory_gb, reset_peak_memory};
 use crate::runner::wing::{analyze, optimize::optimize};
 use crate::structure::{mass_grad, modes_vjp, ModalSeed, Sampler};
 use crate::study::Study;
@@ -298,29 +299,6 @@ pub struct LfdTimings {
     pub peak_build_gb: Option<f64>,
     pub peak_gafs_gb: Option<f64>,
     pub peak_vjp_gb: Option<f64>,
-}
-
-/// The process's peak resident memory since the last [`reset_peak_memory`], GB (Linux's VmHWM;
-/// None elsewhere).
-pub fn peak_memory_gb() -> Option<f64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024.0 / 1e9)
-}
-
-/// The process's present resident memory, GB (Linux's VmRSS; None elsewhere).
-pub fn resident_memory_gb() -> Option<f64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
-    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024.0 / 1e9)
-}
-
-/// Restarts the peak resident memory from the present one (Linux: `/proc/self/clear_refs`), so
-/// that each stage's peak is its own.
-pub fn reset_peak_memory() {
-    let _ = std::fs::write("/proc/self/clear_refs", "5");
 }
 
 /// The LFD stages on the study's initial design (no steady-state cache), see [`LfdTimings`].

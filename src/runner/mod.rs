@@ -6,6 +6,7 @@
 pub mod bench;
 pub mod export;
 pub mod load;
+pub mod memory;
 pub mod nastran;
 mod nastran_design;
 pub mod sweep;

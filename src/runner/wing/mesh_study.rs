@@ -11,7 +11,7 @@ use crate::pipeline::{aeroelastic, analyse, Aeroelastic};
 use crate::report::figures::{line_plot, Series};
 use crate::report::results::FidelityComparison;
 use crate::report::{save_figure, write_atomic};
-use crate::runner::bench::{peak_memory_gb, reset_peak_memory};
+use crate::runner::memory::{peak_memory_gb, reset_peak_memory, resident_memory_gb};
 use crate::study::{FidelitySpec, Study};
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
@@ -216,7 +216,7 @@ fn run_level(
         .map_err(|e| anyhow::anyhow!("design: {}", e.reason))?;
     let modes = case.solve_modes(&plate).context("modal analysis")?;
     reset_peak_memory();
-    let baseline_memory_gb = crate::runner::bench::resident_memory_gb();
+    let baseline_memory_gb = resident_memory_gb();
     let t = Instant::now();
     let aero = case.aero_model(&plate)?;
     let steady_s = t.elapsed().as_secs_f64();
