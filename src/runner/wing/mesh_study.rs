@@ -111,14 +111,17 @@ pub fn mesh_study(study: &Study, levels: &[String], dir: &Path) -> Result<()> {
         .first()
         .map(|o| o.name.clone())
         .unwrap_or_default();
+    // the DLM model once: its GAFs (and, for a new file, its RMS) are every level's reference
+    let case_other = other.resolve()?;
+    let mut dlm = Some(aeroelastic(&case_other, &case_other.initial.to_vec()).context("the DLM")?);
+    let dlm_table = dlm.as_ref().expect("just built").table.clone();
     let mut doc: MeshStudy = match std::fs::read_to_string(&path) {
         Ok(text) => serde_json::from_str(&text)
             .with_context(|| format!("{}: not a mesh study", path.display()))?,
         Err(_) => {
-            // the DLM once: its RMS and GAFs are the reference of every level
-            let x = other.resolve()?.initial.to_vec();
-            let model = aeroelastic(&other.resolve()?, &x).context("the DLM")?;
-            let rms = first_rms(model, &settings).context("the DLM's gust response")?;
+            // the DLM's RMS: the reference of every level (its model built once, above)
+            let rms = first_rms(dlm.take().expect("built once"), &settings)
+                .context("the DLM's gust response")?;
             MeshStudy {
                 study: study.spec.name.clone(),
                 output: output.clone(),
@@ -133,10 +136,6 @@ pub fn mesh_study(study: &Study, levels: &[String], dir: &Path) -> Result<()> {
             }
         }
     };
-    let case_other = other.resolve()?;
-    let dlm_table = aeroelastic(&case_other, &case_other.initial.to_vec())
-        .context("the DLM")?
-        .table;
     for level in parsed {
         if doc.rows.iter().any(|r| r.level == level.name()) {
             println!("{}: already in {}", level.name(), path.display());
