@@ -65,7 +65,8 @@ pub struct WarmStart {
     n: usize,
     /// (k, the solutions of its columns).
     tables: Vec<(f64, Vec<Vec<num_complex::Complex32>>)>,
-    /// (k, the adjoint solutions of the last reverse sweep, seed by seed and column by column).
+    /// (k, the adjoint solutions of the last reverse sweep: one per mode, of its generalized
+    /// force).
     adjoints: Vec<(f64, Vec<Vec<num_complex::Complex32>>)>,
     /// GMRES iterations of the last table.
     pub last_iterations: usize,
@@ -228,26 +229,19 @@ fn solver_error(e: LfdError, k: f64, n_modes: usize) -> AeroError {
     }
 }
 
-/// An adjoint LFD failure at `k`: the right-hand sides are, per seed, the adjoints of the
-/// `n_modes` mode columns and (when `n_cols` > `n_modes`) of the gust column.
-fn adjoint_error(e: LfdError, k: f64, n_modes: usize, n_cols: usize) -> AeroError {
+/// An adjoint LFD failure at `k`: the right-hand sides are the adjoints of the `n_modes`
+/// modes' generalized forces (one per mode, whatever the seeds).
+fn adjoint_error(e: LfdError, k: f64, n_modes: usize) -> AeroError {
     let rhs_index = match &e {
         LfdError::Gmres { rhs, .. } => Some(*rhs),
         _ => None,
     };
     match (solver_error(e, k, usize::MAX), rhs_index) {
-        (AeroError::Solver { k, failure, .. }, Some(i)) => {
-            let (seed, col) = (i / n_cols, i % n_cols);
-            AeroError::Solver {
-                k,
-                rhs: if col < n_modes {
-                    format!("adjoint of mode {} (seed {})", col + 1, seed + 1)
-                } else {
-                    format!("adjoint of the gust (seed {})", seed + 1)
-                },
-                failure,
-            }
-        }
+        (AeroError::Solver { k, failure, .. }, Some(i)) if i < n_modes => AeroError::Solver {
+            k,
+            rhs: format!("adjoint of mode {}'s generalized force", i + 1),
+            failure,
+        },
         (other, _) => other,
     }
 }
@@ -671,12 +665,13 @@ impl AerodynamicsReverse for Lfd {
     /// The adjoint of the GAFs with respect to the mode shapes at the wall nodes and, along the
     /// model's mesh tangents, the geometry parameters (see [`crate::adjoint`] and
     /// [`crate::mesh_sensitivity`]). Per frequency: the forward solutions of the GAF table (kept
-    /// from the last one at this point, else solved), then for every seed and mode j the adjoint
-    /// LFD solve (s V + ∂R/∂q)ᵀ λ_j = F_qᵀ u_j with u_j = Σ_i conj(Q̄_ij) · scale · φ̄_i on the
-    /// wall faces, and the shape seed Re(F_xᵀ u_j − Bᵀ λ_j) carried back through the mesh
-    /// deformation; the projection's own seed Re(conj(Q̄) · scale · f̂) goes to the projecting
-    /// mode. One factorization per frequency serves the forward and the adjoint solves of every
-    /// seed.
+    /// from the last one at this point, else solved), then per mode i the adjoint LFD solve
+    /// (s V + ∂R/∂q)ᵀ μ_i = F_qᵀ u_i with u_i = scale · φ̄_i on the wall faces (mode i's
+    /// generalized force), and for every seed and mode j the shape seed Re(F_xᵀ u_j − Bᵀ λ_j)
+    /// with u_j = Σ_i conj(Q̄_ij) u_i and λ_j = Σ_i conj(Q̄_ij) μ_i, carried back through the
+    /// mesh deformation; the projection's own seed Re(conj(Q̄) · scale · f̂) goes to the
+    /// projecting mode. One factorization per frequency serves the forward and the adjoint
+    /// solves; the adjoint solves are one a mode whatever the number of seeds.
     fn gafs_vjp(
         &self,
         flight: &FlightCondition,
@@ -857,8 +852,12 @@ struct SeedSweep<'a> {
 
 impl SeedSweep<'_> {
     /// The reverse sweep at reduced frequency `kk` (index `ik`) with its factorization and the
-    /// forward solutions: the projection's seeds, the adjoint solves (sᵀV + ∂R/∂q)ᵀ λ = F_qᵀ u
-    /// of every seed and column, the geometry gradient and the motion seeds.
+    /// forward solutions: the projection's seeds, one adjoint solve (sᵀV + ∂R/∂q)ᵀ μ_i = F_qᵀ u_i
+    /// per mode i with u_i = scale · φ̄_i (mode i's generalized force), and from them, for every
+    /// seed, the geometry gradient and the motion seeds. A column's adjoint is a combination of
+    /// the μ_i (λ_j = Σ_i conj(Q̄_ij) μ_i, the equations being linear), so the solves do not
+    /// depend on the seeds: their number is the modes', whatever the seeds, and the previous
+    /// design's μ_i start them well (their right-hand sides move only with the mode shapes).
     fn at_frequency(
         &self,
         ik: usize,
@@ -868,9 +867,8 @@ impl SeedSweep<'_> {
         seeds: &[GafTable],
         guesses: Option<&Vec<Vec<C64>>>,
     ) -> Result<(PerFrequency, Vec<Solution>), AeroError> {
-        let (nm, n_cols) = (self.nm, self.n_cols);
+        let nm = self.nm;
         let lfd = &self.model.lfd;
-        let n_nodes = lfd.euler.mesh.nodes.len();
         // linearized wall forces of each mode motion and of the gust
         let forces: Vec<Vec<[C64; 3]>> = (0..=nm)
             .map(|j| {
@@ -881,42 +879,35 @@ impl SeedSweep<'_> {
                     .collect()
             })
             .collect();
-        let mut out = Vec::with_capacity(seeds.len());
-        let mut adjoint_rhs = Vec::with_capacity(seeds.len() * n_cols);
-        let mut direct = Vec::with_capacity(seeds.len() * n_cols);
-        let mut force_seeds = Vec::with_capacity(seeds.len() * n_cols);
-        for seed in seeds {
-            let (s_ss, s_gs) = (&seed.q_ss[ik], &seed.q_gs[ik]);
-            out.push((
-                self.projection_seed(s_ss, s_gs, &forces),
-                vec![vec![[0.0; 3]; n_nodes]; nm],
-            ));
-            // u_j = Σ_i conj(Q̄_ij) scale φ̄_i: the seed on mode j's wall forces
-            for j in 0..nm {
-                let u = self.force_seed(|i| s_ss[i][j].conj());
-                let (uq, ux) = self.rev.wall_forces_transpose(&u);
-                adjoint_rhs.push(uq);
-                direct.push(ux);
-                force_seeds.push(u);
-            }
-            if n_cols > nm {
-                // the gust column's seed, for the geometry derivative only
-                let u = self.force_seed(|i| s_gs[i].conj());
-                adjoint_rhs.push(self.rev.wall_forces_transpose(&u).0);
-                direct.push(Vec::new());
-                force_seeds.push(u);
-            }
-        }
-        let start: Vec<Option<&Vec<C64>>> = (0..adjoint_rhs.len())
-            .map(|j| guesses.and_then(|g| g.get(j)))
+        // u_i on the wall faces, F_qᵀ u_i (the adjoint right-hand side) and F_xᵀ u_i
+        let units: Vec<Vec<[C64; 3]>> = (0..nm)
+            .map(|i| self.force_seed(|m| C64::new(if m == i { 1.0 } else { 0.0 }, 0.0)))
             .collect();
-        let lambda = self
+        let (adjoint_rhs, direct): (Vec<Vec<C64>>, Vec<NodeField>) = units
+            .iter()
+            .map(|u| self.rev.wall_forces_transpose(u))
+            .unzip();
+        let start: Vec<Option<&Vec<C64>>> =
+            (0..nm).map(|i| guesses.and_then(|g| g.get(i))).collect();
+        let mu = self
             .rev
             .solve_transpose_from(lfd, f, &adjoint_rhs, &start)
-            .map_err(|e| adjoint_error(e, kk, nm, n_cols))?;
-        let geo = self.geometry_gradient(kk, f, sol, &lambda, &force_seeds, seeds.len());
-        self.motion_seeds(f, &lambda, &direct, &mut out);
-        Ok(((out, geo), lambda))
+            .map_err(|e| adjoint_error(e, kk, nm))?;
+        drop(adjoint_rhs);
+        let coefficients: Vec<Coefficients> = seeds
+            .iter()
+            .map(|seed| Coefficients {
+                ss: &seed.q_ss[ik],
+                gs: &seed.q_gs[ik],
+            })
+            .collect();
+        let geo = self.geometry_gradient(kk, f, sol, &mu, &units, &coefficients);
+        let mut out: Vec<NodeSeeds> = coefficients
+            .iter()
+            .map(|c| (self.projection_seed(c.ss, c.gs, &forces), Vec::new()))
+            .collect();
+        self.motion_seeds(f, &mu, direct, &coefficients, &mut out);
+        Ok(((out, geo), mu))
     }
 
     /// The seed of the force projection on the node shapes: Re(conj(Q̄_ij) scale f̂_j) on φ_i
@@ -966,19 +957,21 @@ impl SeedSweep<'_> {
             .collect()
     }
 
-    /// Per seed, the geometry gradient at one frequency: Σ_columns Re(uᵀ ∂f̂ − λᵀ t) along
-    /// each mesh tangent, where t and ∂f̂ are the column's residual and force tangents.
+    /// Per seed, the geometry gradient at one frequency: Σ_columns Re(u_jᵀ ∂f̂ − λ_jᵀ t) along
+    /// each mesh tangent, where t and ∂f̂ are the column's residual and force tangents, with
+    /// u_j = Σ_i c_ij u_i and λ_j = Σ_i c_ij μ_i: the products with the μ_i and u_i are taken
+    /// once and combined per seed.
     fn geometry_gradient(
         &self,
         kk: f64,
         f: &Factored,
         sol: &[Solution],
-        lambda: &[(Vec<C64>, crate::krylov::GmresInfo)],
-        force_seeds: &[Vec<[C64; 3]>],
-        n_seeds: usize,
+        mu: &[Solution],
+        units: &[Vec<[C64; 3]>],
+        coefficients: &[Coefficients],
     ) -> Vec<Vec<f64>> {
         let tangents = &self.model.tangents;
-        let mut geo = vec![vec![0.0; tangents.len()]; n_seeds];
+        let mut geo = vec![vec![0.0; tangents.len()]; coefficients.len()];
         for (d, (dq0, dx_hat)) in self.geometry.iter().enumerate() {
             for col in 0..self.n_cols {
                 let gust_fluxes;
@@ -1001,46 +994,90 @@ impl SeedSweep<'_> {
                     &tangents[d].nodes,
                     dq0,
                 );
-                for (si, g) in geo.iter_mut().enumerate() {
-                    let idx = si * self.n_cols + col;
-                    let lam = &lambda[idx].0;
-                    let mut acc = C64::new(0.0, 0.0);
-                    for (uw, fw) in force_seeds[idx].iter().zip(&df) {
-                        for c in 0..3 {
-                            acc += uw[c] * fw[c];
+                // a_i = u_iᵀ ∂f̂ − μ_iᵀ t
+                let a: Vec<C64> = units
+                    .iter()
+                    .zip(mu)
+                    .map(|(u, (m, _))| {
+                        let mut acc = C64::new(0.0, 0.0);
+                        for (uw, fw) in u.iter().zip(&df) {
+                            for c in 0..3 {
+                                acc += uw[c] * fw[c];
+                            }
                         }
-                    }
-                    for (a, b) in lam.iter().zip(&t) {
-                        acc -= a * b;
-                    }
-                    g[d] += acc.re;
+                        for (x, y) in m.iter().zip(&t) {
+                            acc -= x * y;
+                        }
+                        acc
+                    })
+                    .collect();
+                for (g, c) in geo.iter_mut().zip(coefficients) {
+                    g[d] += (0..self.nm).map(|i| c.of(i, col) * a[i]).sum::<C64>().re;
                 }
             }
         }
         geo
     }
 
-    /// The seeds on the mode motions: Re(F_xᵀ u_j − Bᵀ λ_j) on every mesh node, into each
-    /// seed's second part (the gust columns have none).
+    /// The seeds on the mode motions, into each seed's second part: Re(F_xᵀ u_j − Bᵀ λ_j) =
+    /// Re Σ_i c_ij (F_xᵀ u_i − Bᵀ μ_i) on every mesh node (the gust column has none).
     fn motion_seeds(
         &self,
         f: &Factored,
-        lambda: &[(Vec<C64>, crate::krylov::GmresInfo)],
-        direct: &[Vec<[C64; 3]>],
+        mu: &[Solution],
+        direct: Vec<NodeField>,
+        coefficients: &[Coefficients],
         out: &mut [NodeSeeds],
     ) {
-        for (idx, ((lam, _), ux)) in lambda.iter().zip(direct).enumerate() {
-            let (si, j) = (idx / self.n_cols, idx % self.n_cols);
-            if j >= self.nm {
-                continue;
-            }
-            let bt = self.rev.motion_rhs_transpose(&self.model.lfd, f.s, lam);
-            let motion = &mut out[si].1[j];
-            for n in 0..motion.len() {
-                for c in 0..3 {
-                    motion[n][c] = (ux[n][c] - bt[n][c]).re;
+        // w_i = F_xᵀ u_i − Bᵀ μ_i
+        let w: Vec<NodeField> = direct
+            .into_iter()
+            .zip(mu)
+            .map(|(mut ux, (m, _))| {
+                let bt = self.rev.motion_rhs_transpose(&self.model.lfd, f.s, m);
+                for (a, b) in ux.iter_mut().zip(&bt) {
+                    for c in 0..3 {
+                        a[c] -= b[c];
+                    }
                 }
-            }
+                ux
+            })
+            .collect();
+        let n_nodes = w.first().map_or(0, |x| x.len());
+        for (seeds, c) in out.iter_mut().zip(coefficients) {
+            seeds.1 = (0..self.nm)
+                .map(|j| {
+                    let cij: Vec<C64> = (0..self.nm).map(|i| c.of(i, j)).collect();
+                    (0..n_nodes)
+                        .map(|n| {
+                            std::array::from_fn(|k| {
+                                cij.iter()
+                                    .zip(&w)
+                                    .map(|(ci, wi)| ci * wi[n][k])
+                                    .sum::<C64>()
+                                    .re
+                            })
+                        })
+                        .collect()
+                })
+                .collect();
+        }
+    }
+}
+
+/// One seed's coefficients at one frequency: column j's adjoint is Σ_i of(i, j) μ_i.
+struct Coefficients<'a> {
+    ss: &'a [Vec<C64>],
+    gs: &'a [C64],
+}
+
+impl Coefficients<'_> {
+    /// conj(Q̄_ij) for a mode column j, conj(Q̄_gs,i) for the gust column (j = modes).
+    fn of(&self, i: usize, j: usize) -> C64 {
+        if j < self.ss.len() {
+            self.ss[i][j].conj()
+        } else {
+            self.gs[i].conj()
         }
     }
 }
@@ -1320,6 +1357,25 @@ mod tests {
             d < 1e-8 * big && adj_warm < adj_cold,
             "{adj_cold} {adj_warm}"
         );
+        // several seeds at once: each seed's gradient is the one it has alone, from the same
+        // adjoint solves (one a mode: the seeds only combine them)
+        let other_seed = random_seed(&flight, &ks, 2, 11);
+        let cold_store = store();
+        aero.warm_start = Some(cold_store.clone());
+        let both = aero
+            .gafs_vjp_many(&flight, &next, &ks, &[seed.clone(), other_seed.clone()])
+            .unwrap();
+        assert_eq!(adjoint_iterations(&cold_store), adj_cold);
+        let alone = aero.gafs_vjp(&flight, &next, &ks, &other_seed).unwrap();
+        for (many, one) in both.iter().zip([&g_cold, &alone]) {
+            let (mut d, mut big) = (0.0f64, 0.0f64);
+            for (a, b) in many.modes.values().zip(one.modes.values()) {
+                d = d.max((a - b).abs());
+                big = big.max(b.abs());
+            }
+            // to the GMRES tolerance (1e-10: the lone seed's solves start from the pair's)
+            assert!(d <= 1e-8 * big, "{d:e} of {big:e}");
+        }
         // a store of another mesh is not used (and is replaced)
         let other = store();
         other.lock().unwrap().n = 7;
@@ -1446,10 +1502,11 @@ mod tests {
         }
     }
 
-    /// A stalled adjoint GMRES names the frequency, the column and the seed (right-hand sides
-    /// are ordered seed by seed, modes then the gust), and keeps the residual history.
+    /// A stalled adjoint GMRES names the frequency and the mode whose generalized force's
+    /// adjoint it solved (one right-hand side a mode, whatever the seeds), and keeps the
+    /// residual history.
     #[test]
-    fn adjoint_failures_name_the_seed() {
+    fn adjoint_failures_name_the_mode() {
         let stalled = |rhs: usize| LfdError::Gmres {
             omega: 0.3,
             rhs,
@@ -1461,11 +1518,10 @@ mod tests {
             },
         };
         for (rhs, want) in [
-            (1, "adjoint of mode 2 (seed 1)"),
-            (2, "adjoint of the gust (seed 1)"),
-            (3, "adjoint of mode 1 (seed 2)"),
+            (0, "adjoint of mode 1's generalized force"),
+            (2, "adjoint of mode 3's generalized force"),
         ] {
-            match adjoint_error(stalled(rhs), 0.5, 2, 3) {
+            match adjoint_error(stalled(rhs), 0.5, 3) {
                 AeroError::Solver { k, rhs, failure } => {
                     assert_eq!((k, rhs.as_str()), (0.5, want));
                     assert_eq!(failure.history, vec![1.0, 1e-2, 1e-3]);
