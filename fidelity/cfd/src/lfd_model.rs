@@ -1360,6 +1360,13 @@ mod tests {
         // several seeds at once: each seed's gradient is the one it has alone, from the same
         // adjoint solves (one a mode: the seeds only combine them)
         let other_seed = random_seed(&flight, &ks, 2, 11);
+        // and the warm start does not care how the seed moved between the designs (in an
+        // optimization it moves with the response's PSD and the multipliers)
+        let moved_store = store();
+        aero.warm_start = Some(moved_store.clone());
+        aero.gafs_vjp(&flight, &first, &ks, &other_seed).unwrap();
+        aero.gafs_vjp(&flight, &next, &ks, &seed).unwrap();
+        assert_eq!(adjoint_iterations(&moved_store), adj_warm);
         let cold_store = store();
         aero.warm_start = Some(cold_store.clone());
         let both = aero
