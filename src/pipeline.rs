@@ -97,6 +97,79 @@ pub(crate) fn tables(
     Ok((table, Some(Residual { shapes, gafs })))
 }
 
+/// How many shapes [`tables`] gives GAFs of: the modes and, with mode acceleration, the
+/// residual shapes.
+pub(crate) fn table_shapes(
+    plate: &PlateModel,
+    modes: &Modes,
+    settings: Option<&GustSettings>,
+) -> usize {
+    modes.len()
+        + settings.filter(|s| s.mode_acceleration).map_or(0, |s| {
+            residual_shapes(plate, modes, &output_samplers(plate, s)).len()
+        })
+}
+
+/// [`tables`] in groups of `group` reduced frequencies (one a thread gives the parallelism of
+/// the whole table), for a table too long to lose: the rows of `done` (a partial table of the
+/// same shapes, in any order) are not computed again, and `keep` receives the rows computed so
+/// far (`done`'s and the new ones) after each group — a checkpoint. Each frequency's GAFs are
+/// independent of the others', so the table is the one [`tables`] gives.
+pub(crate) fn tables_in_groups(
+    plate: &PlateModel,
+    modes: &Modes,
+    aero: &AeroModel,
+    settings: Option<&GustSettings>,
+    group: usize,
+    done: Option<GafTable>,
+    keep: &mut dyn FnMut(&GafTable) -> Result<()>,
+) -> Result<(GafTable, Option<Residual>)> {
+    let shapes = match settings.filter(|s| s.mode_acceleration) {
+        Some(settings) => residual_shapes(plate, modes, &output_samplers(plate, settings)),
+        None => Vec::new(),
+    };
+    let all_shapes = with_residual(modes, &shapes);
+    let surface = aero.transfer.shapes_on_surface(plate, &all_shapes);
+    let mut rows = done.unwrap_or_else(|| GafTable::zeros(&aero.flight, &[], all_shapes.len()));
+    let todo: Vec<f64> = aero
+        .k
+        .iter()
+        .copied()
+        .filter(|k| {
+            !rows
+                .k
+                .iter()
+                .any(|d| (d - k).abs() <= 1e-12 * k.abs().max(1.0))
+        })
+        .collect();
+    for ks in todo.chunks(group.max(1)) {
+        let part = aero
+            .fidelity
+            .gafs(&aero.flight, &surface, ks)
+            .map_err(|e| anyhow::Error::new(e).context("aerodynamics"))?;
+        rows.k.extend(part.k);
+        rows.q_ss.extend(part.q_ss);
+        rows.q_gs.extend(part.q_gs);
+        keep(&rows)?;
+    }
+    // the rows in the study's order
+    let mut all = GafTable::zeros(&aero.flight, &aero.k, all_shapes.len());
+    for (i, k) in aero.k.iter().enumerate() {
+        let j = rows
+            .k
+            .iter()
+            .position(|d| (d - k).abs() <= 1e-12 * k.abs().max(1.0))
+            .expect("every k computed or done");
+        all.q_ss[i] = rows.q_ss[j].clone();
+        all.q_gs[i] = rows.q_gs[j].clone();
+    }
+    if shapes.is_empty() {
+        return Ok((all, None));
+    }
+    let (table, gafs) = ResidualGafs::split(&all, modes.len());
+    Ok((table, Some(Residual { shapes, gafs })))
+}
+
 impl Evaluation {
     fn pk(&self) -> PkProblem<'_> {
         PkProblem::new(&self.modes, &self.table, self.aero.flight.density)

@@ -4,7 +4,9 @@
 //! over three levels the RMS's observed order of convergence and its Richardson extrapolate.
 //!
 //! Each level's row is written to `mesh_study.json` as soon as it is done, and a rerun keeps the
-//! rows already there: a level that takes longer than a session (the fine one) runs on its own.
+//! rows already there; within a level the GAF table is kept after each round of frequencies
+//! (`partial_<level>.json`), so a level longer than a session (the fine one, about 2 h) resumes
+//! where it was stopped.
 
 use crate::aero::lfd::WingMeshLevel;
 use crate::pipeline::{aeroelastic, analyse, Aeroelastic};
@@ -141,7 +143,7 @@ pub fn mesh_study(study: &Study, levels: &[String], dir: &Path) -> Result<()> {
             println!("{}: already in {}", level.name(), path.display());
             continue;
         }
-        let row = run_level(study, level, &settings, &dlm_table)?;
+        let row = run_level(study, level, &settings, &dlm_table, dir)?;
         println!(
             "{}: {} cells, RMS {:.6e} m, GAF table {:.1} s, model {:.1} s, peak {:.2} GB (from {:.2} GB at the start)",
             row.level,
@@ -156,6 +158,8 @@ pub fn mesh_study(study: &Study, levels: &[String], dir: &Path) -> Result<()> {
         doc.rows.sort_by_key(|r| r.cells);
         doc.richardson = richardson(&doc);
         write_atomic(&path, serde_json::to_string_pretty(&doc)?.as_bytes())?;
+        // the level's row written, its partial table is not needed
+        let _ = std::fs::remove_file(partial_file(dir, level));
     }
     save_figure(dir, "mesh_study_rms", &figure(&doc))?;
     write_atomic(&dir.join("summary.md"), summary(&doc).as_bytes())?;
@@ -201,13 +205,98 @@ fn first_rms(model: Aeroelastic, settings: &crate::gust::GustSettings) -> Result
     Ok(ev.rms_m.clone())
 }
 
+/// A level's GAF table so far (`partial_<level>.json` beside `mesh_study.json`, written after
+/// each round of frequencies and removed when the level's row is written): a rerun of a level
+/// that was stopped computes only the frequencies it lacks.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+struct PartialLevel {
+    level: String,
+    cells: usize,
+    /// Hash of the level's study (design, modes, k list, LFD settings): a partial table of
+    /// another study is not used.
+    fingerprint: String,
+    /// The GAF table's time so far, s (summed over the runs).
+    gaf_table_s: f64,
+    /// The largest peak resident memory of the runs so far, GB.
+    peak_memory_gb: Option<f64>,
+    /// The rows computed so far.
+    table: gustkit_core::GafTable,
+}
+
+/// The partial table file of `level` in `dir`.
+fn partial_file(dir: &Path, level: WingMeshLevel) -> std::path::PathBuf {
+    dir.join(format!("partial_{}.json", level.name()))
+}
+
+/// A hash of the level's study file (its design, modes, frequencies and LFD settings).
+fn fingerprint(s: &Study) -> Result<String> {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    serde_json::to_string(&s.spec)?.hash(&mut h);
+    Ok(format!("{:016x}", h.finish()))
+}
+
+/// The partial table in `file` when it is this level's, of this study and of `n_shapes`
+/// shapes; else none, with a line saying why when the file is there (it is never trusted).
+fn read_partial(
+    file: &Path,
+    level: WingMeshLevel,
+    cells: usize,
+    fingerprint: &str,
+    n_shapes: usize,
+) -> Option<PartialLevel> {
+    let text = std::fs::read_to_string(file).ok()?;
+    let why = match serde_json::from_str::<PartialLevel>(&text) {
+        Err(e) => format!("not a partial GAF table ({e})"),
+        Ok(p) if p.level != level.name() || p.cells != cells => format!(
+            "it is level {} ({} cells), not {} ({cells} cells)",
+            p.level,
+            p.cells,
+            level.name()
+        ),
+        Ok(p) if p.fingerprint != fingerprint => {
+            "it was computed for another study (design, modes, frequencies or LFD settings)".into()
+        }
+        Ok(p)
+            if p.table.q_ss.len() != p.table.k.len()
+                || p.table.q_gs.len() != p.table.k.len()
+                || p.table.q_gs.iter().any(|r| r.len() != n_shapes)
+                || p.table
+                    .q_ss
+                    .iter()
+                    .any(|r| r.len() != n_shapes || r.iter().any(|c| c.len() != n_shapes)) =>
+        {
+            format!("its table is not one of this analysis's {n_shapes} shapes")
+        }
+        Ok(p)
+            if p.table
+                .q_ss
+                .iter()
+                .flatten()
+                .flatten()
+                .any(|v| !v.is_finite())
+                || p.table.q_gs.iter().flatten().any(|v| !v.is_finite()) =>
+        {
+            "its table holds non-finite GAFs".into()
+        }
+        Ok(p) => return Some(p),
+    };
+    println!(
+        "{}: ignored, the level starts from its first frequency: {why}",
+        file.display()
+    );
+    None
+}
+
 fn run_level(
     study: &Study,
     level: WingMeshLevel,
     settings: &crate::gust::GustSettings,
     dlm: &gustkit_core::GafTable,
+    dir: &Path,
 ) -> Result<MeshStudyRow> {
     let (s, cells) = level_study(study, level)?;
+    let print = fingerprint(&s)?;
     let case = s.resolve()?;
     let x = case.initial.to_vec();
     let plate = case
@@ -220,9 +309,49 @@ fn run_level(
     let aero = case.aero_model(&plate)?;
     let steady_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let (table, residual) = crate::pipeline::tables(&plate, &modes, &aero, Some(settings))?;
-    let gaf_table_s = t.elapsed().as_secs_f64();
-    let peak_memory_gb = peak_memory_gb();
+    // the table in rounds of one frequency a thread, each round kept in the partial file
+    let file = partial_file(dir, level);
+    let n_shapes = crate::pipeline::table_shapes(&plate, &modes, Some(settings));
+    let earlier = read_partial(&file, level, cells, &print, n_shapes);
+    let (earlier_s, earlier_peak) = earlier
+        .as_ref()
+        .map_or((0.0, None), |p| (p.gaf_table_s, p.peak_memory_gb));
+    if let Some(p) = &earlier {
+        println!(
+            "{}: {} of {} reduced frequencies from {} ({:.0} s)",
+            level.name(),
+            p.table.k.len(),
+            aero.k.len(),
+            file.display(),
+            p.gaf_table_s
+        );
+    }
+    let max_peak = |now: Option<f64>| match (now, earlier_peak) {
+        (Some(a), Some(b)) => Some(a.max(b)),
+        (a, b) => a.or(b),
+    };
+    let mut keep = |rows: &gustkit_core::GafTable| -> Result<()> {
+        let partial = PartialLevel {
+            level: level.name().into(),
+            cells,
+            fingerprint: print.clone(),
+            gaf_table_s: earlier_s + t.elapsed().as_secs_f64(),
+            peak_memory_gb: max_peak(peak_memory_gb()),
+            table: rows.clone(),
+        };
+        write_atomic(&file, serde_json::to_string(&partial)?.as_bytes())
+    };
+    let (table, residual) = crate::pipeline::tables_in_groups(
+        &plate,
+        &modes,
+        &aero,
+        Some(settings),
+        rayon::current_num_threads(),
+        earlier.map(|p| p.table),
+        &mut keep,
+    )?;
+    let gaf_table_s = earlier_s + t.elapsed().as_secs_f64();
+    let peak_memory_gb = max_peak(peak_memory_gb());
     let (ss, gs) = FidelityComparison::differences(&table, dlm);
     let gaf_difference_to_dlm = REPORTED_K
         .iter()
@@ -404,6 +533,137 @@ fn summary(doc: &MeshStudy) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The minimal wing (DLM, 8 reduced frequencies), with or without mode acceleration.
+    fn minimal(mode_acceleration: bool) -> Study {
+        let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/minimal_wing.json");
+        let mut v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+        v["gust"]["mode_acceleration"] = mode_acceleration.into();
+        Study::from_str(&file, &v.to_string()).unwrap()
+    }
+
+    /// A table computed in rounds and stopped after its first round, then resumed from the rows
+    /// it kept (given in another order), is the whole table; the resumed run computes only the
+    /// frequencies it lacked (one call of `keep` a round) — with the residual shapes of mode
+    /// acceleration too.
+    #[test]
+    fn a_table_in_rounds_resumes_to_the_whole_table() {
+        for mode_acceleration in [false, true] {
+            let study = minimal(mode_acceleration);
+            let settings = study.gust_settings().unwrap();
+            let case = study.resolve().unwrap();
+            let plate = case
+                .model_at(crate::wing::DesignVector::from_slice(
+                    &case.initial.to_vec(),
+                ))
+                .unwrap();
+            let modes = case.solve_modes(&plate).unwrap();
+            let aero = case.aero_model(&plate).unwrap();
+            let nk = aero.k.len();
+            let (whole, residual) =
+                crate::pipeline::tables(&plate, &modes, &aero, Some(&settings)).unwrap();
+            assert_eq!(residual.is_some(), mode_acceleration);
+            let shapes = crate::pipeline::table_shapes(&plate, &modes, Some(&settings));
+            assert_eq!(shapes > modes.len(), mode_acceleration);
+            let mut kept = Vec::new();
+            let (rounds, _) = crate::pipeline::tables_in_groups(
+                &plate,
+                &modes,
+                &aero,
+                Some(&settings),
+                3,
+                None,
+                &mut |t| {
+                    kept.push(t.clone());
+                    Ok(())
+                },
+            )
+            .unwrap();
+            assert_eq!(rounds, whole);
+            assert_eq!(kept.len(), nk.div_ceil(3));
+            for (i, t) in kept.iter().enumerate() {
+                assert_eq!(t.k.len(), (3 * (i + 1)).min(nk));
+                assert_eq!(t.q_gs[0].len(), shapes);
+            }
+            let mut first = kept[0].clone();
+            first.k.reverse();
+            first.q_ss.reverse();
+            first.q_gs.reverse();
+            let mut calls = 0;
+            let (resumed, resumed_residual) = crate::pipeline::tables_in_groups(
+                &plate,
+                &modes,
+                &aero,
+                Some(&settings),
+                3,
+                Some(first),
+                &mut |_| {
+                    calls += 1;
+                    Ok(())
+                },
+            )
+            .unwrap();
+            assert_eq!(calls, (nk - 3).div_ceil(3));
+            // each frequency's GAFs are computed alone either way: the same numbers
+            assert_eq!(resumed, whole);
+            assert_eq!(
+                resumed_residual.map(|r| r.gafs),
+                residual.map(|r| r.gafs),
+                "mode acceleration {mode_acceleration}"
+            );
+        }
+    }
+
+    /// A partial table is used only when it is this level's, of this study and consistent;
+    /// anything else is ignored (never trusted).
+    #[test]
+    fn a_partial_table_of_another_level_or_study_is_ignored() {
+        let dir = std::env::temp_dir().join(format!("gustkit-partial-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = partial_file(&dir, WingMeshLevel::Coarse);
+        let flight = gustkit_core::FlightCondition {
+            mach: 0.5,
+            velocity: 170.0,
+            density: 0.4,
+            b_ref: 0.3,
+            x_ref: 0.0,
+        };
+        let good = PartialLevel {
+            level: "coarse".into(),
+            cells: 7168,
+            fingerprint: "abc".into(),
+            gaf_table_s: 12.0,
+            peak_memory_gb: Some(0.3),
+            table: gustkit_core::GafTable::zeros(&flight, &[0.0, 0.5], 2),
+        };
+        let write = |p: &PartialLevel| {
+            std::fs::write(&file, serde_json::to_string(p).unwrap()).unwrap();
+        };
+        write(&good);
+        let read = |cells, print: &str, shapes| {
+            read_partial(&file, WingMeshLevel::Coarse, cells, print, shapes)
+        };
+        assert_eq!(
+            read(7168, "abc", 2).map(|p| p.table.k),
+            Some(vec![0.0, 0.5])
+        );
+        assert!(read(7168, "abd", 2).is_none());
+        assert!(read(57344, "abc", 2).is_none());
+        assert!(read(7168, "abc", 3).is_none());
+        assert!(read_partial(&file, WingMeshLevel::Medium, 7168, "abc", 2).is_none());
+        let mut bad = good.clone();
+        bad.table.q_ss[1][0][1] = num_complex::Complex64::new(f64::NAN, 0.0);
+        write(&bad);
+        assert!(read(7168, "abc", 2).is_none());
+        let mut short = good.clone();
+        short.table.q_gs.pop();
+        write(&short);
+        assert!(read(7168, "abc", 2).is_none());
+        std::fs::write(&file, "{ not json").unwrap();
+        assert!(read(7168, "abc", 2).is_none());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     fn row(level: &str, cells: usize, rms: f64) -> MeshStudyRow {
         MeshStudyRow {
