@@ -971,48 +971,61 @@ impl SeedSweep<'_> {
         coefficients: &[Coefficients],
     ) -> Vec<Vec<f64>> {
         let tangents = &self.model.tangents;
+        let n_geo = self.geometry.len();
         let mut geo = vec![vec![0.0; tangents.len()]; coefficients.len()];
-        for (d, (dq0, dx_hat)) in self.geometry.iter().enumerate() {
+        // the tangents in batches of TANGENT_BATCH, one hyper-dual evaluation a batch and column
+        // (the last batch padded with repeats of its last tangent, whose results are dropped)
+        for start in (0..n_geo).step_by(TANGENT_BATCH) {
+            let ds: [usize; TANGENT_BATCH] = std::array::from_fn(|m| (start + m).min(n_geo - 1));
             for col in 0..self.n_cols {
-                let gust_fluxes;
+                let gust_fluxes: Vec<(Vec<C64>, Vec<C64>)>;
                 let column = if col < self.nm {
                     Column::Motion {
                         x_hat: &self.x_hat[col],
-                        dx_hat: &dx_hat[col],
+                        dx_hat: ds.map(|d| self.geometry[d].1[col].as_slice()),
                     }
                 } else {
-                    gust_fluxes = self.model.gust_flux_tangent(self.flight, kk, &tangents[d]);
+                    gust_fluxes = ds
+                        .iter()
+                        .map(|&d| self.model.gust_flux_tangent(self.flight, kk, &tangents[d]))
+                        .collect();
                     Column::Gust {
-                        g: &gust_fluxes.0,
-                        dg: &gust_fluxes.1,
+                        g: &gust_fluxes[0].0,
+                        dg: std::array::from_fn(|m| gust_fluxes[m].1.as_slice()),
                     }
                 };
-                let (t, df) = self.model.lfd.column_tangent(
+                let batch = self.model.lfd.column_tangents(
                     f.s,
                     &sol[col].0,
                     &column,
-                    &tangents[d].nodes,
-                    dq0,
+                    ds.map(|d| tangents[d].nodes.as_slice()),
+                    ds.map(|d| self.geometry[d].0.as_slice()),
                 );
-                // a_i = u_iᵀ ∂f̂ − μ_iᵀ t
-                let a: Vec<C64> = units
-                    .iter()
-                    .zip(mu)
-                    .map(|(u, (m, _))| {
-                        let mut acc = C64::new(0.0, 0.0);
-                        for (uw, fw) in u.iter().zip(&df) {
-                            for c in 0..3 {
-                                acc += uw[c] * fw[c];
+                for (m, (t, df)) in batch.iter().enumerate() {
+                    if start + m >= n_geo {
+                        break;
+                    }
+                    let d = ds[m];
+                    // a_i = u_iᵀ ∂f̂ − μ_iᵀ t
+                    let a: Vec<C64> = units
+                        .iter()
+                        .zip(mu)
+                        .map(|(u, (mi, _))| {
+                            let mut acc = C64::new(0.0, 0.0);
+                            for (uw, fw) in u.iter().zip(df) {
+                                for c in 0..3 {
+                                    acc += uw[c] * fw[c];
+                                }
                             }
-                        }
-                        for (x, y) in m.iter().zip(&t) {
-                            acc -= x * y;
-                        }
-                        acc
-                    })
-                    .collect();
-                for (g, c) in geo.iter_mut().zip(coefficients) {
-                    g[d] += (0..self.nm).map(|i| c.of(i, col) * a[i]).sum::<C64>().re;
+                            for (x, y) in mi.iter().zip(t) {
+                                acc -= x * y;
+                            }
+                            acc
+                        })
+                        .collect();
+                    for (g, c) in geo.iter_mut().zip(coefficients) {
+                        g[d] += (0..self.nm).map(|i| c.of(i, col) * a[i]).sum::<C64>().re;
+                    }
                 }
             }
         }
@@ -1064,6 +1077,10 @@ impl SeedSweep<'_> {
         }
     }
 }
+
+/// Mesh tangents (geometry parameters) differentiated in one hyper-dual evaluation: the
+/// planform's four.
+const TANGENT_BATCH: usize = 4;
 
 /// One seed's coefficients at one frequency: column j's adjoint is Σ_i of(i, j) μ_i.
 struct Coefficients<'a> {

@@ -30,30 +30,34 @@ pub struct MeshTangent {
     pub radius: f64,
 }
 
-type Hd = HyperDual<2>;
+/// A hyper-dual number of the column tangents: ε the real and imaginary LFD perturbation, `M`
+/// mesh directions δ.
+type Hd<const M: usize> = HyperDual<2, M>;
 
-fn hd(v: f64, a: C64, b: f64, ab: C64) -> Hd {
-    HyperDual::new(v, [a.re, a.im], b, [ab.re, ab.im])
+fn hd<const M: usize>(v: f64, a: C64, b: [f64; M], ab: [C64; M]) -> Hd<M> {
+    HyperDual::new(v, [a.re, a.im], b, ab.map(|z| [z.re, z.im]))
 }
 
-fn a_part(x: Hd) -> C64 {
+fn a_part<const M: usize>(x: Hd<M>) -> C64 {
     C64::new(x.a[0], x.a[1])
 }
 
-fn ab_part(x: Hd) -> C64 {
-    C64::new(x.ab[0], x.ab[1])
+/// The ε δ_m part.
+fn ab_part<const M: usize>(x: Hd<M>, m: usize) -> C64 {
+    C64::new(x.ab[m][0], x.ab[m][1])
 }
 
-/// What drives an LFD column: a mode motion (node displacements x̂ and their tangent δx̂) or the
-/// gust (face volume fluxes ĝ, already scaled, and their tangent δĝ).
-pub enum Column<'a> {
+/// What drives an LFD column: a mode motion (node displacements x̂ and their tangents δx̂ along
+/// each of `M` mesh directions) or the gust (face volume fluxes ĝ, already scaled, and their
+/// tangents δĝ).
+pub enum Column<'a, const M: usize = 1> {
     Motion {
         x_hat: &'a [[C64; 3]],
-        dx_hat: &'a [[C64; 3]],
+        dx_hat: [&'a [[C64; 3]]; M],
     },
     Gust {
         g: &'a [C64],
-        dg: &'a [C64],
+        dg: [&'a [C64]; M],
     },
 }
 
@@ -84,72 +88,101 @@ impl LfdOperator {
         Ok(x.iter().map(|z| z.re).collect())
     }
 
-    /// The tangent δX · ∂/∂X at fixed LFD solution q̂ of one column: t = δ(A q̂ + b) per cell
-    /// state and ∂f̂ per wall face (in the order of [`LfdOperator::wall_face_forces`]), for the
-    /// mesh tangent `d_nodes` and the steady tangent `dq0`, at s.
-    pub fn column_tangent(
+    /// The tangents δX · ∂/∂X at fixed LFD solution q̂ of one column along `M` mesh directions
+    /// at once (one hyper-dual evaluation): per direction m, t = δ_m(A q̂ + b) per cell state and
+    /// ∂f̂ per wall face (in the order of [`LfdOperator::wall_face_forces`]), for the mesh
+    /// tangent `d_nodes[m]` and the steady tangent `dq0[m]`, at s.
+    pub fn column_tangents<const M: usize>(
         &self,
         s: C64,
         q_hat: &[C64],
-        column: &Column,
-        d_nodes: &[[f64; 3]],
-        dq0: &[f64],
-    ) -> (Field, Vec<[C64; 3]>) {
+        column: &Column<M>,
+        d_nodes: [&[[f64; 3]]; M],
+        dq0: [&[f64]; M],
+    ) -> [(Field, Vec<[C64; 3]>); M] {
         let e = &self.euler;
         let mesh = &e.mesh;
         let zero = C64::new(0.0, 0.0);
         let order = e.order;
-        let node = |n: usize, with_motion: bool| -> [Hd; 3] {
-            std::array::from_fn(|k| match (column, with_motion) {
-                (Column::Motion { x_hat, dx_hat }, true) => {
-                    hd(mesh.nodes[n][k], x_hat[n][k], d_nodes[n][k], dx_hat[n][k])
+        let node = |n: usize, with_motion: bool| -> [Hd<M>; 3] {
+            std::array::from_fn(|k| {
+                let b = std::array::from_fn(|m| d_nodes[m][n][k]);
+                match (column, with_motion) {
+                    (Column::Motion { x_hat, dx_hat }, true) => hd(
+                        mesh.nodes[n][k],
+                        x_hat[n][k],
+                        b,
+                        std::array::from_fn(|m| dx_hat[m][n][k]),
+                    ),
+                    _ => hd(mesh.nodes[n][k], zero, b, [zero; M]),
                 }
-                _ => hd(mesh.nodes[n][k], zero, d_nodes[n][k], zero),
             })
         };
-        let nodes: Vec<[Hd; 3]> = (0..mesh.nodes.len()).map(|n| node(n, true)).collect();
-        let q: Vec<State<Hd>> = self
+        let nodes: Vec<[Hd<M>; 3]> = (0..mesh.nodes.len()).map(|n| node(n, true)).collect();
+        let q: Vec<State<Hd<M>>> = self
             .q0
             .iter()
             .enumerate()
             .map(|(c, qc)| {
-                std::array::from_fn(|k| hd(qc[k], q_hat[c * NVAR + k], dq0[c * NVAR + k], zero))
+                std::array::from_fn(|k| {
+                    let i = c * NVAR + k;
+                    hd(
+                        qc[k],
+                        q_hat[i],
+                        std::array::from_fn(|m| dq0[m][i]),
+                        [zero; M],
+                    )
+                })
             })
             .collect();
-        let vg: Vec<Hd> = match column {
+        let vg: Vec<Hd<M>> = match column {
             Column::Motion { .. } => mesh
                 .faces
                 .iter()
                 .enumerate()
                 .map(|(fi, f)| {
                     // the swept volume from X to X + ε x̂, both moving with δ: its ε part is
-                    // L_X(x̂), its εδ part the derivative of that linearization
-                    let a: Vec<[Hd; 3]> = f.nodes.iter().map(|&n| node(n, false)).collect();
-                    let b: Vec<[Hd; 3]> = f.nodes.iter().map(|&n| nodes[n]).collect();
+                    // L_X(x̂), its εδ parts the derivatives of that linearization
+                    let a: Vec<[Hd<M>; 3]> = f.nodes.iter().map(|&n| node(n, false)).collect();
+                    let b: Vec<[Hd<M>; 3]> = f.nodes.iter().map(|&n| nodes[n]).collect();
                     let l = crate::mesh::swept_volume(&a, &b);
-                    hd(e.face_vg[fi], s * a_part(l), 0.0, s * ab_part(l))
+                    hd(
+                        e.face_vg[fi],
+                        s * a_part(l),
+                        [0.0; M],
+                        std::array::from_fn(|m| s * ab_part(l, m)),
+                    )
                 })
                 .collect(),
             Column::Gust { g, dg } => (0..mesh.faces.len())
-                .map(|fi| hd(e.face_vg[fi], g[fi], 0.0, dg[fi]))
+                .map(|fi| {
+                    hd(
+                        e.face_vg[fi],
+                        g[fi],
+                        [0.0; M],
+                        std::array::from_fn(|m| dg[m][fi]),
+                    )
+                })
                 .collect(),
         };
         let geom = e.geometry_at(&nodes, vg, order);
         let r = e.residual_in(&q, &geom).0;
         let v = mesh.volumes_at(&nodes);
-        let mut t = vec![zero; self.n()];
-        for c in 0..mesh.n_cells {
-            for k in 0..NVAR {
-                t[c * NVAR + k] = ab_part(r[c][k]) + s * ab_part(v[c] * q[c][k]);
-            }
-        }
         let geom_f = e.geometry_at(&nodes, vec![Hd::cst(0.0); mesh.faces.len()], order);
-        let forces = e
-            .wall_face_forces(&q, &geom_f)
-            .into_iter()
-            .map(|(_, f)| f.map(ab_part))
-            .collect();
-        (t, forces)
+        let forces = e.wall_face_forces(&q, &geom_f);
+        std::array::from_fn(|m| {
+            let mut t = vec![zero; self.n()];
+            for c in 0..mesh.n_cells {
+                for k in 0..NVAR {
+                    t[c * NVAR + k] = ab_part(r[c][k], m) + s * ab_part(v[c] * q[c][k], m);
+                }
+            }
+            let df = forces
+                .iter()
+                .map(|(_, f)| f.map(|x| ab_part(x, m)))
+                .collect();
+            (t, df)
+        })
     }
 }
 
@@ -215,15 +248,15 @@ mod tests {
         };
         let (x_hat, dx_hat) = (motion(0), motion(1));
         let s = C64::new(0.0, 0.7);
-        let (t, df) = lfd.column_tangent(
+        let [(t, df)] = lfd.column_tangents(
             s,
             &q_hat,
             &Column::Motion {
                 x_hat: &x_hat,
-                dx_hat: &dx_hat,
+                dx_hat: [&dx_hat],
             },
-            &d_nodes,
-            &dq0,
+            [&d_nodes],
+            [&dq0],
         );
         // the forward pieces at mesh X + h δX, state q₀ + h δq₀, motion x̂ + h δx̂
         // the LFD problem on the mesh X + h δX about the state q₀ + h δq₀
@@ -284,8 +317,13 @@ mod tests {
         for (a, b) in g.iter().zip(&plain) {
             assert!((a - b).norm() < 1e-14, "{a} vs {b}");
         }
-        let (t, _) =
-            lfd.column_tangent(s, &q_hat, &Column::Gust { g: &g, dg: &dg }, &d_nodes, &dq0);
+        let [(t, _)] = lfd.column_tangents(
+            s,
+            &q_hat,
+            &Column::Gust { g: &g, dg: [&dg] },
+            [&d_nodes],
+            [&dq0],
+        );
         let at = |h: f64| {
             let op = moved(h);
             let gh = op.euler.harmonic_gust_fluxes(0.7, 0.5, 0.1);
@@ -295,5 +333,48 @@ mod tests {
         };
         let (tp, tm) = (at(h), at(-h));
         assert_central(&t, &tp, &tm, h, "gust");
+        // three directions in one evaluation give each direction's own tangents (the δ parts
+        // never mix): to round-off
+        let scaled = |c: f64| -> (Vec<[f64; 3]>, Vec<f64>, Vec<[C64; 3]>) {
+            (
+                d_nodes.iter().map(|p| [c * p[0], p[1] - c, 0.0]).collect(),
+                dq0.iter().map(|v| v * (1.0 + c)).collect(),
+                dx_hat.iter().map(|p| p.map(|z| z * c)).collect(),
+            )
+        };
+        let dirs = [scaled(1.0), scaled(-0.5), scaled(2.0)];
+        let column: Column<3> = Column::Motion {
+            x_hat: &x_hat,
+            dx_hat: std::array::from_fn(|m| dirs[m].2.as_slice()),
+        };
+        let many = lfd.column_tangents(
+            s,
+            &q_hat,
+            &column,
+            std::array::from_fn(|m| dirs[m].0.as_slice()),
+            std::array::from_fn(|m| dirs[m].1.as_slice()),
+        );
+        for (m, (t3, f3)) in many.iter().enumerate() {
+            let [(t1, f1)] = lfd.column_tangents(
+                s,
+                &q_hat,
+                &Column::Motion {
+                    x_hat: &x_hat,
+                    dx_hat: [&dirs[m].2],
+                },
+                [&dirs[m].0],
+                [&dirs[m].1],
+            );
+            let scale = t1.iter().fold(0.0f64, |a, v| a.max(v.norm()));
+            for (a, b) in t3.iter().zip(&t1) {
+                assert!((a - b).norm() <= 1e-13 * scale, "direction {m}: {a} vs {b}");
+            }
+            for (a, b) in f3.iter().flatten().zip(f1.iter().flatten()) {
+                assert!(
+                    (a - b).norm() <= 1e-13 * scale.max(1.0),
+                    "direction {m}: {a} vs {b}"
+                );
+            }
+        }
     }
 }

@@ -1,24 +1,26 @@
-//! Hyper-dual numbers for exact mixed second derivatives: x = v + Σ a_i ε_i + b δ + Σ ab_i ε_i δ
-//! with ε_i² = δ² = ε_i ε_j = 0. A kernel written over [`Scalar`] and run on them gives, in the
+//! Hyper-dual numbers for exact mixed second derivatives: x = v + Σ a_i ε_i + Σ b_m δ_m +
+//! Σ ab_mi ε_i δ_m with every product of two ε or two δ zero (ε_i ε_j = δ_m δ_n = 0). A kernel written over [`Scalar`] and run on them gives, in the
 //! `ab` parts, the derivative along δ of its directional derivatives along the ε_i, without
 //! truncation error. The LFD's planform sensitivities use them: the ε parts carry the (real and
 //! imaginary) LFD perturbation, δ the planform direction, so `ab` is the planform derivative of
-//! the linearized residual and forces (paper Eq. 19's second-derivative terms).
+//! the linearized residual and forces (paper Eq. 19's second-derivative terms); with M second
+//! directions one evaluation gives the derivatives along M planform variables at once.
 
 use crate::scalar::Scalar;
 use std::ops::{Add, AddAssign, Div, Mul, MulAssign, Neg, Sub, SubAssign};
 
-/// A hyper-dual number with `N` first directions ε and one second direction δ.
+/// A hyper-dual number with `N` first directions ε and `M` second directions δ (`ab[m][i]`:
+/// the ε_i δ_m part).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct HyperDual<const N: usize> {
+pub struct HyperDual<const N: usize, const M: usize = 1> {
     pub v: f64,
     pub a: [f64; N],
-    pub b: f64,
-    pub ab: [f64; N],
+    pub b: [f64; M],
+    pub ab: [[f64; N]; M],
 }
 
-impl<const N: usize> HyperDual<N> {
-    pub fn new(v: f64, a: [f64; N], b: f64, ab: [f64; N]) -> Self {
+impl<const N: usize, const M: usize> HyperDual<N, M> {
+    pub fn new(v: f64, a: [f64; N], b: [f64; M], ab: [[f64; N]; M]) -> Self {
         Self { v, a, b, ab }
     }
 
@@ -28,8 +30,10 @@ impl<const N: usize> HyperDual<N> {
         Self {
             v: f,
             a: self.a.map(|x| f1 * x),
-            b: f1 * self.b,
-            ab: std::array::from_fn(|i| f1 * self.ab[i] + f2 * self.a[i] * self.b),
+            b: self.b.map(|x| f1 * x),
+            ab: std::array::from_fn(|m| {
+                std::array::from_fn(|i| f1 * self.ab[m][i] + f2 * self.a[i] * self.b[m])
+            }),
         }
     }
 
@@ -39,46 +43,51 @@ impl<const N: usize> HyperDual<N> {
     }
 }
 
-impl<const N: usize> PartialOrd for HyperDual<N> {
+impl<const N: usize, const M: usize> PartialOrd for HyperDual<N, M> {
     fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
         self.v.partial_cmp(&other.v)
     }
 }
 
-impl<const N: usize> Add for HyperDual<N> {
+impl<const N: usize, const M: usize> Add for HyperDual<N, M> {
     type Output = Self;
     #[inline]
     fn add(self, o: Self) -> Self {
         Self {
             v: self.v + o.v,
             a: std::array::from_fn(|i| self.a[i] + o.a[i]),
-            b: self.b + o.b,
-            ab: std::array::from_fn(|i| self.ab[i] + o.ab[i]),
+            b: std::array::from_fn(|m| self.b[m] + o.b[m]),
+            ab: std::array::from_fn(|m| std::array::from_fn(|i| self.ab[m][i] + o.ab[m][i])),
         }
     }
 }
-impl<const N: usize> Sub for HyperDual<N> {
+impl<const N: usize, const M: usize> Sub for HyperDual<N, M> {
     type Output = Self;
     #[inline]
     fn sub(self, o: Self) -> Self {
         self + (-o)
     }
 }
-impl<const N: usize> Mul for HyperDual<N> {
+impl<const N: usize, const M: usize> Mul for HyperDual<N, M> {
     type Output = Self;
     #[inline]
     fn mul(self, o: Self) -> Self {
         Self {
             v: self.v * o.v,
             a: std::array::from_fn(|i| self.a[i] * o.v + self.v * o.a[i]),
-            b: self.b * o.v + self.v * o.b,
-            ab: std::array::from_fn(|i| {
-                self.ab[i] * o.v + self.a[i] * o.b + self.b * o.a[i] + self.v * o.ab[i]
+            b: std::array::from_fn(|m| self.b[m] * o.v + self.v * o.b[m]),
+            ab: std::array::from_fn(|m| {
+                std::array::from_fn(|i| {
+                    self.ab[m][i] * o.v
+                        + self.a[i] * o.b[m]
+                        + self.b[m] * o.a[i]
+                        + self.v * o.ab[m][i]
+                })
             }),
         }
     }
 }
-impl<const N: usize> Div for HyperDual<N> {
+impl<const N: usize, const M: usize> Div for HyperDual<N, M> {
     type Output = Self;
     #[inline]
     #[allow(clippy::suspicious_arithmetic_impl)]
@@ -87,37 +96,37 @@ impl<const N: usize> Div for HyperDual<N> {
         self * o.recip()
     }
 }
-impl<const N: usize> Neg for HyperDual<N> {
+impl<const N: usize, const M: usize> Neg for HyperDual<N, M> {
     type Output = Self;
     #[inline]
     fn neg(self) -> Self {
         Self {
             v: -self.v,
             a: self.a.map(|x| -x),
-            b: -self.b,
-            ab: self.ab.map(|x| -x),
+            b: self.b.map(|x| -x),
+            ab: self.ab.map(|r| r.map(|x| -x)),
         }
     }
 }
-impl<const N: usize> AddAssign for HyperDual<N> {
+impl<const N: usize, const M: usize> AddAssign for HyperDual<N, M> {
     #[inline]
     fn add_assign(&mut self, o: Self) {
         *self = *self + o;
     }
 }
-impl<const N: usize> SubAssign for HyperDual<N> {
+impl<const N: usize, const M: usize> SubAssign for HyperDual<N, M> {
     #[inline]
     fn sub_assign(&mut self, o: Self) {
         *self = *self - o;
     }
 }
-impl<const N: usize> MulAssign for HyperDual<N> {
+impl<const N: usize, const M: usize> MulAssign for HyperDual<N, M> {
     #[inline]
     fn mul_assign(&mut self, o: Self) {
         *self = *self * o;
     }
 }
-impl<const N: usize> Add<f64> for HyperDual<N> {
+impl<const N: usize, const M: usize> Add<f64> for HyperDual<N, M> {
     type Output = Self;
     #[inline]
     fn add(mut self, o: f64) -> Self {
@@ -125,7 +134,7 @@ impl<const N: usize> Add<f64> for HyperDual<N> {
         self
     }
 }
-impl<const N: usize> Sub<f64> for HyperDual<N> {
+impl<const N: usize, const M: usize> Sub<f64> for HyperDual<N, M> {
     type Output = Self;
     #[inline]
     fn sub(mut self, o: f64) -> Self {
@@ -133,19 +142,19 @@ impl<const N: usize> Sub<f64> for HyperDual<N> {
         self
     }
 }
-impl<const N: usize> Mul<f64> for HyperDual<N> {
+impl<const N: usize, const M: usize> Mul<f64> for HyperDual<N, M> {
     type Output = Self;
     #[inline]
     fn mul(self, o: f64) -> Self {
         Self {
             v: self.v * o,
             a: self.a.map(|x| x * o),
-            b: self.b * o,
-            ab: self.ab.map(|x| x * o),
+            b: self.b.map(|x| x * o),
+            ab: self.ab.map(|r| r.map(|x| x * o)),
         }
     }
 }
-impl<const N: usize> Div<f64> for HyperDual<N> {
+impl<const N: usize, const M: usize> Div<f64> for HyperDual<N, M> {
     type Output = Self;
     #[inline]
     fn div(self, o: f64) -> Self {
@@ -153,14 +162,14 @@ impl<const N: usize> Div<f64> for HyperDual<N> {
     }
 }
 
-impl<const N: usize> Scalar for HyperDual<N> {
+impl<const N: usize, const M: usize> Scalar for HyperDual<N, M> {
     #[inline]
     fn cst(v: f64) -> Self {
         Self {
             v,
             a: [0.0; N],
-            b: 0.0,
-            ab: [0.0; N],
+            b: [0.0; M],
+            ab: [[0.0; N]; M],
         }
     }
     #[inline]
@@ -245,20 +254,54 @@ mod tests {
         let x0 = [0.7, -1.3];
         let (e, d) = ([0.4, -0.9], [1.1, 0.3]);
         let hd: [HyperDual<1>; 2] =
-            std::array::from_fn(|i| HyperDual::new(x0[i], [e[i]], d[i], [0.0]));
+            std::array::from_fn(|i| HyperDual::new(x0[i], [e[i]], [d[i]], [[0.0]]));
         let y = kernel(&hd);
         let dual_at = |t: f64, dir: [f64; 2]| {
             let x: [Dual<1>; 2] = std::array::from_fn(|i| Dual::new(x0[i] + t * d[i], [dir[i]]));
             kernel(&x).d[0]
         };
         assert!((y.a[0] - dual_at(0.0, e)).abs() < 1e-13);
-        assert!((y.b - dual_at(0.0, d)).abs() < 1e-13);
+        assert!((y.b[0] - dual_at(0.0, d)).abs() < 1e-13);
         let h = 1e-5;
         let fd = (dual_at(h, e) - dual_at(-h, e)) / (2.0 * h);
         assert!(
-            (y.ab[0] - fd).abs() < 1e-8 * fd.abs().max(1.0),
+            (y.ab[0][0] - fd).abs() < 1e-8 * fd.abs().max(1.0),
             "{} vs {fd}",
-            y.ab[0]
+            y.ab[0][0]
         );
+    }
+
+    /// Three second directions at once give, part by part, the three one-direction numbers
+    /// (the same operations on each δ, no cross terms) to round-off.
+    #[test]
+    fn several_second_directions_are_independent() {
+        let x0 = [0.7, -1.3];
+        let e = [[0.4, -0.9], [0.2, 0.5]];
+        let d = [[1.1, 0.3], [-0.6, 0.8], [0.0, 2.0]];
+        let ab0 = [
+            [[0.1, 0.0], [0.0, -0.2]],
+            [[0.3, 0.1], [0.0, 0.0]],
+            [[0.0, 0.0], [0.05, 0.0]],
+        ];
+        let many: [HyperDual<2, 3>; 2] = std::array::from_fn(|k| {
+            HyperDual::new(
+                x0[k],
+                [e[0][k], e[1][k]],
+                std::array::from_fn(|m| d[m][k]),
+                std::array::from_fn(|m| ab0[m][k]),
+            )
+        });
+        let y = kernel(&many);
+        for m in 0..3 {
+            let one: [HyperDual<2>; 2] = std::array::from_fn(|k| {
+                HyperDual::new(x0[k], [e[0][k], e[1][k]], [d[m][k]], [ab0[m][k]])
+            });
+            let z = kernel(&one);
+            assert_eq!((y.v, y.a), (z.v, z.a));
+            assert!((y.b[m] - z.b[0]).abs() <= 1e-15 * z.b[0].abs().max(1.0));
+            for i in 0..2 {
+                assert!((y.ab[m][i] - z.ab[0][i]).abs() <= 1e-14 * z.ab[0][i].abs().max(1.0));
+            }
+        }
     }
 }
