@@ -71,6 +71,7 @@ impl<const N: usize, const M: usize> Sub for HyperDual<N, M> {
 impl<const N: usize, const M: usize> Mul for HyperDual<N, M> {
     type Output = Self;
     #[inline]
+    #[allow(clippy::suspicious_arithmetic_impl)] // the product rule sums its parts
     fn mul(self, o: Self) -> Self {
         Self {
             v: self.v * o.v,
