@@ -294,7 +294,9 @@ impl WingBuilder for LfdWingSpec {
         self.validate(wing)?;
         let cells = self.mesh_spec().n_cells();
         let gb = self.memory_estimate_gb()
-            + gustkit_cfd::adjoint::LfdReverse::estimate_bytes(cells) as f64 / 1e9;
+            + gustkit_cfd::adjoint::LfdReverse::estimate_bytes(cells, rayon::current_num_threads())
+                as f64
+                / 1e9;
         if self.mesh_file.is_none() && !(gb <= self.memory_limit_gb) {
             return Err(BuildError {
                 path: if self.mesh_sizes.is_some() {
