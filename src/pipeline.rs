@@ -83,18 +83,20 @@ pub(crate) fn tables(
     aero: &AeroModel,
     settings: Option<&GustSettings>,
 ) -> Result<(GafTable, Option<Residual>)> {
-    let Some(settings) = settings.filter(|s| s.mode_acceleration) else {
-        let table = aero
-            .gafs(plate, modes)
-            .map_err(|e| anyhow::Error::new(e).context("aerodynamics"))?;
-        return Ok((table, None));
-    };
-    let shapes = residual_shapes(plate, modes, &output_samplers(plate, settings));
-    let all = aero
-        .gafs_of_shapes(plate, &with_residual(modes, &shapes))
-        .map_err(|e| anyhow::Error::new(e).context("aerodynamics"))?;
-    let (table, gafs) = ResidualGafs::split(&all, modes.len());
-    Ok((table, Some(Residual { shapes, gafs })))
+    tables_in_groups(
+        plate,
+        modes,
+        aero,
+        settings,
+        aero.k.len(),
+        None,
+        &mut |_| Ok(()),
+    )
+}
+
+/// Whether two reduced frequencies are the same row (to round-off of their JSON round trip).
+fn same_k(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-12 * b.abs().max(1.0)
 }
 
 /// How many shapes [`tables`] gives GAFs of: the modes and, with mode acceleration, the
@@ -135,12 +137,7 @@ pub(crate) fn tables_in_groups(
         .k
         .iter()
         .copied()
-        .filter(|k| {
-            !rows
-                .k
-                .iter()
-                .any(|d| (d - k).abs() <= 1e-12 * k.abs().max(1.0))
-        })
+        .filter(|k| !rows.k.iter().any(|&d| same_k(d, *k)))
         .collect();
     for ks in todo.chunks(group.max(1)) {
         let part = aero
@@ -158,7 +155,7 @@ pub(crate) fn tables_in_groups(
         let j = rows
             .k
             .iter()
-            .position(|d| (d - k).abs() <= 1e-12 * k.abs().max(1.0))
+            .position(|&d| same_k(d, *k))
             .expect("every k computed or done");
         all.q_ss[i] = rows.q_ss[j].clone();
         all.q_gs[i] = rows.q_gs[j].clone();
