@@ -122,7 +122,7 @@ fn lfd_gradients_match_differences() {
 
 /// Bad LFD settings are named by their JSON path: a mesh whose memory estimate exceeds the
 /// limit (refused before anything is allocated), odd point counts, an unknown level or
-/// preconditioner.
+/// preconditioner, a warm start of no designs or of more than it may keep.
 #[test]
 fn lfd_settings_are_checked_at_load() {
     let mut v = flagship();
@@ -153,6 +153,11 @@ fn lfd_settings_are_checked_at_load() {
     assert_eq!(e.path, "aero.fidelity.lfd.ilu_ordering", "{e}");
     let e = with(serde_json::json!({"lfd": {"steady_max_iterations": 0}}));
     assert_eq!(e.path, "aero.fidelity.lfd.steady_max_iterations", "{e}");
+    for designs in [0, 9] {
+        let e = with(serde_json::json!({"lfd": {"warm_start_designs": designs}}));
+        assert_eq!(e.path, "aero.fidelity.lfd.warm_start_designs", "{e}");
+        assert!(e.reason.contains("1 to 8"), "{e}");
+    }
 }
 
 /// A steady solve that runs out of Newton iterations is a clear error naming the key that

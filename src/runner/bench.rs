@@ -207,6 +207,15 @@ pub fn bench(study: &Study, repeat: Option<usize>, optimization: bool) -> Result
             "  the same, adjoint GMRES from the previous design's adjoint solutions              {:>9.2} s, {} iterations",
             w.gradient_warm_s, w.gradient_warm_iterations
         );
+        let l = bench_lfd_line_search(&study)?;
+        println!(
+            "  a line search's backtrack (x0, x0 + p, x0 + p/2; p: thicknesses × 1.01, planform × 1.002), GMRES from the last design's solutions {:>9.2} s, {} iterations ({:.1} a right-hand side)",
+            l.one_design_s, l.one_design_iterations, l.one_design_iterations as f64 / l.rhs as f64
+        );
+        println!(
+            "  the same, GMRES from the combination of the last {} designs' solutions          {:>9.2} s, {} iterations ({:.1} a right-hand side)",
+            l.designs, l.several_designs_s, l.several_designs_iterations, l.several_designs_iterations as f64 / l.rhs as f64
+        );
         return Ok(());
     }
     if study.spec.gust.is_some() {
@@ -454,6 +463,80 @@ pub fn bench_lfd_warm_start(study: &Study) -> Result<WarmStartTimings> {
         gradient_cold_iterations,
         gradient_warm_s,
         gradient_warm_iterations,
+    })
+}
+
+/// A line search's backtrack on the LFD study with the planform moving: the function at the
+/// initial design x₀, at the trial point x₀ + p (every thickness × 1.01, every planform
+/// parameter × 1.002) and at the backtracked x₀ + p/2, in a fresh run folder whose GMRES
+/// starts from the last design's solutions alone, then from the combination of the last
+/// `designs` (the study's `warm_start_designs`): the backtrack's GMRES iterations and time.
+#[derive(Debug, Serialize)]
+pub struct LineSearchTimings {
+    pub rhs: usize,
+    pub designs: usize,
+    pub one_design_s: f64,
+    pub one_design_iterations: usize,
+    pub several_designs_s: f64,
+    pub several_designs_iterations: usize,
+}
+
+/// See [`LineSearchTimings`].
+pub fn bench_lfd_line_search(study: &Study) -> Result<LineSearchTimings> {
+    let settings = study.gust_settings()?;
+    let x0 = study.initial_design()?.to_vec();
+    let n_t = x0.len() - crate::wing::N_PLANFORM;
+    let step = |t: f64| -> Vec<f64> {
+        x0.iter()
+            .enumerate()
+            .map(|(i, v)| v * (1.0 + t * if i < n_t { 0.01 } else { 0.002 }))
+            .collect()
+    };
+    let designs = match study.spec.aero.as_ref().map(|a| &a.fidelity) {
+        Some(crate::aero::FidelitySpec::Lfd(l)) => l.warm_start_designs,
+        _ => anyhow::bail!("the line-search bench needs an LFD study"),
+    };
+    let run = |kept: usize| -> Result<(f64, usize)> {
+        let dir =
+            std::env::temp_dir().join(format!("gustkit-bench-line-{kept}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir)?;
+        let mut s = study.clone();
+        s.cache_dir = Some(dir.clone());
+        if let Some(crate::aero::FidelitySpec::Lfd(l)) =
+            s.spec.aero.as_mut().map(|a| &mut a.fidelity)
+        {
+            l.warm_start_designs = kept;
+        }
+        let case = s.resolve()?;
+        crate::pipeline::evaluate(&case, &settings, &x0)?;
+        crate::pipeline::evaluate(&case, &settings, &step(1.0))?;
+        let t = Instant::now();
+        crate::pipeline::evaluate(&case, &settings, &step(0.5))?;
+        let elapsed = t.elapsed().as_secs_f64();
+        let iterations = {
+            let w = crate::aero::lfd::warm_start_store(&dir);
+            let w = w.lock().unwrap_or_else(|e| e.into_inner());
+            w.last_iterations
+        };
+        crate::aero::lfd::clear_warm_start(&dir);
+        let _ = std::fs::remove_dir_all(&dir);
+        Ok((elapsed, iterations))
+    };
+    let (one_design_s, one_design_iterations) = run(1)?;
+    let (several_designs_s, several_designs_iterations) = run(designs)?;
+    let n_k = study
+        .spec
+        .aero
+        .as_ref()
+        .map_or(0, |a| a.reduced_frequencies.len());
+    Ok(LineSearchTimings {
+        rhs: n_k * (settings_modes(study)? + 1),
+        designs,
+        one_design_s,
+        one_design_iterations,
+        several_designs_s,
+        several_designs_iterations,
     })
 }
 

@@ -146,14 +146,14 @@ impl LfdReverse {
         self.solve_transpose_from(lfd, f, rhs, &[])
     }
 
-    /// [`LfdReverse::solve_transpose`] from initial guesses, each scaled by the complex factor
-    /// that minimizes its residual (see [`LfdOperator::solve_from`]).
+    /// [`LfdReverse::solve_transpose`] from initial guesses, combined to minimize the residual
+    /// (see [`LfdOperator::solve_from`]).
     pub fn solve_transpose_from(
         &self,
         lfd: &LfdOperator,
         f: &Factored,
         rhs: &[Field],
-        guesses: &[Option<&Field>],
+        guesses: &[Vec<crate::lfd::Guess>],
     ) -> Result<Vec<(Field, GmresInfo)>, LfdError> {
         let prec = |v: &[C64]| lfd.precondition_transpose(f, v);
         let op = |v: &[C64]| lfd.apply_transpose(f.s, v);

@@ -14,7 +14,7 @@
 use crate::adjoint::LfdReverse;
 use crate::deform::Deformation;
 use crate::gas::primitive;
-use crate::lfd::{Factored, HarmonicGust, LfdError, LfdOperator, Symbol};
+use crate::lfd::{Factored, Guess, HarmonicGust, LfdError, LfdOperator, Symbol};
 use crate::mesh::{Boundary, Side};
 use crate::mesh_sensitivity::{Column, MeshTangent};
 use crate::wing_mesh::SectionCell;
@@ -54,35 +54,66 @@ pub struct Lfd {
     pub warm_start: Option<std::sync::Arc<std::sync::Mutex<WarmStart>>>,
 }
 
-/// The LFD solutions of a GAF table, per reduced frequency and column (the modes, then the
-/// gust), kept as GMRES initial guesses for the next table on a mesh of the same size:
-/// consecutive designs of an optimization differ little. Single precision (a guess needs no
-/// more): 40 bytes a cell per (k, column), 5.3 kB a cell for 11 k and 12 columns. A store of
-/// another size (another mesh) is not used, and is replaced.
-#[derive(Debug, Default)]
+/// The solutions of one design's GAF table (or reverse sweep), single precision: per reduced
+/// frequency, one per column.
+type KeptDesign = Vec<(f64, Vec<Vec<num_complex::Complex32>>)>;
+
+/// How many designs' solutions a [`WarmStart`] keeps by default: the last three span a line
+/// search's trial points and the step before (see [`crate::lfd::combined_guess`]).
+pub const DEFAULT_WARM_DESIGNS: usize = 3;
+
+/// The LFD solutions of the last few GAF tables, per reduced frequency and column (the modes,
+/// then the gust), kept as GMRES initial guesses for the next table on a mesh of the same size:
+/// consecutive designs of an optimization differ little, and the combination of the last few
+/// solutions that minimizes the residual follows a design that moves along a line. Single
+/// precision (a guess needs no more): 40 bytes a cell per (design, k, column), 5.3 kB a cell a
+/// design for 11 k and 12 columns. A store of another size (another mesh) is not used, and is
+/// replaced.
+#[derive(Debug)]
 pub struct WarmStart {
     /// Length of each solution (cells × 5).
     n: usize,
-    /// (k, the solutions of its columns).
-    tables: Vec<(f64, Vec<Vec<num_complex::Complex32>>)>,
-    /// (k, the adjoint solutions of the last reverse sweep: one per mode, of its generalized
-    /// force).
-    adjoints: Vec<(f64, Vec<Vec<num_complex::Complex32>>)>,
+    /// The last designs' tables, newest first.
+    tables: Vec<KeptDesign>,
+    /// The last reverse sweeps' adjoint solutions (one per mode, of its generalized force),
+    /// newest first.
+    adjoints: Vec<KeptDesign>,
+    /// How many designs to keep (at least one).
+    pub designs: usize,
     /// GMRES iterations of the last table.
     pub last_iterations: usize,
     /// GMRES iterations of the last reverse sweep's adjoint solves.
     pub last_adjoint_iterations: usize,
 }
 
+impl Default for WarmStart {
+    fn default() -> Self {
+        Self {
+            n: 0,
+            tables: Vec::new(),
+            adjoints: Vec::new(),
+            designs: DEFAULT_WARM_DESIGNS,
+            last_iterations: 0,
+            last_adjoint_iterations: 0,
+        }
+    }
+}
+
 impl WarmStart {
-    /// The guesses for reduced frequency `k` (none where this store holds another mesh's).
-    fn guesses(&self, k: f64, n: usize) -> Option<Vec<Vec<C64>>> {
+    /// The guesses for reduced frequency `k`, per column the kept designs' solutions (none where
+    /// this store holds another mesh's).
+    fn guesses(&self, k: f64, n: usize) -> Vec<Vec<Guess<'_>>> {
         Self::find(&self.tables, self.n, k, n)
     }
 
-    /// The adjoint guesses for reduced frequency `k`.
-    fn adjoint_guesses(&self, k: f64, n: usize) -> Option<Vec<Vec<C64>>> {
+    /// The adjoint guesses for reduced frequency `k`, per mode.
+    fn adjoint_guesses(&self, k: f64, n: usize) -> Vec<Vec<Guess<'_>>> {
         Self::find(&self.adjoints, self.n, k, n)
+    }
+
+    /// The designs kept (tables, reverse sweeps).
+    pub fn kept_designs(&self) -> (usize, usize) {
+        (self.tables.len(), self.adjoints.len())
     }
 
     /// One frequency's solutions in single precision, and their GMRES iterations.
@@ -101,49 +132,46 @@ impl WarmStart {
 
     /// Keeps the solutions of a table (`adjoint`: of a reverse sweep) per reduced frequency, in
     /// single precision ([`WarmStart::single`]), for a mesh of `n` unknowns (another mesh's are
-    /// dropped), with their GMRES iterations.
-    fn keep(
-        &mut self,
-        n: usize,
-        kept: Vec<(f64, Vec<Vec<num_complex::Complex32>>)>,
-        iterations: usize,
-        adjoint: bool,
-    ) {
+    /// dropped), as the newest of the last [`WarmStart::designs`], with their GMRES iterations.
+    fn keep(&mut self, n: usize, kept: KeptDesign, iterations: usize, adjoint: bool) {
         if self.n != n {
             self.tables.clear();
             self.adjoints.clear();
         }
         self.n = n;
-        if adjoint {
-            self.adjoints = kept;
+        let designs = self.designs.max(1);
+        let list = if adjoint {
             self.last_adjoint_iterations = iterations;
+            &mut self.adjoints
         } else {
-            self.tables = kept;
             self.last_iterations = iterations;
-        }
+            &mut self.tables
+        };
+        list.truncate(designs - 1);
+        list.insert(0, kept);
     }
 
-    fn find(
-        tables: &[(f64, Vec<Vec<num_complex::Complex32>>)],
-        stored_n: usize,
-        k: f64,
-        n: usize,
-    ) -> Option<Vec<Vec<C64>>> {
+    /// Per column, the solutions at reduced frequency `k` of the kept designs, newest first.
+    fn find(designs: &[KeptDesign], stored_n: usize, k: f64, n: usize) -> Vec<Vec<Guess<'_>>> {
+        let mut columns: Vec<Vec<Guess>> = Vec::new();
         if stored_n != n {
-            return None;
+            return columns;
         }
-        tables
-            .iter()
-            .find(|(kk, _)| (kk - k).abs() <= 1e-12 * k.abs().max(1.0))
-            .map(|(_, s)| {
-                s.iter()
-                    .map(|x| {
-                        x.iter()
-                            .map(|v| C64::new(v.re as f64, v.im as f64))
-                            .collect()
-                    })
-                    .collect()
-            })
+        for design in designs {
+            let Some((_, solutions)) = design
+                .iter()
+                .find(|(kk, _)| (kk - k).abs() <= 1e-12 * k.abs().max(1.0))
+            else {
+                continue;
+            };
+            if columns.len() < solutions.len() {
+                columns.resize_with(solutions.len(), Vec::new);
+            }
+            for (c, x) in columns.iter_mut().zip(solutions) {
+                c.push(x.as_slice());
+            }
+        }
+        columns
     }
 }
 
@@ -344,16 +372,17 @@ impl Lfd {
         kk: f64,
         x_hat: &[NodeField],
     ) -> Result<(Factored, Vec<Solution>), AeroError> {
-        self.forward_from(flight, kk, x_hat, None)
+        self.forward_from(flight, kk, x_hat, &[])
     }
 
-    /// [`Lfd::forward`] with GMRES initial guesses per column (`guesses[j]`, where given).
+    /// [`Lfd::forward`] with GMRES initial guesses per column (`guesses[j]`: none, or previous
+    /// designs' solutions).
     fn forward_from(
         &self,
         flight: &FlightCondition,
         kk: f64,
         x_hat: &[NodeField],
-        guesses: Option<&Vec<Vec<C64>>>,
+        guesses: &[Vec<Guess>],
     ) -> Result<(Factored, Vec<Solution>), AeroError> {
         let (l, m) = (self.length_m, self.mach);
         // the unit gust w_g/U = 1 is a vertical velocity M in units of a∞
@@ -374,12 +403,9 @@ impl Lfd {
                 .map(|v| v * m)
                 .collect(),
         );
-        let start: Vec<Option<&Vec<C64>>> = (0..rhs.len())
-            .map(|j| guesses.and_then(|g| g.get(j)))
-            .collect();
         let sol = self
             .lfd
-            .solve_from(&f, &rhs, &start)
+            .solve_from(&f, &rhs, guesses)
             .map_err(|e| solver_error(e, kk, x_hat.len()))?;
         Ok((f, sol))
     }
@@ -530,8 +556,8 @@ impl Aerodynamics for Lfd {
             let part: Result<Vec<Vec<Solution>>, AeroError> = round
                 .par_iter()
                 .map(|&kk| {
-                    let guesses = warm.as_ref().and_then(|w| w.guesses(kk, n));
-                    Ok(self.forward_from(flight, kk, &x_hat, guesses.as_ref())?.1)
+                    let guesses = warm.as_ref().map(|w| w.guesses(kk, n)).unwrap_or_default();
+                    Ok(self.forward_from(flight, kk, &x_hat, &guesses)?.1)
                 })
                 .collect();
             solved.extend(part?);
@@ -745,8 +771,11 @@ impl AerodynamicsReverse for Lfd {
                             (f, &fresh)
                         }
                     };
-                    let guesses = warm.as_ref().and_then(|w| w.adjoint_guesses(kk, n));
-                    sweep.at_frequency(ik, kk, &f, sol, seeds, guesses.as_ref())
+                    let guesses = warm
+                        .as_ref()
+                        .map(|w| w.adjoint_guesses(kk, n))
+                        .unwrap_or_default();
+                    sweep.at_frequency(ik, kk, &f, sol, seeds, &guesses)
                 })
                 .collect();
             match swept {
@@ -865,7 +894,7 @@ impl SeedSweep<'_> {
         f: &Factored,
         sol: &[Solution],
         seeds: &[GafTable],
-        guesses: Option<&Vec<Vec<C64>>>,
+        guesses: &[Vec<Guess>],
     ) -> Result<(PerFrequency, Vec<Solution>), AeroError> {
         let nm = self.nm;
         let lfd = &self.model.lfd;
@@ -887,11 +916,9 @@ impl SeedSweep<'_> {
             .iter()
             .map(|u| self.rev.wall_forces_transpose(u))
             .unzip();
-        let start: Vec<Option<&Vec<C64>>> =
-            (0..nm).map(|i| guesses.and_then(|g| g.get(i))).collect();
         let mu = self
             .rev
-            .solve_transpose_from(lfd, f, &adjoint_rhs, &start)
+            .solve_transpose_from(lfd, f, &adjoint_rhs, guesses)
             .map_err(|e| adjoint_error(e, kk, nm))?;
         drop(adjoint_rhs);
         let coefficients: Vec<Coefficients> = seeds
@@ -1275,6 +1302,75 @@ mod tests {
         Lfd::new(lfd, 1.0, 1.0, radius)
     }
 
+    /// The lifting test section with the block ILU(0) preconditioner of large meshes (the exact
+    /// LU needs one or two GMRES iterations from any start) and GMRES to 1e-10.
+    fn ilu_section() -> Lfd {
+        let mut e = Euler::new(lifting_mesh(), free_stream(0.5, 2f64.to_radians()));
+        e.order = Order::Second;
+        let (q0, _) = e
+            .solve_steady(vec![e.q_inf; e.mesh.n_cells], &SteadyParams::default())
+            .unwrap();
+        let mut lfd = LfdOperator::with_preconditioner(e, q0, crate::lfd::Preconditioner::BlockIlu);
+        lfd.params.tolerance = 1e-10;
+        Lfd::new(lfd, 1.0, 1.0, 10.0)
+    }
+
+    /// Three designs on a line (plunge × 1, 1.01, 1.02; pitch axis at 0, 2 and 4 % of the chord:
+    /// the right-hand sides, and so the solutions, are linear along it, as a line search's trial
+    /// points are to first order): keeping the last two designs, the third table starts from
+    /// the combination of their solutions and needs fewer GMRES iterations than from the
+    /// second's alone, for the same table (1e-8 of its largest entry, GMRES to 1e-10); the store
+    /// keeps no more designs than it is told.
+    #[test]
+    fn several_kept_designs_follow_a_design_moving_on_a_line() {
+        let flight = subsonic_test_flight();
+        let ks = [0.0, 0.4, 1.5];
+        let mut aero = ilu_section();
+        let pts = aero.surface().points.clone();
+        let design = |t: f64| {
+            let mut m = rigid_modes(&aero);
+            for (i, p) in pts.iter().enumerate() {
+                m.disp[0][i] = [0.0, 0.0, 1.0 + 0.01 * t];
+                m.disp[1][i] = [p[2], 0.0, -(p[0] - 0.02 * t)];
+            }
+            m
+        };
+        let (first, second, third) = (design(0.0), design(1.0), design(2.0));
+        let mut runs = Vec::new();
+        for kept in [1, 2] {
+            let store = std::sync::Arc::new(std::sync::Mutex::new(WarmStart {
+                designs: kept,
+                ..Default::default()
+            }));
+            aero.warm_start = Some(store.clone());
+            aero.gafs(&flight, &first, &ks).unwrap();
+            aero.gafs(&flight, &second, &ks).unwrap();
+            let table = aero.gafs(&flight, &third, &ks).unwrap();
+            let s = store.lock().unwrap();
+            assert_eq!(s.kept_designs().0, kept);
+            runs.push((table, s.last_iterations));
+        }
+        let ((one, it_one), (two, it_two)) = (&runs[0], &runs[1]);
+        let mut big = 0.0f64;
+        let mut d = 0.0f64;
+        for i in 0..ks.len() {
+            for r in 0..2 {
+                for c in 0..2 {
+                    big = big.max(one.q_ss[i][r][c].norm());
+                    d = d.max((two.q_ss[i][r][c] - one.q_ss[i][r][c]).norm());
+                }
+                big = big.max(one.q_gs[i][r].norm());
+                d = d.max((two.q_gs[i][r] - one.q_gs[i][r]).norm());
+            }
+        }
+        eprintln!(
+            "third design's GMRES iterations: from the second design {it_one}, from the last two {it_two}; tables differ by {:.1e}",
+            d / big
+        );
+        assert!(d < 1e-8 * big);
+        assert!(it_two < it_one, "{it_one} {it_two}");
+    }
+
     /// GMRES started from the previous table's solutions (a shared [`WarmStart`]), with the
     /// block ILU(0) preconditioner of large meshes (the exact LU needs one or two iterations
     /// from any start): the table of a "next design" (plunge scaled by 1.01, pitch axis moved 2 %
@@ -1286,17 +1382,7 @@ mod tests {
     fn warm_started_tables_give_the_cold_answer_in_fewer_iterations() {
         let flight = subsonic_test_flight();
         let ks = [0.0, 0.4, 1.5];
-        let mut aero = {
-            let mut e = Euler::new(lifting_mesh(), free_stream(0.5, 2f64.to_radians()));
-            e.order = Order::Second;
-            let (q0, _) = e
-                .solve_steady(vec![e.q_inf; e.mesh.n_cells], &SteadyParams::default())
-                .unwrap();
-            let mut lfd =
-                LfdOperator::with_preconditioner(e, q0, crate::lfd::Preconditioner::BlockIlu);
-            lfd.params.tolerance = 1e-10;
-            Lfd::new(lfd, 1.0, 1.0, 10.0)
-        };
+        let mut aero = ilu_section();
         let first = rigid_modes(&aero);
         let mut next = first.clone();
         let pts = aero.surface().points.clone();
@@ -1403,10 +1489,10 @@ mod tests {
         // a store of another mesh is not used (and is replaced)
         let other = store();
         other.lock().unwrap().n = 7;
-        other.lock().unwrap().tables = ks
+        other.lock().unwrap().tables = vec![ks
             .iter()
             .map(|&k| (k, vec![vec![num_complex::Complex32::new(1.0, 0.0); 7]; 3]))
-            .collect();
+            .collect()];
         aero.warm_start = Some(other.clone());
         let fresh = aero.gafs(&flight, &next, &ks).unwrap();
         assert_eq!(iterations(&other), cold_it);

@@ -85,7 +85,25 @@ pub struct LfdWingSpec {
     /// and imaginary parts).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub amplitude_fields_k: Option<f64>,
+    /// In a run (an optimization's designs), the GMRES solves of a design start from the
+    /// combination of the LFD solutions of this many previous designs that minimizes the
+    /// residual (1: the last design's alone); each costs 40 bytes a cell per reduced frequency
+    /// and column, forward and adjoint.
+    #[serde(default = "default_warm_start_designs")]
+    pub warm_start_designs: usize,
 }
+
+fn default_warm_start_designs() -> usize {
+    gustkit_cfd::lfd_model::DEFAULT_WARM_DESIGNS
+}
+
+/// The most designs [`LfdWingSpec::warm_start_designs`] may keep (more span little more).
+const MAX_WARM_DESIGNS: usize = 8;
+
+/// Bytes a cell of one design in the GMRES warm-start store of a run, forward and adjoint
+/// solutions in single precision (40 B a cell each) for the flagship's table: 11 reduced
+/// frequencies, 11 modes and the gust (12 forward columns, 11 adjoints).
+const WARM_DESIGN_BYTES_PER_CELL: f64 = 40.0 * 11.0 * (12.0 + 11.0);
 
 fn default_gmres_tolerance() -> f64 {
     1e-8
@@ -256,6 +274,15 @@ impl WingBuilder for LfdWingSpec {
         self.params()
             .validate()
             .map_err(|r| fail("gmres_tolerance", r))?;
+        if !(1..=MAX_WARM_DESIGNS).contains(&self.warm_start_designs) {
+            return Err(fail(
+                "warm_start_designs",
+                format!(
+                    "must be 1 to {MAX_WARM_DESIGNS} previous designs (got {})",
+                    self.warm_start_designs
+                ),
+            ));
+        }
         if self.steady_max_iterations == 0 {
             return Err(fail(
                 "steady_max_iterations",
@@ -294,8 +321,9 @@ impl WingBuilder for LfdWingSpec {
         self.validate(wing)?;
         let cells = self.mesh_spec().n_cells();
         let gb = self.memory_estimate_gb()
-            + gustkit_cfd::adjoint::LfdReverse::estimate_bytes(cells, rayon::current_num_threads())
+            + (gustkit_cfd::adjoint::LfdReverse::estimate_bytes(cells, rayon::current_num_threads())
                 as f64
+                + self.warm_start_designs as f64 * WARM_DESIGN_BYTES_PER_CELL * cells as f64)
                 / 1e9;
         if self.mesh_file.is_none() && !(gb <= self.memory_limit_gb) {
             return Err(BuildError {
@@ -305,8 +333,9 @@ impl WingBuilder for LfdWingSpec {
                     "mesh".into()
                 },
                 reason: format!(
-                    "gradients on the {} mesh ({cells} cells) need about {gb:.1} GB with the reverse mode's Jacobians, above memory_limit_gb = {}: choose a coarser mesh or raise the limit",
+                    "gradients on the {} mesh ({cells} cells) need about {gb:.1} GB with the reverse mode's Jacobians and the warm start's {} designs, above memory_limit_gb = {}: choose a coarser mesh, fewer warm_start_designs or raise the limit",
                     if self.mesh_sizes.is_some() { "given" } else { self.mesh.name() },
+                    self.warm_start_designs,
                     self.memory_limit_gb
                 ),
             });
@@ -417,6 +446,9 @@ impl WingBuilder for LfdWingSpec {
         // the designs of one run (one run folder) start their GMRES from the previous design's
         // solutions
         model.warm_start = wing.cache_dir.map(steady_cache::warm_start_store);
+        if let Some(w) = &model.warm_start {
+            w.lock().unwrap_or_else(|e| e.into_inner()).designs = self.warm_start_designs;
+        }
         let Some(mesh) = built_in else {
             // an external mesh: its wall nodes placed on the planform, or why they do not fit
             let unit = self
