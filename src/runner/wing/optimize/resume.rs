@@ -26,8 +26,9 @@ pub(crate) fn fnv(text: &str) -> u64 {
 }
 
 /// The part of a study that defines its optimization problem: everything but what only labels
-/// the run (description, reference), decides when it stops (max_iterations, tolerance) or belongs
-/// to other analyses (the flutter sweep, the sweep section). A checkpoint resumes only when this
+/// the run (description, reference), decides when it stops (max_iterations, tolerance), belongs
+/// to other analyses (the flutter sweep, the sweep section) or only starts the LFD's GMRES
+/// (`warm_start_designs`). A checkpoint resumes only when this
 /// is unchanged.
 pub(super) fn defining_spec(study: &Study) -> Result<serde_json::Value> {
     let mut v = serde_json::to_value(&study.spec)?;
@@ -35,9 +36,17 @@ pub(super) fn defining_spec(study: &Study) -> Result<serde_json::Value> {
         for key in ["description", "flutter", "sweep"] {
             m.remove(key);
         }
-        // the second fidelity only analyses the designs the optimization reaches
+        // the second fidelity only analyses the designs the optimization reaches; the LFD's
+        // warm start chooses where its GMRES starts, not what it converges to
         if let Some(a) = m.get_mut("aero").and_then(|a| a.as_object_mut()) {
             a.remove("compare_with");
+            if let Some(l) = a
+                .get_mut("fidelity")
+                .and_then(|f| f.get_mut("lfd"))
+                .and_then(|l| l.as_object_mut())
+            {
+                l.remove("warm_start_designs");
+            }
         }
         if let Some(o) = m.get_mut("optimization").and_then(|o| o.as_object_mut()) {
             for key in [
@@ -155,7 +164,7 @@ pub(super) fn open_checkpoint(
                 None => "the checkpoint belongs to another problem".to_string(),
             };
             anyhow::bail!(
-                "{}: --resume: {what}; only the description, the reference, max_iterations, tolerance, aero.compare_with, the flutter sweep and the sweep section may change between a run and its resumption. Run without --resume to start over",
+                "{}: --resume: {what}; only the description, the reference, max_iterations, tolerance, aero.compare_with, aero.fidelity.lfd.warm_start_designs, the flutter sweep and the sweep section may change between a run and its resumption. Run without --resume to start over",
                 study.file.display()
             );
         }
@@ -173,4 +182,27 @@ pub(super) fn open_checkpoint(
         None
     };
     Ok((problem_id, checkpoint))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The LFD study's problem is the same whatever warm start its GMRES takes (a run resumes
+    /// with another `warm_start_designs`), and another whenever what it converges to changes
+    /// (the GMRES tolerance, say).
+    #[test]
+    fn the_warm_start_does_not_define_the_problem() {
+        let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_lfd_analysis.json");
+        let text = std::fs::read_to_string(&file).unwrap();
+        let with = |lfd: serde_json::Value| {
+            let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+            v["aero"]["fidelity"] = serde_json::json!({ "lfd": lfd });
+            let study = Study::from_str(&file, &v.to_string()).unwrap();
+            defining_spec(&study).unwrap()
+        };
+        let plain = with(serde_json::json!({}));
+        assert_eq!(plain, with(serde_json::json!({"warm_start_designs": 1})));
+        assert_ne!(plain, with(serde_json::json!({"gmres_tolerance": 1e-9})));
+    }
 }
