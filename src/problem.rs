@@ -161,6 +161,10 @@ pub struct DesignProblem<'a> {
     /// Wall time of every function (values) and gradient evaluated, s.
     pub function_times: Vec<f64>,
     pub gradient_times: Vec<f64>,
+    /// An LFD model's GMRES iterations a right-hand side in every function's GAF table and in
+    /// every gradient's adjoint solves (empty for other fidelities).
+    pub function_gmres: Vec<f64>,
+    pub gradient_gmres: Vec<f64>,
 }
 
 impl<'a> DesignProblem<'a> {
@@ -174,6 +178,16 @@ impl<'a> DesignProblem<'a> {
             peak_values: Vec::new(),
             function_times: Vec::new(),
             gradient_times: Vec::new(),
+            function_gmres: Vec::new(),
+            gradient_gmres: Vec::new(),
+        }
+    }
+
+    /// The LFD warm-start store's last GMRES iterations a right-hand side (table, adjoints).
+    fn gmres_per_rhs(&self) -> (Option<f64>, Option<f64>) {
+        match &self.case.cache_dir {
+            Some(dir) => crate::aero::lfd::warm_start_iterations(dir),
+            None => (None, None),
         }
     }
 
@@ -190,6 +204,10 @@ struct Records {
     damping_peaks: Vec<(Vec<f64>, f64)>,
     function_times: Vec<f64>,
     gradient_times: Vec<f64>,
+    #[serde(default)]
+    function_gmres: Vec<f64>,
+    #[serde(default)]
+    gradient_gmres: Vec<f64>,
 }
 
 impl Problem for DesignProblem<'_> {
@@ -201,6 +219,8 @@ impl Problem for DesignProblem<'_> {
             damping_peaks: self.damping_peaks.clone(),
             function_times: self.function_times.clone(),
             gradient_times: self.gradient_times.clone(),
+            function_gmres: self.function_gmres.clone(),
+            gradient_gmres: self.gradient_gmres.clone(),
         })
         .unwrap_or(serde_json::Value::Null)
     }
@@ -214,6 +234,8 @@ impl Problem for DesignProblem<'_> {
         self.damping_peaks.splice(0..0, r.damping_peaks);
         self.function_times.splice(0..0, r.function_times);
         self.gradient_times.splice(0..0, r.gradient_times);
+        self.function_gmres.splice(0..0, r.function_gmres);
+        self.gradient_gmres.splice(0..0, r.gradient_gmres);
         Ok(())
     }
     fn upper(&self) -> Vec<f64> {
@@ -254,6 +276,9 @@ impl Problem for DesignProblem<'_> {
         };
         self.last = Some((ev, flutter, floor_modes, peak));
         self.function_times.push(t0.elapsed().as_secs_f64());
+        if let (Some(per_rhs), _) = self.gmres_per_rhs() {
+            self.function_gmres.push(per_rhs);
+        }
         Ok(v)
     }
     fn gradients(&mut self, x: &[f64]) -> Result<Gradients, EvalError> {
@@ -308,6 +333,9 @@ impl Problem for DesignProblem<'_> {
         let t0 = std::time::Instant::now();
         let mut g = gradients(ev, &all)?.into_iter();
         self.gradient_times.push(t0.elapsed().as_secs_f64());
+        if let (_, Some(per_rhs)) = self.gmres_per_rhs() {
+            self.gradient_gmres.push(per_rhs);
+        }
         let (f, h) = (g.next().expect("mass"), g.next().expect("area"));
         let mut ineq: Vec<Vec<f64>> = g.collect();
         // the order of the values: RMS, flutter margin, mode floor, peak

@@ -1125,3 +1125,45 @@ fn a_steady_state_of_another_mesh_is_ignored_with_a_line() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// An optimization's records of the LFD's GMRES (results.json's `timing.function_gmres_per_rhs`
+/// and `gradient_gmres_per_rhs`): one entry a function and a gradient, the iterations a
+/// right-hand side of its GAF table or adjoint solves; the second design's table, started from
+/// the first's solutions, needs fewer than the first's from zero.
+#[test]
+fn an_optimization_records_its_gmres_iterations() {
+    use gustkit::optim::Problem;
+    let (study, dir) = small_lfd_study("records");
+    let settings = study.gust_settings().unwrap();
+    let case = study.resolve().unwrap();
+    let x0 = study.initial_design().unwrap().to_vec();
+    let ev0 = gustkit::pipeline::evaluate(&case, &settings, &x0).unwrap();
+    gustkit::aero::lfd::clear_warm_start(&dir);
+    let spec = gustkit::problem::DesignSpec {
+        lower: x0.iter().map(|v| v - 0.5 * v.abs()).collect(),
+        upper: x0.iter().map(|v| v + 0.5 * v.abs()).collect(),
+        output: 0,
+        rms_limit: ev0.rms_m[0],
+        mass0: ev0.mass_kg,
+        area0: ev0.area_m2,
+        fix_area: false,
+        flutter: None,
+        mode_floor: None,
+        peak: None,
+    };
+    let mut problem = gustkit::problem::DesignProblem::new(&case, settings, spec);
+    let x1: Vec<f64> = x0
+        .iter()
+        .enumerate()
+        .map(|(i, v)| v * if i + 4 < x0.len() { 1.01 } else { 1.002 })
+        .collect();
+    problem.values(&x0).unwrap();
+    problem.values(&x1).unwrap();
+    problem.gradients(&x1).unwrap();
+    let (f, g) = (&problem.function_gmres, &problem.gradient_gmres);
+    eprintln!("GMRES iterations a right-hand side: functions {f:?}, gradient {g:?}");
+    assert_eq!((f.len(), g.len()), (2, 1));
+    assert!(f.iter().chain(g).all(|v| v.is_finite() && *v > 0.0));
+    assert!(f[1] < f[0], "{f:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -289,6 +289,13 @@ pub struct Timing {
     pub gradient: Option<Stats>,
     /// Threads of the process's thread pool.
     pub threads: usize,
+    /// An LFD model's GMRES iterations a right-hand side, every function's GAF table in the
+    /// order evaluated (they fall as the warm start takes hold; a resumed run: every session's).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub function_gmres_per_rhs: Vec<f64>,
+    /// The same for every gradient's adjoint solves.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub gradient_gmres_per_rhs: Vec<f64>,
 }
 
 /// One design analysed with one fidelity.

@@ -42,18 +42,25 @@ pub struct LfdReverse {
     n_cells: usize,
 }
 
-/// Bytes per cell of [`LfdReverse`] (used to refuse a mesh that would not fit), with a margin:
-/// most of it is ∂R/∂x, a 5 × 3 block for each of the 80 cells within two face-neighbour steps
-/// of an interior node's eight cells (10.7 kB a node of a hexahedral mesh with the rest);
-/// measured 9.2 kB a cell on a small wing mesh (560 cells). The operation tapes it replaced
-/// took about 2 800 entries of 40 bytes a cell (113 kB, up to twice that in their buffers).
-pub const BYTES_PER_CELL: usize = 16_000;
+/// Bytes per cell a gradient holds beyond its GAF table whatever the threads (used to refuse a
+/// mesh that would not fit), with a margin: [`LfdReverse`] — most of it ∂R/∂x, a 5 × 3 block
+/// for each of the 80 cells within two face-neighbour steps of an interior node's eight cells
+/// (10.7 kB a node of a hexahedral mesh with the rest; 9.2 kB a cell measured on a 560-cell
+/// wing mesh) — and the sweep's per-mode fields (the modes' geometry tangents, node seeds).
+/// Measured on the coarse wing mesh with 11 modes and the four planform tangents: the reverse
+/// sweep's peak 0.513 GB on 1 thread and 0.649 GB on 2 against the GAF table's 0.324 and
+/// 0.418 GB, 26.4 and 32.2 kB a cell above it, so 20.6 kB shared and 5.8 kB a thread. The
+/// operation tapes the Jacobians replaced took about 2 800 entries of 40 bytes a cell (113 kB,
+/// up to twice that in their buffers).
+pub const BYTES_PER_CELL: usize = 22_000;
 
-/// Bytes per cell and thread of the geometry gradient's hyper-dual evaluations (the mesh, its
-/// geometry and the residual over numbers with four second directions, one evaluation a thread
-/// at a time): measured 12 kB a cell a thread above the reverse mode's other needs on the coarse
-/// wing mesh (2 threads: peak 0.74 GB against 0.59 GB with one direction an evaluation).
-pub const TANGENT_BYTES_PER_CELL: usize = 12_000;
+/// Bytes per cell and thread a gradient holds beyond its GAF table's own per-thread state: the
+/// geometry tangents' hyper-dual evaluations (the mesh, its geometry and the residual over
+/// numbers with four second directions, one evaluation a thread at a time) take 12 kB a cell a
+/// thread, but the frequency's factorization and GMRES basis are dropped before them, so they
+/// add 5.8 kB a cell a thread (measured, see [`BYTES_PER_CELL`]; 12 kB while the factorization
+/// was held beside them: 0.742 GB on 2 threads).
+pub const TANGENT_BYTES_PER_CELL: usize = 6_500;
 
 impl LfdReverse {
     /// Assembles the linearizations of `lfd` at its steady state.

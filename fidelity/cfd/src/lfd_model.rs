@@ -84,6 +84,9 @@ pub struct WarmStart {
     pub last_iterations: usize,
     /// GMRES iterations of the last reverse sweep's adjoint solves.
     pub last_adjoint_iterations: usize,
+    /// Right-hand sides of the last table and of the last reverse sweep's adjoint solves.
+    pub last_rhs: usize,
+    pub last_adjoint_rhs: usize,
 }
 
 impl Default for WarmStart {
@@ -95,6 +98,8 @@ impl Default for WarmStart {
             designs: DEFAULT_WARM_DESIGNS,
             last_iterations: 0,
             last_adjoint_iterations: 0,
+            last_rhs: 0,
+            last_adjoint_rhs: 0,
         }
     }
 }
@@ -140,11 +145,14 @@ impl WarmStart {
         }
         self.n = n;
         let designs = self.designs.max(1);
+        let rhs = kept.iter().map(|(_, x)| x.len()).sum();
         let list = if adjoint {
             self.last_adjoint_iterations = iterations;
+            self.last_adjoint_rhs = rhs;
             &mut self.adjoints
         } else {
             self.last_iterations = iterations;
+            self.last_rhs = rhs;
             &mut self.tables
         };
         list.truncate(designs - 1);
@@ -775,7 +783,7 @@ impl AerodynamicsReverse for Lfd {
                         .as_ref()
                         .map(|w| w.adjoint_guesses(kk, n))
                         .unwrap_or_default();
-                    sweep.at_frequency(ik, kk, &f, sol, seeds, &guesses)
+                    sweep.at_frequency(ik, kk, f, sol, seeds, &guesses)
                 })
                 .collect();
             match swept {
@@ -887,11 +895,13 @@ impl SeedSweep<'_> {
     /// the μ_i (λ_j = Σ_i conj(Q̄_ij) μ_i, the equations being linear), so the solves do not
     /// depend on the seeds: their number is the modes', whatever the seeds, and the previous
     /// design's μ_i start them well (their right-hand sides move only with the mode shapes).
+    /// The factorization is dropped once the adjoints are solved: the geometry tangents'
+    /// hyper-dual evaluations that follow never hold it beside them.
     fn at_frequency(
         &self,
         ik: usize,
         kk: f64,
-        f: &Factored,
+        f: Factored,
         sol: &[Solution],
         seeds: &[GafTable],
         guesses: &[Vec<Guess>],
@@ -918,9 +928,11 @@ impl SeedSweep<'_> {
             .unzip();
         let mu = self
             .rev
-            .solve_transpose_from(lfd, f, &adjoint_rhs, guesses)
+            .solve_transpose_from(lfd, &f, &adjoint_rhs, guesses)
             .map_err(|e| adjoint_error(e, kk, nm))?;
         drop(adjoint_rhs);
+        let s = f.s;
+        drop(f);
         let coefficients: Vec<Coefficients> = seeds
             .iter()
             .map(|seed| Coefficients {
@@ -928,12 +940,12 @@ impl SeedSweep<'_> {
                 gs: &seed.q_gs[ik],
             })
             .collect();
-        let geo = self.geometry_gradient(kk, f, sol, &mu, &units, &coefficients);
+        let geo = self.geometry_gradient(kk, s, sol, &mu, &units, &coefficients);
         let mut out: Vec<NodeSeeds> = coefficients
             .iter()
             .map(|c| (self.projection_seed(c.ss, c.gs, &forces), Vec::new()))
             .collect();
-        self.motion_seeds(f, &mu, direct, &coefficients, &mut out);
+        self.motion_seeds(s, &mu, direct, &coefficients, &mut out);
         Ok(((out, geo), mu))
     }
 
@@ -991,7 +1003,7 @@ impl SeedSweep<'_> {
     fn geometry_gradient(
         &self,
         kk: f64,
-        f: &Factored,
+        s: C64,
         sol: &[Solution],
         mu: &[Solution],
         units: &[Vec<[C64; 3]>],
@@ -1022,7 +1034,7 @@ impl SeedSweep<'_> {
                     }
                 };
                 let batch = self.model.lfd.column_tangents(
-                    f.s,
+                    s,
                     &sol[col].0,
                     &column,
                     ds.map(|d| tangents[d].nodes.as_slice()),
@@ -1063,7 +1075,7 @@ impl SeedSweep<'_> {
     /// Re Σ_i c_ij (F_xᵀ u_i − Bᵀ μ_i) on every mesh node (the gust column has none).
     fn motion_seeds(
         &self,
-        f: &Factored,
+        s: C64,
         mu: &[Solution],
         direct: Vec<NodeField>,
         coefficients: &[Coefficients],
@@ -1074,7 +1086,7 @@ impl SeedSweep<'_> {
             .into_iter()
             .zip(mu)
             .map(|(mut ux, (m, _))| {
-                let bt = self.rev.motion_rhs_transpose(&self.model.lfd, f.s, m);
+                let bt = self.rev.motion_rhs_transpose(&self.model.lfd, s, m);
                 for (a, b) in ux.iter_mut().zip(&bt) {
                     for c in 0..3 {
                         a[c] -= b[c];

@@ -119,20 +119,42 @@ pub(super) fn save_state(
 /// File-name prefix of the cached steady states (`steady_lfd_<hash>.bin`).
 pub const STEADY_PREFIX: &str = "steady_lfd_";
 
+type Store = std::sync::Arc<std::sync::Mutex<gustkit_cfd::lfd_model::WarmStart>>;
+
+/// Every run folder's warm-start store in this process.
+static STORES: std::sync::OnceLock<
+    std::sync::Mutex<std::collections::BTreeMap<std::path::PathBuf, Store>>,
+> = std::sync::OnceLock::new();
+
 /// The GMRES warm-start store of the run whose folder is `dir`, shared by every LFD model built
 /// for it in this process (the designs of one optimization); created empty on first use.
 pub(crate) fn warm_start_store(
     dir: &Path,
 ) -> std::sync::Arc<std::sync::Mutex<gustkit_cfd::lfd_model::WarmStart>> {
-    use std::collections::BTreeMap;
-    use std::sync::{Arc, Mutex, OnceLock};
-    type Store = Arc<Mutex<gustkit_cfd::lfd_model::WarmStart>>;
-    static STORES: OnceLock<Mutex<BTreeMap<std::path::PathBuf, Store>>> = OnceLock::new();
     let mut stores = STORES
         .get_or_init(Default::default)
         .lock()
         .unwrap_or_else(|e| e.into_inner());
     stores.entry(dir.to_path_buf()).or_default().clone()
+}
+
+/// The GMRES iterations a right-hand side of the last GAF table and of the last reverse sweep's
+/// adjoint solves in the warm-start store of the run folder `dir` (none where no LFD model of
+/// that folder kept one, or it has not solved any).
+pub fn warm_start_iterations(dir: &Path) -> (Option<f64>, Option<f64>) {
+    let Some(stores) = STORES.get() else {
+        return (None, None);
+    };
+    let stores = stores.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(store) = stores.get(dir) else {
+        return (None, None);
+    };
+    let w = store.lock().unwrap_or_else(|e| e.into_inner());
+    let per = |it: usize, rhs: usize| (rhs > 0).then(|| it as f64 / rhs as f64);
+    (
+        per(w.last_iterations, w.last_rhs),
+        per(w.last_adjoint_iterations, w.last_adjoint_rhs),
+    )
 }
 
 /// Empties the GMRES warm-start store of the run folder `dir` (its next table starts from zero).

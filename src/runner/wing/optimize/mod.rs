@@ -144,6 +144,8 @@ pub fn optimize_pass(
         gradient: (!problem.gradient_times.is_empty())
             .then(|| Stats::of(std::mem::take(&mut problem.gradient_times))),
         threads: rayon::current_num_threads(),
+        function_gmres_per_rhs: std::mem::take(&mut problem.function_gmres),
+        gradient_gmres_per_rhs: std::mem::take(&mut problem.gradient_gmres),
     };
     let t_ev = Instant::now();
     let ev = crate::pipeline::evaluate(&fixed_basis, &settings, &info.x).context("final design")?;
