@@ -104,6 +104,10 @@ pub enum Command {
         /// Folder that holds the per-study report folders.
         #[arg(long, default_value = "reports")]
         reports: PathBuf,
+        /// Skip the sweep at twice the modes and lattice (for a study already at a fine
+        /// resolution, whose doubled lattice would need many times its memory).
+        #[arg(long)]
+        no_resolution_check: bool,
     },
     /// Adjoint gradient of the gust RMS against finite differences (like paper Table 4).
     CheckGradient {
@@ -124,7 +128,6 @@ pub enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Time the structural chain (assembly, modes, all sensitivities) of a study.
     /// The LFD analysis of the study's initial design on the built-in mesh levels: RMS, GAF
     /// differences to the DLM of `aero.compare_with`, model-build and GAF-table times, peak
     /// memory, and over three levels the Richardson extrapolate (mesh_study.json, a figure and
@@ -139,6 +142,9 @@ pub enum Command {
         #[arg(long, default_value = "reports")]
         reports: PathBuf,
     },
+    /// Benchmarks of a study (warm-up, repetitions, median/min/max, thread count): the
+    /// structural chain (assembly, modes, all sensitivities), the aerodynamics, the gust
+    /// response and its gradient; an LFD study's GAF table, gradient and warm starts.
     Bench {
         study: PathBuf,
         /// Timed repetitions of each line after one warm-up run (median, min and max are
@@ -194,10 +200,12 @@ pub fn dispatch(cli: Cli) -> Result<runner::Outcome> {
             study,
             json,
             reports,
+            no_resolution_check,
         } => done(runner::wing::flutter::flutter(
             &wing(&study, "flutter")?,
             json,
             &reports,
+            !no_resolution_check,
         )),
         Command::CheckGradient { study, dv, json } => done(runner::wing::gradient::check_gradient(
             &wing(&study, "check-gradient")?,

@@ -94,11 +94,6 @@ pub(crate) fn tables(
     )
 }
 
-/// Whether two reduced frequencies are the same row (to round-off of their JSON round trip).
-fn same_k(a: f64, b: f64) -> bool {
-    (a - b).abs() <= 1e-12 * b.abs().max(1.0)
-}
-
 /// How many shapes [`tables`] gives GAFs of: the modes and, with mode acceleration, the
 /// residual shapes.
 pub(crate) fn table_shapes(
@@ -137,7 +132,7 @@ pub(crate) fn tables_in_groups(
         .k
         .iter()
         .copied()
-        .filter(|k| !rows.k.iter().any(|&d| same_k(d, *k)))
+        .filter(|k| !rows.k.iter().any(|&d| gustkit_core::aero::same_k(d, *k)))
         .collect();
     for ks in todo.chunks(group.max(1)) {
         let part = aero
@@ -155,7 +150,7 @@ pub(crate) fn tables_in_groups(
         let j = rows
             .k
             .iter()
-            .position(|&d| same_k(d, *k))
+            .position(|&d| gustkit_core::aero::same_k(d, *k))
             .expect("every k computed or done");
         all.q_ss[i] = rows.q_ss[j].clone();
         all.q_gs[i] = rows.q_gs[j].clone();

@@ -91,40 +91,104 @@ impl PeakLimit {
 
 /// A modal basis chosen by a frequency cutoff, kept so through an optimization: the constraints
 /// see a fixed count of modes (`retained`, the count below the cutoff at the initial design: a
-/// count that changed between iterations would make the constraints jump), and the first mode
-/// they leave out must stay above the cutoff, 1 − ω²_{retained+1} / ω²_cut ≤ 0. So at every
-/// design the retained modes are every mode below the cutoff, and the optimizer cannot thin the
-/// wing until modes it does not see fall into the flutter range. Its gradient is the eigenvalue
-/// derivative φᵀ(∂K − λ ∂M)φ (a simple eigenvalue; where mode retained+1 and retained+2 coincide
-/// the constraint is only directionally differentiable, as the lower of two frequencies is).
+/// count that changed between iterations would make the constraints jump), and the modes they
+/// leave out must stay above the cutoff. So at every design the retained modes are every mode
+/// below the cutoff, and the optimizer cannot thin the wing until modes it does not see fall into
+/// the flutter range.
+///
+/// The constraint is the KS aggregate of gⱼ = 1 − ω²ⱼ/ω²_cut over the `band` modes above the
+/// retained ones, not the first of them alone: an optimum pushes several modes onto the cutoff
+/// together (the flagship's DLM optimum had modes 12, 13 and 14 within 0.2 Hz of 226.4 Hz), where
+/// the lowest eigenvalue has a kink and the SQP crawls (steps of 2⁻¹⁸, 76 iterations). A sum
+/// over a whole cluster of eigenvalues is smooth where they cross; the band reaches far enough
+/// up (as many modes as are retained: the resolution check's doubled basis) that the modes at its
+/// edge weigh nothing, and the first mode beyond it must stay above [`FLOOR_GUARD`] × the cutoff
+/// (an evaluation where it does not is refused).
 #[derive(Clone, Copy, Debug)]
 pub struct ModeFloor {
     pub retained: usize,
     pub omega_cut: f64,
+    /// Modes retained+1 ..= retained+band enter the aggregate.
+    pub band: usize,
 }
 
+/// The most the floor's KS aggregate may exceed the largest gⱼ, ln(band)/ρ (a fraction of
+/// ω²_cut): with every mode of the band on the cutoff the modes are kept 1 % of the cutoff
+/// frequency above it, with two 0.3 % (band 11); the sharpness ρ follows from the band.
+pub const FLOOR_KS_BIAS: f64 = 0.02;
+
+/// The first mode beyond the floor's band must stay above this multiple of the cutoff frequency
+/// (there its KS weight is below e^{−0.21 ρ}, 1e-11 for the flagship's ρ = 120).
+pub const FLOOR_GUARD: f64 = 1.1;
+
 impl ModeFloor {
-    /// The modes of `plate` up to the first one left out, and the constraint's value.
+    /// The floor of a basis of `retained` modes below `omega_cut` (rad/s), its band as wide as
+    /// the basis (at least 2 modes, at most the `dofs` − retained − 1 the plate has left).
+    pub fn new(retained: usize, omega_cut: f64, dofs: usize) -> Self {
+        let room = dofs.saturating_sub(retained + 1).max(1);
+        Self {
+            retained,
+            omega_cut,
+            band: retained.max(2).min(room),
+        }
+    }
+
+    /// The KS sharpness ρ = ln(band)/[`FLOOR_KS_BIAS`].
+    pub fn rho(&self) -> f64 {
+        (self.band.max(2) as f64).ln() / FLOOR_KS_BIAS
+    }
+
+    /// gⱼ = 1 − ω²ⱼ/ω²_cut of the band's modes.
+    fn margins(&self, modes: &crate::structure::Modes) -> Vec<f64> {
+        let w2 = self.omega_cut * self.omega_cut;
+        modes.modes[self.retained..self.retained + self.band]
+            .iter()
+            .map(|m| 1.0 - m.lambda / w2)
+            .collect()
+    }
+
+    /// The modes of `plate` up to the first one beyond the band, and the constraint's value;
+    /// an error where that mode has come below [`FLOOR_GUARD`] × the cutoff.
     pub fn evaluate(
         &self,
         selection: &ModeSelection,
         plate: &crate::structure::PlateModel,
     ) -> anyhow::Result<(crate::structure::Modes, f64)> {
+        let last = self.retained + self.band;
         let modes = selection
-            .solve_count(plate, self.retained + 1)
+            .solve_count(plate, last + 1)
             .context("modal basis floor")?;
-        let lambda = modes.modes[self.retained].lambda;
-        Ok((modes, 1.0 - lambda / (self.omega_cut * self.omega_cut)))
+        let to_hz = |w: f64| w / (2.0 * std::f64::consts::PI);
+        if let Some(beyond) = modes.modes.get(last) {
+            let f = beyond.lambda.max(0.0).sqrt();
+            if f < FLOOR_GUARD * self.omega_cut {
+                anyhow::bail!(
+                    "modal basis floor: mode {} has come down to {:.1} Hz, below {FLOOR_GUARD} × the cutoff {:.1} Hz: beyond the {} modes (from mode {}) the floor keeps above the cutoff",
+                    last + 1,
+                    to_hz(f),
+                    to_hz(self.omega_cut),
+                    self.band,
+                    self.retained + 1
+                );
+            }
+        }
+        let (ks, _) = crate::flutter::margin::ks_max(&self.margins(&modes), self.rho());
+        Ok((modes, ks))
     }
 
-    /// The constraint's gradient in the design variables.
+    /// The constraint's gradient in the design variables: the KS weights times the eigenvalue
+    /// derivatives φⱼᵀ(∂K − λⱼ ∂M)φⱼ (the weighted sum over a cluster does not depend on which
+    /// basis of its eigenspace the solver returned, for equal eigenvalues have equal weights).
     pub fn gradient(
         &self,
         plate: &crate::structure::PlateModel,
         modes: &crate::structure::Modes,
     ) -> Vec<f64> {
+        let (_, weights) = crate::flutter::margin::ks_max(&self.margins(modes), self.rho());
         let mut seed = crate::structure::ModalSeed::zeros(modes);
-        seed.lambda[self.retained] = -1.0 / (self.omega_cut * self.omega_cut);
+        for (j, w) in weights.iter().enumerate() {
+            seed.lambda[self.retained + j] = -w / (self.omega_cut * self.omega_cut);
+        }
         crate::structure::modes_vjp(plate, modes, &seed)
     }
 }

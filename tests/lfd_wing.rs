@@ -571,7 +571,8 @@ fn amplitude_fields_are_written() {
     let rms = check["refined_rms_m"][0].as_f64().unwrap();
     assert!(rms.is_finite() && rms > 0.0, "{check}");
     // a next mesh above the memory limit is not run, with the reason (the estimate is linear in
-    // the cells: a limit of twice the study's own estimate refuses 8 × the cells)
+    // the cells: a limit of twice the study's own estimate refuses 8 × the cells); the check
+    // doubles the modes alone on the study's own mesh and says so
     let lfd: gustkit::aero::lfd::LfdWingSpec =
         serde_json::from_value(v["aero"]["fidelity"]["lfd"].clone()).unwrap();
     v["aero"]["fidelity"]["lfd"]["memory_limit_gb"] = (2.0 * lfd.memory_estimate_gb()).into();
@@ -579,12 +580,19 @@ fn amplitude_fields_are_written() {
     let o = run(&file);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let check = &results()["resolution_check"];
-    let why = check["not_run"].as_str().unwrap();
+    let refined = check["refined_model"].as_str().unwrap();
     assert!(
-        why.contains("cannot run here") && why.contains("memory_limit_gb"),
-        "{why}"
+        refined.starts_with("LFD given mesh (576 cells)")
+            && refined.contains("modes only")
+            && refined.contains("4608 cells")
+            && refined.contains("cannot run here")
+            && refined.contains("memory_limit_gb")
+            && refined.ends_with(", 6 modes"),
+        "{refined}"
     );
-    assert!(check["refined_rms_m"].as_array().unwrap().is_empty());
+    assert!(check["not_run"].is_null(), "{check}");
+    let rms = check["refined_rms_m"][0].as_f64().unwrap();
+    assert!(rms.is_finite() && rms > 0.0, "{check}");
     v["aero"]["fidelity"]["lfd"]["amplitude_fields_k"] = 0.5.into();
     std::fs::write(&file, v.to_string()).unwrap();
     let o = run(&file);

@@ -385,6 +385,23 @@ pub struct WarmStartTimings {
     pub gradient_warm_iterations: usize,
 }
 
+/// A fresh, empty scratch run folder `gustkit-bench-<name>-<pid>` in the temp dir and the case of
+/// `study` with it as its run folder (the LFD's steady state and GMRES warm start live there).
+fn scratch_case(study: &Study, name: &str) -> Result<(std::path::PathBuf, crate::case::Case)> {
+    let dir = std::env::temp_dir().join(format!("gustkit-bench-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir)?;
+    let mut s = study.clone();
+    s.cache_dir = Some(dir.clone());
+    Ok((dir, s.resolve()?))
+}
+
+/// Removes a scratch run folder and its process-wide GMRES warm-start store.
+fn remove_scratch(dir: &std::path::Path) {
+    let _ = std::fs::remove_dir_all(dir);
+    crate::aero::lfd::clear_warm_start(dir);
+}
+
 /// See [`WarmStartTimings`]: the pipeline's function in two fresh scratch run folders, one
 /// that first evaluated the initial design (its steady state and LFD solutions are the next
 /// design's start) and one that did not (its steady state cached beforehand, so that only the
@@ -398,17 +415,6 @@ pub fn bench_lfd_warm_start(study: &Study) -> Result<WarmStartTimings> {
     for t in x1.iter_mut().take(n_t) {
         *t *= 1.01;
     }
-    let scratch = |name: &str| {
-        let d =
-            std::env::temp_dir().join(format!("gustkit-bench-warm-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).map(|_| d)
-    };
-    let case_in = |dir: &std::path::Path| -> Result<crate::case::Case> {
-        let mut s = study.clone();
-        s.cache_dir = Some(dir.to_path_buf());
-        Ok(s.resolve()?)
-    };
     // the function, then the gradient of the first output's RMS: (function s, gradient s)
     let timed = |case: &crate::case::Case, x: &[f64]| -> Result<(f64, f64)> {
         let t = Instant::now();
@@ -424,8 +430,7 @@ pub fn bench_lfd_warm_start(study: &Study) -> Result<WarmStartTimings> {
         crate::pipeline::gradient(&ev, &seeds)?;
         Ok((function, t.elapsed().as_secs_f64()))
     };
-    let (warm_dir, cold_dir) = (scratch("warm")?, scratch("cold")?);
-    let warm_case = case_in(&warm_dir)?;
+    let (warm_dir, warm_case) = scratch_case(study, "warm-warm")?;
     timed(&warm_case, &x0)?;
     let (warm_s, gradient_warm_s) = timed(&warm_case, &x1)?;
     let store = |d: &std::path::Path| {
@@ -438,7 +443,7 @@ pub fn bench_lfd_warm_start(study: &Study) -> Result<WarmStartTimings> {
     let (warm_iterations, gradient_warm_iterations) = store(&warm_dir);
     // the cold folder: the next design's steady state solved first, its GMRES store then
     // emptied
-    let cold_case = case_in(&cold_dir)?;
+    let (cold_dir, cold_case) = scratch_case(study, "warm-cold")?;
     timed(&cold_case, &x1)?;
     crate::aero::lfd::clear_warm_start(&cold_dir);
     let (cold_s, gradient_cold_s) = timed(&cold_case, &x1)?;
@@ -449,10 +454,8 @@ pub fn bench_lfd_warm_start(study: &Study) -> Result<WarmStartTimings> {
         .aero
         .as_ref()
         .map_or(0, |a| a.reduced_frequencies.len());
-    for d in [&warm_dir, &cold_dir] {
-        let _ = std::fs::remove_dir_all(d);
-        crate::aero::lfd::clear_warm_start(d);
-    }
+    remove_scratch(&warm_dir);
+    remove_scratch(&cold_dir);
     Ok(WarmStartTimings {
         rhs: n_k * (modes + 1),
         cold_s,
@@ -493,22 +496,17 @@ pub fn bench_lfd_line_search(study: &Study) -> Result<LineSearchTimings> {
             .collect()
     };
     let designs = match study.spec.aero.as_ref().map(|a| &a.fidelity) {
-        Some(crate::aero::FidelitySpec::Lfd(l)) => l.warm_start_designs,
+        Some(crate::aero::FidelitySpec::Lfd(l)) => l.warm_start_designs(),
         _ => anyhow::bail!("the line-search bench needs an LFD study"),
     };
     let run = |kept: usize| -> Result<(f64, usize)> {
-        let dir =
-            std::env::temp_dir().join(format!("gustkit-bench-line-{kept}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir)?;
         let mut s = study.clone();
-        s.cache_dir = Some(dir.clone());
         if let Some(crate::aero::FidelitySpec::Lfd(l)) =
             s.spec.aero.as_mut().map(|a| &mut a.fidelity)
         {
-            l.warm_start_designs = kept;
+            l.warm_start_designs = Some(kept);
         }
-        let case = s.resolve()?;
+        let (dir, case) = scratch_case(&s, &format!("line-{kept}"))?;
         crate::pipeline::evaluate(&case, &settings, &x0)?;
         crate::pipeline::evaluate(&case, &settings, &step(1.0))?;
         let t = Instant::now();
@@ -519,8 +517,7 @@ pub fn bench_lfd_line_search(study: &Study) -> Result<LineSearchTimings> {
             let w = w.lock().unwrap_or_else(|e| e.into_inner());
             w.last_iterations
         };
-        crate::aero::lfd::clear_warm_start(&dir);
-        let _ = std::fs::remove_dir_all(&dir);
+        remove_scratch(&dir);
         Ok((elapsed, iterations))
     };
     let (one_design_s, one_design_iterations) = run(1)?;

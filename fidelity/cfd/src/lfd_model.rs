@@ -168,7 +168,7 @@ impl WarmStart {
         for design in designs {
             let Some((_, solutions)) = design
                 .iter()
-                .find(|(kk, _)| (kk - k).abs() <= 1e-12 * k.abs().max(1.0))
+                .find(|(kk, _)| gustkit_core::aero::same_k(*kk, k))
             else {
                 continue;
             };

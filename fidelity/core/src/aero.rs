@@ -139,6 +139,12 @@ impl ModalSurface {
     }
 }
 
+/// Whether two reduced frequencies are the same GAF-table row: equal to round-off of their
+/// JSON round trip (relative 1e-12, absolute near k = 0).
+pub fn same_k(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-12 * b.abs().max(1.0)
+}
+
 /// Generalized aerodynamic forces at a list of reduced frequencies (see the module conventions).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct GafTable {

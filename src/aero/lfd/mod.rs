@@ -88,13 +88,19 @@ pub struct LfdWingSpec {
     /// In a run (an optimization's designs), the GMRES solves of a design start from the
     /// combination of the LFD solutions of this many previous designs that minimizes the
     /// residual (1: the last design's alone); each costs 40 bytes a cell per reduced frequency
-    /// and column, forward and adjoint.
-    #[serde(default = "default_warm_start_designs")]
-    pub warm_start_designs: usize,
+    /// and column, forward and adjoint. Absent: [`gustkit_cfd::lfd_model::DEFAULT_WARM_DESIGNS`]
+    /// (not written back then, so a study's serialized form, which fingerprints partial results,
+    /// does not change with this key's arrival).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub warm_start_designs: Option<usize>,
 }
 
-fn default_warm_start_designs() -> usize {
-    gustkit_cfd::lfd_model::DEFAULT_WARM_DESIGNS
+impl LfdWingSpec {
+    /// How many designs' solutions the warm start combines (the key, or its default).
+    pub fn warm_start_designs(&self) -> usize {
+        self.warm_start_designs
+            .unwrap_or(gustkit_cfd::lfd_model::DEFAULT_WARM_DESIGNS)
+    }
 }
 
 /// The most designs [`LfdWingSpec::warm_start_designs`] may keep (more span little more).
@@ -274,12 +280,12 @@ impl WingBuilder for LfdWingSpec {
         self.params()
             .validate()
             .map_err(|r| fail("gmres_tolerance", r))?;
-        if !(1..=MAX_WARM_DESIGNS).contains(&self.warm_start_designs) {
+        if !(1..=MAX_WARM_DESIGNS).contains(&self.warm_start_designs()) {
             return Err(fail(
                 "warm_start_designs",
                 format!(
                     "must be 1 to {MAX_WARM_DESIGNS} previous designs (got {})",
-                    self.warm_start_designs
+                    self.warm_start_designs()
                 ),
             ));
         }
@@ -323,7 +329,7 @@ impl WingBuilder for LfdWingSpec {
         let gb = self.memory_estimate_gb()
             + (gustkit_cfd::adjoint::LfdReverse::estimate_bytes(cells, rayon::current_num_threads())
                 as f64
-                + self.warm_start_designs as f64 * WARM_DESIGN_BYTES_PER_CELL * cells as f64)
+                + self.warm_start_designs() as f64 * WARM_DESIGN_BYTES_PER_CELL * cells as f64)
                 / 1e9;
         if self.mesh_file.is_none() && !(gb <= self.memory_limit_gb) {
             return Err(BuildError {
@@ -335,7 +341,7 @@ impl WingBuilder for LfdWingSpec {
                 reason: format!(
                     "gradients on the {} mesh ({cells} cells) need about {gb:.1} GB with the reverse mode's Jacobians and the warm start's {} designs, above memory_limit_gb = {}: choose a coarser mesh, fewer warm_start_designs or raise the limit",
                     if self.mesh_sizes.is_some() { "given" } else { self.mesh.name() },
-                    self.warm_start_designs,
+                    self.warm_start_designs(),
                     self.memory_limit_gb
                 ),
             });
@@ -447,7 +453,7 @@ impl WingBuilder for LfdWingSpec {
         // solutions
         model.warm_start = wing.cache_dir.map(steady_cache::warm_start_store);
         if let Some(w) = &model.warm_start {
-            w.lock().unwrap_or_else(|e| e.into_inner()).designs = self.warm_start_designs;
+            w.lock().unwrap_or_else(|e| e.into_inner()).designs = self.warm_start_designs();
         }
         let Some(mesh) = built_in else {
             // an external mesh: its wall nodes placed on the planform, or why they do not fit

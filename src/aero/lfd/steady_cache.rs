@@ -128,9 +128,7 @@ static STORES: std::sync::OnceLock<
 
 /// The GMRES warm-start store of the run whose folder is `dir`, shared by every LFD model built
 /// for it in this process (the designs of one optimization); created empty on first use.
-pub(crate) fn warm_start_store(
-    dir: &Path,
-) -> std::sync::Arc<std::sync::Mutex<gustkit_cfd::lfd_model::WarmStart>> {
+pub(crate) fn warm_start_store(dir: &Path) -> Store {
     let mut stores = STORES
         .get_or_init(Default::default)
         .lock()

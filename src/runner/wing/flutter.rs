@@ -6,8 +6,9 @@ use crate::study::Study;
 use anyhow::Result;
 use std::path::Path;
 
-/// `gustkit flutter`: p-k sweep of a study at its flight Mach number and density.
-pub fn flutter(study: &Study, json: bool, reports: &Path) -> Result<()> {
+/// `gustkit flutter`: p-k sweep of a study at its flight Mach number and density, with the
+/// same sweep at twice the resolution beside it when `resolution_check`.
+pub fn flutter(study: &Study, json: bool, reports: &Path, resolution_check: bool) -> Result<()> {
     // a study without a usable sweep is refused before its report folder is made
     study.flutter_velocities()?;
     let dir = study.report_dir(reports);
@@ -17,7 +18,7 @@ pub fn flutter(study: &Study, json: bool, reports: &Path) -> Result<()> {
     let mut study = study.clone();
     study.cache_dir = Some(dir.clone());
     let study = &study;
-    let (doc, r, velocities) = flutter_analysis(study, &dir, true)?;
+    let (doc, r, velocities) = flutter_analysis(study, &dir, resolution_check)?;
     if json {
         println!("{}", serde_json::to_string_pretty(&doc)?);
         return Ok(());
@@ -25,6 +26,7 @@ pub fn flutter(study: &Study, json: bool, reports: &Path) -> Result<()> {
     print_flutter(study, &r, &velocities, &doc);
     let c = &doc["resolution_check"];
     match c["refined_model"].as_str() {
+        _ if !resolution_check => println!("resolution check not run (--no-resolution-check)"),
         Some(m) => println!(
             "resolution check: with {m} the design {}{}",
             c["refined_flutter"].as_str().unwrap_or(""),

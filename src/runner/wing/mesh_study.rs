@@ -228,11 +228,17 @@ fn partial_file(dir: &Path, level: WingMeshLevel) -> std::path::PathBuf {
     dir.join(format!("partial_{}.json", level.name()))
 }
 
-/// A hash of the level's study file (its design, modes, frequencies and LFD settings).
+/// A hash of the level's study file (its design, modes, frequencies and LFD settings), without
+/// the LFD's `warm_start_designs` (it chooses where a GMRES starts, not what it converges to; a
+/// partial table written before the key existed keeps its fingerprint).
 fn fingerprint(s: &Study) -> Result<String> {
     use std::hash::{Hash, Hasher};
+    let mut spec = s.spec.clone();
+    if let Some(FidelitySpec::Lfd(l)) = spec.aero.as_mut().map(|a| &mut a.fidelity) {
+        l.warm_start_designs = None;
+    }
     let mut h = std::collections::hash_map::DefaultHasher::new();
-    serde_json::to_string(&s.spec)?.hash(&mut h);
+    serde_json::to_string(&spec)?.hash(&mut h);
     Ok(format!("{:016x}", h.finish()))
 }
 
@@ -613,6 +619,27 @@ mod tests {
                 "mode acceleration {mode_acceleration}"
             );
         }
+    }
+
+    /// The fingerprint of a level's study is that of the solution: the warm start's
+    /// `warm_start_designs` leaves it, the GMRES tolerance changes it.
+    #[test]
+    fn the_warm_start_leaves_the_fingerprint() {
+        let file =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_lfd_mesh_study.json");
+        let study = Study::load(&file).unwrap();
+        let print = |edit: &dyn Fn(&mut crate::aero::lfd::LfdWingSpec)| {
+            let mut s = study.clone();
+            match s.spec.aero.as_mut().map(|a| &mut a.fidelity) {
+                Some(FidelitySpec::Lfd(l)) => edit(l),
+                _ => panic!("an LFD study"),
+            }
+            fingerprint(&s).unwrap()
+        };
+        let plain = print(&|_| {});
+        assert_eq!(plain, print(&|l| l.warm_start_designs = Some(1)));
+        assert_eq!(plain, print(&|l| l.warm_start_designs = Some(3)));
+        assert_ne!(plain, print(&|l| l.gmres_tolerance *= 0.1));
     }
 
     /// A partial table is used only when it is this level's, of this study and consistent;

@@ -82,6 +82,7 @@ fn refined_study(
         }
         extended = format!(", reduced frequencies to {k:.2}");
     }
+    let original = aero.fidelity.clone();
     let (refined, words) = aero.fidelity.refined()?;
     aero.fidelity = refined;
     let model = words + &extended;
@@ -90,14 +91,26 @@ fn refined_study(
     // the refined model leaves nothing in the run folder (the LFD would write its steady state
     // and C_p sections there, which the report takes for the study's own)
     s.cache_dir = None;
-    s.check_memory(1)
-        .and_then(|()| s.validate_fidelity())
-        .map_err(|e| {
+    let fits = |s: &Study| s.check_memory(1).and_then(|()| s.validate_fidelity());
+    if let Err(e) = fits(&s) {
+        // the next lattice or mesh does not fit (an LFD on the medium mesh: the fine one needs
+        // about 19 GB): the modes alone are doubled, and the words say what was not refined
+        let aero = s.spec.aero.as_mut().expect("refinable: it has one");
+        aero.fidelity = original;
+        let same = format!(
+            "{}{extended} (modes only: the next resolution, {}, cannot run here: {})",
+            aero.fidelity.words(),
+            model,
+            e.reason
+        );
+        fits(&s).map_err(|e| {
             format!(
-                "the refined model ({model}, {refined_modes} modes) cannot run here: {}",
+                "the refined model ({model}, {refined_modes} modes) cannot run here, nor twice the modes on the study's own model: {}",
                 e.reason
             )
         })?;
+        return Ok((s, format!("{same}, {refined_modes} modes")));
+    }
     Ok((s, format!("{model}, {refined_modes} modes")))
 }
 

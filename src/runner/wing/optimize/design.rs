@@ -116,7 +116,7 @@ pub(crate) fn rms_constraint(
 }
 
 /// The study as its optimization sees it: with a basis chosen by the cutoff rule, the count of
-/// modes below the cutoff at the initial design, kept whole by a floor on the first mode left out
+/// modes below the cutoff at the initial design, kept whole by a floor on the modes left out
 /// ([`crate::problem::ModeFloor`]); otherwise the study itself and no floor. The final design is
 /// reported and checked with the same basis.
 pub(crate) fn design_basis(study: &Study) -> Result<(Study, Option<crate::problem::ModeFloor>)> {
@@ -133,10 +133,11 @@ pub(crate) fn design_basis(study: &Study) -> Result<(Study, Option<crate::proble
     fixed.spec.structure.modes = crate::study::schema::ModesSpec::Count(retained);
     Ok((
         fixed,
-        Some(crate::problem::ModeFloor {
+        Some(crate::problem::ModeFloor::new(
             retained,
             omega_cut,
-        }),
+            study.retained_dofs(&plate),
+        )),
     ))
 }
 

@@ -162,9 +162,14 @@ pub(super) fn print_limits(
     }
     if let Some(f) = floor {
         println!(
-            "modal basis: the {} modes below {:.1} Hz at the initial design; the first mode left out must stay above it",
+            "modal basis: the {} modes below {:.1} Hz at the initial design; modes {}–{} must stay above it (KS, ρ = {:.0}), mode {} above {:.1} Hz",
             f.retained,
-            f.omega_cut / (2.0 * std::f64::consts::PI)
+            f.omega_cut / (2.0 * std::f64::consts::PI),
+            f.retained + 1,
+            f.retained + f.band,
+            f.rho(),
+            f.retained + f.band + 1,
+            crate::problem::FLOOR_GUARD * f.omega_cut / (2.0 * std::f64::consts::PI)
         );
     }
 }

@@ -103,6 +103,11 @@ pub(crate) fn json_differences(
     }
 }
 
+/// The formulation of the constraints the code builds from a study, part of the problem's
+/// identity: a checkpoint written when a constraint meant something else is not resumed
+/// (2: the modal floor as a KS aggregate over a band of modes, no longer the first mode alone).
+pub(crate) const FORMULATION: u32 = 2;
+
 /// The checkpoint file of a pass in the run folder (`checkpoint.json` for the first, which warm
 /// starts of later runs read).
 pub fn checkpoint_file(dir: &Path, pass: usize) -> std::path::PathBuf {
@@ -125,7 +130,7 @@ pub(super) fn open_checkpoint(
 ) -> Result<(String, Option<crate::optim::Checkpoint>)> {
     let defining = defining_spec(study)?;
     let mut problem_id = format!(
-        "{}:{:016x}",
+        "{}:{:016x}:f{FORMULATION}",
         study.spec.name,
         fnv(&serde_json::to_string(&defining)?)
     );
@@ -161,7 +166,7 @@ pub(super) fn open_checkpoint(
                     "the study changed since the checkpoint was written: {}",
                     d.iter().take(6).cloned().collect::<Vec<_>>().join(", ")
                 ),
-                None => "the checkpoint belongs to another problem".to_string(),
+                None => "the checkpoint belongs to another problem (or to an earlier gustkit's formulation of the constraints)".to_string(),
             };
             anyhow::bail!(
                 "{}: --resume: {what}; only the description, the reference, max_iterations, tolerance, aero.compare_with, aero.fidelity.lfd.warm_start_designs, the flutter sweep and the sweep section may change between a run and its resumption. Run without --resume to start over",
