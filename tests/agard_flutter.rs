@@ -5,6 +5,8 @@
 //! 143.9: V_f = 0.37 · b_s ω_α √μ with b_s = 0.9165 ft, ω_α = 239.3 rad/s gives the same speed). Linear potential flow with a plate model is expected
 //! within several percent at M = 0.5 and to lie above experiment near M = 0.9 (no transonic dip).
 
+mod common;
+
 use std::path::Path;
 use std::process::Command;
 
@@ -113,17 +115,7 @@ fn flagship_optimum_branches_stay_apart() {
     let study =
         gustkit::study::Study::from_str(&root.join("flagship_2026_11.json"), &v.to_string())
             .unwrap();
-    let results: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(root.join("tests/data/agard445_dlm_optimum_2026_11.json"))
-            .unwrap(),
-    )
-    .unwrap();
-    let x: Vec<f64> = results["design_variables"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
+    let x = common::fixture_design("agard445_dlm_optimum_2026_11.json");
     let settings = study.gust_settings().unwrap();
     let case = study.resolve().unwrap();
     let ev = gustkit::pipeline::evaluate(&case, &settings, &x).unwrap();

@@ -270,19 +270,7 @@ fn mode_floor_is_smooth_where_modes_cluster() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let study = Study::load(&root.join("studies/agard445_dlm.json")).unwrap();
     let case = study.resolve().unwrap();
-    let data: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(
-            root.join("tests/data/agard445_dlm_optimum_2026_12_clustered.json"),
-        )
-        .unwrap(),
-    )
-    .unwrap();
-    let xc: Vec<f64> = data["design_variables"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
+    let xc = common::fixture_design("agard445_dlm_optimum_2026_12_clustered.json");
     let plate_at = |x: &[f64]| study.model_at(DesignVector::from_slice(x)).unwrap();
     let omega_cut = 2.0 * std::f64::consts::PI * 226.44;
     let floor =

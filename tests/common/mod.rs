@@ -6,6 +6,21 @@ use gustkit::study::Study;
 use gustkit::wing::{Airfoil, DesignVector, Planform};
 use std::path::{Path, PathBuf};
 
+/// The design variables (SI, the optimizer's order) of a design kept in `tests/data/<file>`.
+pub fn fixture_design(file: &str) -> Vec<f64> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(file);
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    doc["design_variables"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect()
+}
+
 /// Path of the shipped AGARD study.
 pub fn agard_path() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm_analysis.json")
