@@ -155,8 +155,9 @@ impl ModeFloor {
         plate: &crate::structure::PlateModel,
     ) -> anyhow::Result<(crate::structure::Modes, f64)> {
         let last = self.retained + self.band;
+        // the guard mode where the plate has one (a plate with no mode beyond the band has none)
         let modes = selection
-            .solve_count(plate, last + 1)
+            .solve_count(plate, (last + 1).min(selection.retained_dofs(plate)))
             .context("modal basis floor")?;
         let to_hz = |w: f64| w / (2.0 * std::f64::consts::PI);
         if let Some(beyond) = modes.modes.get(last) {
