@@ -229,17 +229,17 @@ fn partial_file(dir: &Path, level: WingMeshLevel) -> std::path::PathBuf {
 }
 
 /// A hash of the level's study file (its design, modes, frequencies and LFD settings), without
-/// the LFD's `warm_start_designs` (it chooses where a GMRES starts, not what it converges to; a
-/// partial table written before the key existed keeps its fingerprint).
+/// the LFD's `warm_start_designs` (it chooses where a GMRES starts, not what it converges to):
+/// the FNV-1a hash the checkpoints and the sweep use, stable across Rust releases.
 fn fingerprint(s: &Study) -> Result<String> {
-    use std::hash::{Hash, Hasher};
     let mut spec = s.spec.clone();
     if let Some(FidelitySpec::Lfd(l)) = spec.aero.as_mut().map(|a| &mut a.fidelity) {
         l.warm_start_designs = None;
     }
-    let mut h = std::collections::hash_map::DefaultHasher::new();
-    serde_json::to_string(&spec)?.hash(&mut h);
-    Ok(format!("{:016x}", h.finish()))
+    Ok(format!(
+        "{:016x}",
+        super::optimize::fnv(&serde_json::to_string(&spec)?)
+    ))
 }
 
 /// The partial table in `file` when it is this level's, of this study and of `n_shapes`
