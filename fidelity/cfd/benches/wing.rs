@@ -10,7 +10,7 @@
 //! printed. `cargo bench -p gustkit-cfd --bench wing` runs the coarse level;
 //! `WING_LEVELS=coarse,medium` adds the medium one (about 10 minutes, 3.5 GB).
 
-use gustkit_cfd::ilu::{IluOrdering, IluParams};
+use gustkit_cfd::ilu::{IluOrdering, IluParams, IluPrecision};
 use gustkit_cfd::lfd::{HarmonicGust, LfdOperator, Preconditioner, Symbol};
 use gustkit_cfd::lfd_model::Lfd;
 use gustkit_cfd::residual::{free_stream, Euler};
@@ -64,13 +64,14 @@ fn gust_rhs(op: &LfdOperator, omega: f64, mach: f64) -> Vec<num_complex::Complex
 }
 
 /// One right-hand side (the gust at k = 0.98, the hardest of the table on the medium mesh) with
-/// each preconditioner of `WING_PRECONDITIONERS` (comma-separated `matrix:fill:ordering`, matrix
-/// `first`/`exact`, ordering `natural`/`rcm`; default the first-order Jacobian's ILU(0) in the
-/// mesh's order and ILU(1) in RCM order, the wing studies' default): stored blocks, factorization
-/// time, GMRES iterations and time.
+/// each preconditioner of `WING_PRECONDITIONERS` (comma-separated `matrix:fill:ordering` with an
+/// optional `:precision`, matrix `first`/`exact`, ordering `natural`/`rcm`, precision of the
+/// stored factors `single` (default) or `double`; default the first-order Jacobian's ILU(0) in
+/// the mesh's order and ILU(1) in RCM order in both precisions, the wing studies' default being
+/// ILU(1), RCM, single): stored blocks and bytes, factorization time, GMRES iterations and time.
 fn preconditioner_table(e: &Euler, q0: &[gustkit_cfd::residual::State<f64>], mach: f64, c: f64) {
     let list = std::env::var("WING_PRECONDITIONERS")
-        .unwrap_or_else(|_| "first:0:natural,first:1:rcm".into());
+        .unwrap_or_else(|_| "first:0:natural,first:1:rcm:double,first:1:rcm".into());
     let omega = 0.98 * mach / (0.5 * c);
     for item in list.split(',') {
         let f: Vec<&str> = item.split(':').collect();
@@ -89,6 +90,11 @@ fn preconditioner_table(e: &Euler, q0: &[gustkit_cfd::residual::State<f64>], mac
             } else {
                 IluOrdering::Natural
             },
+            precision: if f.get(3) == Some(&"double") {
+                IluPrecision::Double
+            } else {
+                IluPrecision::Single
+            },
         };
         let t = Instant::now();
         let fac = match op.factor(omega, Symbol::Exact) {
@@ -103,8 +109,9 @@ fn preconditioner_table(e: &Euler, q0: &[gustkit_cfd::residual::State<f64>], mac
         let t = Instant::now();
         match op.solve(&fac, &[gust]) {
             Ok(sol) => println!(
-                "  {item}: {} blocks/row, factor {t_fac:.2} s, one right-hand side at k = 0.98: {} GMRES iterations, {:.2} s; peak memory {:.2} GB",
+                "  {item}: {} blocks/row ({:.0} B a cell), factor {t_fac:.2} s, one right-hand side at k = 0.98: {} GMRES iterations, {:.2} s; peak memory {:.2} GB",
                 fac.n_blocks() as f64 / e.mesh.n_cells as f64,
+                fac.bytes() as f64 / e.mesh.n_cells as f64,
                 sol[0].1.iterations,
                 t.elapsed().as_secs_f64(),
                 peak_gb()
@@ -134,6 +141,7 @@ fn main() {
             ilu: IluParams {
                 fill: 1,
                 ordering: IluOrdering::ReverseCuthillMckee,
+                ..IluParams::default()
             },
             ..SteadyParams::default()
         };
@@ -146,6 +154,7 @@ fn main() {
         op.params.ilu = IluParams {
             fill: 1,
             ordering: IluOrdering::ReverseCuthillMckee,
+            ..IluParams::default()
         };
         let t_jac = t.elapsed().as_secs_f64();
         let omega = 0.5 * mach / (0.5 * p[2]);

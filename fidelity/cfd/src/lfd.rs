@@ -150,6 +150,14 @@ impl Factored {
             Factors::Lu(_) => 0,
         }
     }
+
+    /// Memory held by an ILU's factors, bytes (0 for a sparse LU, which does not report it).
+    pub fn bytes(&self) -> usize {
+        match &self.factors {
+            Factors::Ilu(ilu) => ilu.bytes(),
+            Factors::Lu(_) => 0,
+        }
+    }
 }
 
 enum Factors {

@@ -13,6 +13,7 @@
 
 use crate::adjoint::LfdReverse;
 use crate::deform::Deformation;
+use crate::forward_store::{ForwardSolutions, ForwardStorage, Solution};
 use crate::gas::primitive;
 use crate::lfd::{Factored, Guess, HarmonicGust, LfdError, LfdOperator, Symbol};
 use crate::mesh::{Boundary, Side};
@@ -25,6 +26,7 @@ use gustkit_core::{
 };
 use num_complex::Complex64 as C64;
 use rayon::prelude::*;
+use std::borrow::Cow;
 
 /// The LFD aerodynamic model of a converged steady flow.
 pub struct Lfd {
@@ -45,6 +47,10 @@ pub struct Lfd {
     pub tangents: Vec<MeshTangent>,
     /// The forward solutions of the last GAF table, reused by a reverse sweep at the same point.
     last_forward: std::sync::Mutex<Option<ForwardCache>>,
+    /// Where the forward solutions are kept between a table and its reverse sweep (memory by
+    /// default; scratch files take their 80 bytes a cell per frequency and column off the
+    /// process's memory).
+    pub forward_storage: ForwardStorage,
     /// Chordwise wall sections whose steady C_p the model reports among its artifacts (a
     /// built-in wing mesh's root, mid-span and tip, say): (η of the section, its wall cells).
     pub sections: Vec<(f64, Vec<SectionCell>)>,
@@ -225,14 +231,11 @@ struct ForwardCache {
     modes: ModalSurface,
     k: Vec<f64>,
     /// Per reduced frequency: the mode columns, then the gust.
-    solutions: Vec<Vec<Solution>>,
+    solutions: ForwardSolutions,
 }
 
 /// Complex node displacements (mesh frame, mesh units).
 type NodeField = Vec<[C64; 3]>;
-
-/// One LFD solution with its GMRES record.
-type Solution = (Vec<C64>, crate::krylov::GmresInfo);
 
 /// An LFD solver failure at reduced frequency `k` as the shared contract's typed error: the
 /// right-hand sides are the `n_modes` mode motions, then the gust.
@@ -338,6 +341,7 @@ impl Lfd {
             reverse: std::sync::OnceLock::new(),
             tangents: Vec::new(),
             last_forward: std::sync::Mutex::new(None),
+            forward_storage: ForwardStorage::Memory,
             sections: Vec::new(),
             warm_start: None,
         }
@@ -364,6 +368,32 @@ impl Lfd {
             .map(|x| x.iter().map(|p| p.map(|v| v.re * l)).collect())
             .collect();
         (x_hat, shapes)
+    }
+
+    /// One frequency's GAF column parts from its LFD solutions (the modes', then the gust's):
+    /// Q_ss[i][j] and Q_gs[i], mode i's generalized force of column j in GAF units.
+    fn project(
+        &self,
+        sol: &[Solution],
+        x_hat: &[NodeField],
+        shapes: &[Vec<[f64; 3]>],
+        scale: f64,
+    ) -> (Vec<Vec<C64>>, Vec<C64>) {
+        let n = x_hat.len();
+        let mut q_ss = vec![vec![C64::new(0.0, 0.0); n]; n];
+        for (j, (q, _)) in sol[..n].iter().enumerate() {
+            let g = self.lfd.generalized_forces(q, Some(&x_hat[j]), shapes);
+            for i in 0..n {
+                q_ss[i][j] = g[i] * scale;
+            }
+        }
+        let q_gs = self
+            .lfd
+            .generalized_forces(&sol[n].0, None, shapes)
+            .iter()
+            .map(|g| g * scale)
+            .collect();
+        (q_ss, q_gs)
     }
 
     /// GAF units per non-dimensional generalized force: 2 × area / M² (forces in ρ∞ a∞² times
@@ -558,53 +588,37 @@ impl Aerodynamics for Lfd {
             .as_ref()
             .map(|w| w.lock().unwrap_or_else(|e| e.into_inner()));
         // the frequencies in rounds of one a thread: the factorizations and right-hand sides
-        // of one round only are held at once
-        let mut solved: Vec<Vec<Solution>> = Vec::with_capacity(k.len());
+        // of one round only are held at once; each frequency's solutions are projected, copied
+        // for the warm start and stored (in memory or a file) as its round ends
+        let mut solved = ForwardSolutions::new(&self.forward_storage, n);
+        let mut parts = Vec::with_capacity(k.len());
+        let (mut kept, mut iterations) = (Vec::new(), 0);
         for round in k.chunks(rayon::current_num_threads().max(1)) {
-            let part: Result<Vec<Vec<Solution>>, AeroError> = round
+            let part: Result<Vec<_>, AeroError> = round
                 .par_iter()
                 .map(|&kk| {
                     let guesses = warm.as_ref().map(|w| w.guesses(kk, n)).unwrap_or_default();
-                    Ok(self.forward_from(flight, kk, &x_hat, &guesses)?.1)
+                    let sol = self.forward_from(flight, kk, &x_hat, &guesses)?.1;
+                    let gafs = self.project(&sol, &x_hat, &shapes, scale);
+                    Ok((sol, gafs))
                 })
                 .collect();
-            solved.extend(part?);
+            for ((sol, gafs), &kk) in part?.into_iter().zip(round) {
+                if self.warm_start.is_some() {
+                    let (single, i) = WarmStart::single(&sol);
+                    kept.push((kk, single));
+                    iterations += i;
+                }
+                parts.push(gafs);
+                solved.push(sol).map_err(AeroError::Input)?;
+            }
         }
         drop(warm);
         if let Some(w) = &self.warm_start {
-            let (kept, iterations) =
-                k.iter()
-                    .zip(&solved)
-                    .fold((Vec::new(), 0), |(mut kept, it), (&kk, s)| {
-                        let (single, i) = WarmStart::single(s);
-                        kept.push((kk, single));
-                        (kept, it + i)
-                    });
             let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
             w.keep(n, kept, iterations, false);
         }
-        let parts: Result<Vec<_>, AeroError> = k
-            .par_iter()
-            .zip(&solved)
-            .map(|(_, sol)| {
-                let n = x_hat.len();
-                let mut q_ss = vec![vec![C64::new(0.0, 0.0); n]; n];
-                for (j, (q, _)) in sol[..n].iter().enumerate() {
-                    let g = self.lfd.generalized_forces(q, Some(&x_hat[j]), &shapes);
-                    for i in 0..n {
-                        q_ss[i][j] = g[i] * scale;
-                    }
-                }
-                let q_gs = self
-                    .lfd
-                    .generalized_forces(&sol[n].0, None, &shapes)
-                    .iter()
-                    .map(|g| g * scale)
-                    .collect();
-                Ok((q_ss, q_gs))
-            })
-            .collect();
-        let table = GafTable::from_parts(flight, k, parts?);
+        let table = GafTable::from_parts(flight, k, parts);
         // kept for a reverse sweep at the same point (the pipeline's gradient follows its function)
         *self.last_forward.lock().unwrap_or_else(|e| e.into_inner()) = Some(ForwardCache {
             flight: *flight,
@@ -630,8 +644,15 @@ impl Aerodynamics for Lfd {
         else {
             return Vec::new();
         };
-        let n = c.solutions[i].len();
-        c.solutions[i]
+        let solutions = match c.solutions.get(i) {
+            Ok(s) => s,
+            Err(e) => {
+                eprintln!("warning: no LFD amplitude fields at k = {k}: {e}");
+                return Vec::new();
+            }
+        };
+        let n = solutions.len();
+        solutions
             .iter()
             .enumerate()
             .map(|(j, (q_hat, _))| {
@@ -770,20 +791,21 @@ impl AerodynamicsReverse for Lfd {
                 .par_iter()
                 .map(|&ik| {
                     let kk = k[ik];
-                    let fresh;
-                    let (f, sol): (Factored, &[Solution]) = match cached.as_ref() {
-                        Some(c) => (self.factor_at(flight, kk, nm)?, &c.solutions[ik]),
+                    let (f, sol): (Factored, Cow<[Solution]>) = match cached.as_ref() {
+                        Some(c) => (
+                            self.factor_at(flight, kk, nm)?,
+                            c.solutions.get(ik).map_err(AeroError::Input)?,
+                        ),
                         None => {
                             let (f, s) = self.forward(flight, kk, &sweep.x_hat)?;
-                            fresh = s;
-                            (f, &fresh)
+                            (f, Cow::Owned(s))
                         }
                     };
                     let guesses = warm
                         .as_ref()
                         .map(|w| w.adjoint_guesses(kk, n))
                         .unwrap_or_default();
-                    sweep.at_frequency(ik, kk, f, sol, seeds, &guesses)
+                    sweep.at_frequency(ik, kk, f, &sol, seeds, &guesses)
                 })
                 .collect();
             match swept {
@@ -1325,6 +1347,120 @@ mod tests {
         let mut lfd = LfdOperator::with_preconditioner(e, q0, crate::lfd::Preconditioner::BlockIlu);
         lfd.params.tolerance = 1e-10;
         Lfd::new(lfd, 1.0, 1.0, 10.0)
+    }
+
+    /// Forward solutions kept in scratch files instead of memory change no number: the table,
+    /// a reverse sweep (every entry seeded, the solutions read back from the files) and the
+    /// amplitude fields are those of the memory store bit for bit, and the files are gone once
+    /// the model is.
+    #[test]
+    fn forward_solutions_in_files_change_no_number() {
+        let flight = subsonic_test_flight();
+        let ks = [0.0, 0.4];
+        let mut aero = ilu_section();
+        let modes = rigid_modes(&aero);
+        let seed = random_seed(&flight, &ks, 2, 5);
+        let dir =
+            std::env::temp_dir().join(format!("gustkit_forward_store_test_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut runs = Vec::new();
+        for storage in [ForwardStorage::Memory, ForwardStorage::Files(dir.clone())] {
+            aero.forward_storage = storage;
+            let table = aero.gafs(&flight, &modes, &ks).unwrap();
+            let files = std::fs::read_dir(&dir).unwrap().count();
+            let g = aero.gafs_vjp(&flight, &modes, &ks, &seed).unwrap();
+            let fields = aero.amplitude_fields(0.4, "test");
+            runs.push((table, g, fields, files));
+        }
+        let ((t0, g0, f0, files0), (t1, g1, f1, files1)) = (&runs[0], &runs[1]);
+        assert_eq!((*files0, *files1), (0, ks.len()));
+        let bits = |t: &GafTable| -> Vec<u64> {
+            let mut v = Vec::new();
+            for i in 0..ks.len() {
+                for row in &t.q_ss[i] {
+                    v.extend(row.iter().flat_map(|c| [c.re.to_bits(), c.im.to_bits()]));
+                }
+                v.extend(
+                    t.q_gs[i]
+                        .iter()
+                        .flat_map(|c| [c.re.to_bits(), c.im.to_bits()]),
+                );
+            }
+            v
+        };
+        assert_eq!(bits(t0), bits(t1));
+        let g_bits = |g: &GafGradient| g.modes.values().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(g_bits(g0), g_bits(g1));
+        assert_eq!(f0.len(), 3);
+        assert_eq!(f0, f1);
+        drop(aero);
+        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+        std::fs::remove_dir(&dir).unwrap();
+    }
+
+    /// The ILU's factors stored in single precision change the GMRES's path, not its answer:
+    /// with GMRES to 1e-12 the GAF table and a reverse sweep (every entry seeded) equal those
+    /// of double-precision factors to 1e-10 of their largest entries (the bound for a
+    /// memory reduction), in about as many iterations (f32 round-off, 6e-8, is far below the
+    /// ILU's own error as an inverse).
+    #[test]
+    fn single_precision_ilu_factors_give_the_double_precision_answer() {
+        let flight = subsonic_test_flight();
+        let ks = [0.0, 0.4, 1.5];
+        let mut aero = ilu_section();
+        aero.lfd.params.tolerance = 1e-12;
+        let modes = rigid_modes(&aero);
+        let seed = random_seed(&flight, &ks, 2, 5);
+        let mut runs = Vec::new();
+        for precision in [
+            crate::ilu::IluPrecision::Double,
+            crate::ilu::IluPrecision::Single,
+        ] {
+            aero.lfd.params.ilu.precision = precision;
+            let store = std::sync::Arc::new(std::sync::Mutex::new(WarmStart::default()));
+            aero.warm_start = Some(store.clone());
+            let table = aero.gafs(&flight, &modes, &ks).unwrap();
+            let g = aero.gafs_vjp(&flight, &modes, &ks, &seed).unwrap();
+            let s = store.lock().unwrap();
+            let bytes = aero.lfd.factor(1.0, Symbol::Exact).unwrap().bytes();
+            runs.push((
+                table,
+                g,
+                s.last_iterations,
+                s.last_adjoint_iterations,
+                bytes,
+            ));
+        }
+        let ((t64, g64, it64, adj64, b64), (t32, g32, it32, adj32, b32)) = (&runs[0], &runs[1]);
+        // the numbers (25 complex values a block) halve; the column indices and row starts not
+        assert!(
+            (*b32 as f64) < 0.55 * *b64 as f64,
+            "factors {b64} → {b32} bytes"
+        );
+        let (mut big, mut d) = (0.0f64, 0.0f64);
+        for i in 0..ks.len() {
+            for r in 0..2 {
+                for c in 0..2 {
+                    big = big.max(t64.q_ss[i][r][c].norm());
+                    d = d.max((t32.q_ss[i][r][c] - t64.q_ss[i][r][c]).norm());
+                }
+                big = big.max(t64.q_gs[i][r].norm());
+                d = d.max((t32.q_gs[i][r] - t64.q_gs[i][r]).norm());
+            }
+        }
+        let (mut g_big, mut g_d) = (0.0f64, 0.0f64);
+        for (x, y) in g64.modes.values().zip(g32.modes.values()) {
+            g_big = g_big.max(x.abs());
+            g_d = g_d.max((x - y).abs());
+        }
+        eprintln!(
+            "single against double ILU factors: table {:.1e}, reverse {:.1e} of the largest entry; GMRES iterations {it64} → {it32}, adjoint {adj64} → {adj32}; factors {b64} → {b32} bytes",
+            d / big,
+            g_d / g_big
+        );
+        assert!(d < 1e-10 * big && g_d < 1e-10 * g_big);
+        let close = |a: usize, b: usize| b <= a + a / 10 + 1;
+        assert!(close(*it64, *it32) && close(*adj64, *adj32));
     }
 
     /// Three designs on a line (plunge × 1, 1.01, 1.02; pitch axis at 0, 2 and 4 % of the chord:

@@ -18,6 +18,7 @@ pub mod adjoint;
 pub mod airfoil;
 pub mod deform;
 pub mod flux;
+pub mod forward_store;
 pub mod gas;
 pub mod ilu;
 pub mod jacobian;

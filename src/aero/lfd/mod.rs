@@ -21,7 +21,8 @@ use super::contract::{
 use crate::wing::{N_PLANFORM, PLANFORM_NAMES};
 use anyhow::{Context, Result};
 use gustkit_cfd::airfoil::AirfoilShape;
-use gustkit_cfd::ilu::{IluOrdering, IluParams};
+use gustkit_cfd::forward_store::ForwardStorage;
+use gustkit_cfd::ilu::{IluOrdering, IluParams, IluPrecision};
 use gustkit_cfd::lfd::{LfdOperator, LfdParams, Preconditioner};
 use gustkit_cfd::lfd_model::Lfd;
 use gustkit_cfd::mesh::{Boundary, Mesh};
@@ -61,6 +62,18 @@ pub struct LfdWingSpec {
     /// The ILU's elimination order: "rcm" (reverse Cuthill–McKee) or "natural" (the mesh's).
     #[serde(default)]
     pub ilu_ordering: IluOrderingSpec,
+    /// The precision the ILU factors are stored in: "single" (the default: half the memory;
+    /// the GMRES converges on the exact operator to its tolerance either way) or "double".
+    /// Absent: single, not written back (a study's serialized form fingerprints partial results
+    /// and checkpoints).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ilu_precision: Option<IluPrecisionSpec>,
+    /// Where the forward LFD solutions of a GAF table wait for its reverse sweep: "disk" (the
+    /// default: scratch files in the system's temporary folder, `TMPDIR`, 80 bytes a cell per
+    /// reduced frequency and column off the process's memory, read back bit for bit) or
+    /// "memory". Absent: disk, not written back.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub forward_solutions: Option<ForwardSolutionsSpec>,
     /// GMRES stops at ‖A q̂ + b‖ ≤ tolerance ‖b‖.
     #[serde(default = "default_gmres_tolerance")]
     pub gmres_tolerance: f64,
@@ -157,25 +170,6 @@ fn default_memory_limit() -> f64 {
     12.0
 }
 
-/// Bytes per cell of the LFD wing model on `threads` threads (each works on one frequency at a
-/// time, with its factorization and one right-hand side's GMRES basis), from its parts: shared by
-/// the threads, the mesh, geometry, states and deformation, the exact second-order Jacobian
-/// (25 blocks a row, 5.2 kB) and the preconditioner's first-order blocks, and the forward
-/// solutions of one GAF table kept for the reverse sweep (11 k × 7 columns × 80 B) — 12 kB in
-/// all; per thread the block ILU(k) of one frequency (6.9 blocks a row for ILU(0) and
-/// the fill blocks of ILU(k), 408 B each), the GMRES basis of one right-hand side (restart + 1
-/// complex vectors of 5 unknowns; the preconditioned vectors are not kept) and the frequency's
-/// right-hand sides and dual-number geometry (3 kB). 41 kB a cell on 2 threads at restart 80
-/// with ILU(1); measured on the medium wing mesh (57 344 cells, 2 threads, 6 modes): 2.05 GB
-/// above the process's start, 35.7 kB a cell (49 kB with the preconditioned vectors kept).
-fn bytes_per_cell(restart: usize, ilu_fill: usize, threads: usize) -> f64 {
-    let threads = threads.max(1) as f64;
-    // the blocks a row of ILU(k) (measured on the medium wing mesh: 6.9, 12.7, 22.1 and 33.2
-    // for ILU(0) to ILU(3)), 408 B a complex block and its column
-    let ilu_blocks = [6.9, 12.7, 22.1, 33.2][ilu_fill.min(3)];
-    12e3 + threads * (ilu_blocks * 408.0 + (restart as f64 + 1.0) * 5.0 * 16.0 + 3e3)
-}
-
 impl LfdWingSpec {
     /// The wing mesh sizes of the spec.
     pub fn mesh_spec(&self) -> WingMeshSpec {
@@ -193,16 +187,50 @@ impl LfdWingSpec {
         }
     }
 
+    /// Bytes per cell of the LFD wing model on `threads` threads (each works on one frequency
+    /// at a time, with its factorization and one right-hand side's GMRES basis), from its parts:
+    /// shared by the threads, the mesh, geometry, states and deformation, the exact second-order
+    /// Jacobian (25 blocks a row, 5.2 kB) and the preconditioner's first-order blocks (5.8 kB
+    /// in all), and with `forward_solutions: "memory"` the forward solutions of one GAF table
+    /// kept for the reverse sweep (11 k × 7 columns × 80 B, 6.2 kB); per thread the block
+    /// ILU(k) of one frequency (6.9 blocks a row for ILU(0) and the fill blocks of ILU(k), the
+    /// diagonal's inverse among them: 25 complex numbers each, 200 B in single precision or
+    /// 400 B in double, and a 4-byte column), the GMRES basis of one right-hand side (restart +
+    /// 1 complex vectors of 5 unknowns; the preconditioned vectors are not kept) and the
+    /// frequency's right-hand sides and dual-number geometry (3 kB). 30 kB a cell on 2 threads
+    /// at the defaults (restart 80, ILU(1) in single precision, forward solutions on disk),
+    /// 41 kB with double-precision factors and the solutions in memory; measured on the medium
+    /// wing mesh (57 344 cells, 2 threads, 6 modes) with the latter: 2.05 GB above the
+    /// process's start, 35.7 kB a cell (49 kB with the preconditioned vectors kept).
+    fn bytes_per_cell(&self, threads: usize) -> f64 {
+        let threads = threads.max(1) as f64;
+        // the blocks a row of ILU(k) (measured on the medium wing mesh: 6.9, 12.7, 22.1 and
+        // 33.2 for ILU(0) to ILU(3))
+        let ilu_blocks = [6.9, 12.7, 22.1, 33.2][self.ilu_fill.min(3)];
+        let block = if self.single_precision_ilu() {
+            200.0
+        } else {
+            400.0
+        } + 4.0;
+        let forward = match self.forward_solutions.unwrap_or_default() {
+            ForwardSolutionsSpec::Disk => 0.0,
+            ForwardSolutionsSpec::Memory => 6.2e3,
+        };
+        5.8e3
+            + forward
+            + threads
+                * (ilu_blocks * block + 16.0 + (self.gmres_restart as f64 + 1.0) * 5.0 * 16.0 + 3e3)
+    }
+
+    /// Whether the ILU's factors are stored in single precision (the default).
+    fn single_precision_ilu(&self) -> bool {
+        self.ilu_precision.unwrap_or_default() == IluPrecisionSpec::Single
+    }
+
     /// The memory the model would take, GB.
     /// (on the threads of the pool it will run on: rayon's current pool).
     pub fn memory_estimate_gb(&self) -> f64 {
-        self.mesh_spec().n_cells() as f64
-            * bytes_per_cell(
-                self.gmres_restart,
-                self.ilu_fill,
-                rayon::current_num_threads(),
-            )
-            / 1e9
+        self.mesh_spec().n_cells() as f64 * self.bytes_per_cell(rayon::current_num_threads()) / 1e9
     }
 
     fn params(&self) -> LfdParams {
@@ -215,6 +243,11 @@ impl LfdWingSpec {
                 ordering: match self.ilu_ordering {
                     IluOrderingSpec::Rcm => IluOrdering::ReverseCuthillMckee,
                     IluOrderingSpec::Natural => IluOrdering::Natural,
+                },
+                precision: if self.single_precision_ilu() {
+                    IluPrecision::Single
+                } else {
+                    IluPrecision::Double
                 },
             },
         }
@@ -368,13 +401,7 @@ impl WingBuilder for LfdWingSpec {
                 let m = file.read().map_err(file_fail)?;
                 m.check()
                     .map_err(|e| file_fail(format!("{}: invalid mesh: {e}", file.path)))?;
-                let gb = m.n_cells as f64
-                    * bytes_per_cell(
-                        self.gmres_restart,
-                        self.ilu_fill,
-                        rayon::current_num_threads(),
-                    )
-                    / 1e9;
+                let gb = m.n_cells as f64 * self.bytes_per_cell(rayon::current_num_threads()) / 1e9;
                 if !(gb <= self.memory_limit_gb) {
                     return Err(file_fail(format!(
                         "{} ({} cells) needs about {gb:.1} GB, above memory_limit_gb = {}: choose a coarser mesh or raise the limit",
@@ -452,6 +479,10 @@ impl WingBuilder for LfdWingSpec {
         // the designs of one run (one run folder) start their GMRES from the previous design's
         // solutions
         model.warm_start = wing.cache_dir.map(steady_cache::warm_start_store);
+        model.forward_storage = match self.forward_solutions.unwrap_or_default() {
+            ForwardSolutionsSpec::Disk => ForwardStorage::Files(std::env::temp_dir()),
+            ForwardSolutionsSpec::Memory => ForwardStorage::Memory,
+        };
         if let Some(w) = &model.warm_start {
             w.lock().unwrap_or_else(|e| e.into_inner()).designs = self.warm_start_designs();
         }
