@@ -8,8 +8,11 @@
 //! nodes; then the reverse mode (its Jacobians by colouring, every GAF entry seeded) with its
 //! memory. Each figure is one run (these solves take seconds to minutes); the thread count is
 //! printed. `cargo bench -p gustkit-cfd --bench wing` runs the coarse level;
-//! `WING_LEVELS=coarse,medium` adds the medium one (about 10 minutes, 3.5 GB).
+//! `WING_LEVELS=coarse,medium` adds the medium one (about 10 minutes, 3.5 GB). The forward
+//! solutions wait for the reverse on disk as in the wing studies (`WING_FORWARD=memory` keeps
+//! them in memory); `WING_REVERSE=0` stops after the GAF table.
 
+use gustkit_cfd::forward_store::ForwardStorage;
 use gustkit_cfd::ilu::{IluOrdering, IluParams, IluPrecision};
 use gustkit_cfd::lfd::{HarmonicGust, LfdOperator, Preconditioner, Symbol};
 use gustkit_cfd::lfd_model::Lfd;
@@ -167,7 +170,12 @@ fn main() {
         let t_rhs = t.elapsed().as_secs_f64();
         drop(f);
         // six smooth shapes on the wall (bending and torsion polynomials), 11 frequencies
-        let model = Lfd::new(op, 1.0, 1.0, 5.0 * p[2]);
+        // the forward solutions on disk as in the wing studies (`WING_FORWARD=memory`: kept in
+        // memory)
+        let mut model = Lfd::new(op, 1.0, 1.0, 5.0 * p[2]);
+        if std::env::var("WING_FORWARD").as_deref() != Ok("memory") {
+            model.forward_storage = ForwardStorage::Files(std::env::temp_dir());
+        }
         let pts = &model.surface().points;
         let mut modes = ModalSurface::zeros(6, pts.len());
         for (i, x) in pts.iter().enumerate() {
@@ -200,6 +208,13 @@ fn main() {
         let mut seed = model.gafs(&flight, &modes, &k).expect("GAF table");
         let t_table = t.elapsed().as_secs_f64();
         let peak_table = peak_gb();
+        if std::env::var("WING_REVERSE").as_deref() == Ok("0") {
+            println!(
+                "{level}: {n} cells; GAF table (11 k × 7 right-hand sides) {t_table:.1} s; peak memory: model {peak_build:.2} GB, GAF table {peak_table:.2} GB ({:.1} kB a cell); reverse not run (WING_REVERSE=0)",
+                peak_table * 1e6 / n as f64
+            );
+            continue;
+        }
         reset_peak();
         // the reverse mode: its Jacobians once, then every GAF entry seeded
         let t = Instant::now();
