@@ -1349,6 +1349,26 @@ mod tests {
         Lfd::new(lfd, 1.0, 1.0, 10.0)
     }
 
+    /// The largest entry of table `a` (Q_ss and Q_gs) and the largest difference of `b` from it.
+    fn table_difference(a: &GafTable, b: &GafTable) -> (f64, f64) {
+        let (mut big, mut d) = (0.0f64, 0.0f64);
+        for (qa, qb) in a
+            .q_ss
+            .iter()
+            .flatten()
+            .flatten()
+            .zip(b.q_ss.iter().flatten().flatten())
+        {
+            big = big.max(qa.norm());
+            d = d.max((qa - qb).norm());
+        }
+        for (qa, qb) in a.q_gs.iter().flatten().zip(b.q_gs.iter().flatten()) {
+            big = big.max(qa.norm());
+            d = d.max((qa - qb).norm());
+        }
+        (big, d)
+    }
+
     /// Forward solutions kept in scratch files instead of memory change no number: the table,
     /// a reverse sweep (every entry seeded, the solutions read back from the files) and the
     /// amplitude fields are those of the memory store bit for bit, and the files are gone once
@@ -1437,17 +1457,7 @@ mod tests {
             (*b32 as f64) < 0.55 * *b64 as f64,
             "factors {b64} → {b32} bytes"
         );
-        let (mut big, mut d) = (0.0f64, 0.0f64);
-        for i in 0..ks.len() {
-            for r in 0..2 {
-                for c in 0..2 {
-                    big = big.max(t64.q_ss[i][r][c].norm());
-                    d = d.max((t32.q_ss[i][r][c] - t64.q_ss[i][r][c]).norm());
-                }
-                big = big.max(t64.q_gs[i][r].norm());
-                d = d.max((t32.q_gs[i][r] - t64.q_gs[i][r]).norm());
-            }
-        }
+        let (big, d) = table_difference(t64, t32);
         let (mut g_big, mut g_d) = (0.0f64, 0.0f64);
         for (x, y) in g64.modes.values().zip(g32.modes.values()) {
             g_big = g_big.max(x.abs());
@@ -1499,18 +1509,7 @@ mod tests {
             runs.push((table, s.last_iterations));
         }
         let ((one, it_one), (two, it_two)) = (&runs[0], &runs[1]);
-        let mut big = 0.0f64;
-        let mut d = 0.0f64;
-        for i in 0..ks.len() {
-            for r in 0..2 {
-                for c in 0..2 {
-                    big = big.max(one.q_ss[i][r][c].norm());
-                    d = d.max((two.q_ss[i][r][c] - one.q_ss[i][r][c]).norm());
-                }
-                big = big.max(one.q_gs[i][r].norm());
-                d = d.max((two.q_gs[i][r] - one.q_gs[i][r]).norm());
-            }
-        }
+        let (big, d) = table_difference(one, two);
         eprintln!(
             "third design's GMRES iterations: from the second design {it_one}, from the last two {it_two}; tables differ by {:.1e}",
             d / big
