@@ -200,8 +200,8 @@ impl LfdWingSpec {
     /// frequency's right-hand sides and dual-number geometry (3 kB). 30 kB a cell on 2 threads
     /// at the defaults (restart 80, ILU(1) in single precision, forward solutions on disk),
     /// 41 kB with double-precision factors and the solutions in memory; measured on the medium
-    /// wing mesh (57 344 cells, 2 threads, 6 modes) with the latter: 2.05 GB above the
-    /// process's start, 35.7 kB a cell (49 kB with the preconditioned vectors kept).
+    /// wing mesh (57 344 cells, 2 threads, 6 modes): the whole `gustkit gafs` peaks at 1.75 GB
+    /// (30.4 kB a cell) at the defaults, 2.30 GB (40.0 kB) with the latter.
     fn bytes_per_cell(&self, threads: usize) -> f64 {
         let threads = threads.max(1) as f64;
         // the blocks a row of ILU(k) (measured on the medium wing mesh: 6.9, 12.7, 22.1 and
