@@ -190,16 +190,16 @@ impl LfdWingSpec {
     /// Bytes per cell of the LFD wing model on `threads` threads (each works on one frequency
     /// at a time, with its factorization and one right-hand side's GMRES basis), from its parts:
     /// shared by the threads, the mesh, geometry, states and deformation, the exact second-order
-    /// Jacobian (25 blocks a row, 5.2 kB) and the preconditioner's first-order blocks (5.8 kB
-    /// in all), and with `forward_solutions: "memory"` the forward solutions of one GAF table
+    /// Jacobian (25 blocks a row, 5.2 kB) and the preconditioner's first-order blocks (7.5 kB
+    /// in all, with a margin over the measurements below), and with `forward_solutions: "memory"` the forward solutions of one GAF table
     /// kept for the reverse sweep (11 k × 7 columns × 80 B, 6.2 kB); per thread the block
     /// ILU(k) of one frequency (6.9 blocks a row for ILU(0) and the fill blocks of ILU(k), the
     /// diagonal's inverse among them: 25 complex numbers each, 200 B in single precision or
     /// 400 B in double, and a 4-byte column), the GMRES basis of one right-hand side (restart +
     /// 1 complex vectors of 5 unknowns; the preconditioned vectors are not kept) and the
-    /// frequency's right-hand sides and dual-number geometry (3 kB). 30 kB a cell on 2 threads
+    /// frequency's right-hand sides and dual-number geometry (3 kB). 32 kB a cell on 2 threads
     /// at the defaults (restart 80, ILU(1) in single precision, forward solutions on disk),
-    /// 41 kB with double-precision factors and the solutions in memory; measured on the medium
+    /// 43 kB with double-precision factors and the solutions in memory; measured on the medium
     /// wing mesh (57 344 cells, 2 threads, 6 modes): the whole `gustkit gafs` peaks at 1.75 GB
     /// (30.4 kB a cell) at the defaults, 2.30 GB (40.0 kB) with the latter.
     fn bytes_per_cell(&self, threads: usize) -> f64 {
@@ -216,7 +216,7 @@ impl LfdWingSpec {
             ForwardSolutionsSpec::Disk => 0.0,
             ForwardSolutionsSpec::Memory => 6.2e3,
         };
-        5.8e3
+        7.5e3
             + forward
             + threads
                 * (ilu_blocks * block + 16.0 + (self.gmres_restart as f64 + 1.0) * 5.0 * 16.0 + 3e3)

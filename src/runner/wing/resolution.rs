@@ -94,7 +94,8 @@ fn refined_study(
     let fits = |s: &Study| s.check_memory(1).and_then(|()| s.validate_fidelity());
     if let Err(e) = fits(&s) {
         // the next lattice or mesh does not fit (an LFD on the medium mesh: the fine one needs
-        // about 14 GB by the estimate, 19.5 GB measured before the single-precision ILU): the modes alone are doubled, and the words say what was not refined
+        // about 14.5 GB by the estimate; 19.5 GB was measured before the single-precision ILU):
+        // the modes alone are doubled, and the words say what was not refined
         let aero = s.spec.aero.as_mut().expect("refinable: it has one");
         aero.fidelity = original;
         let same = format!(
