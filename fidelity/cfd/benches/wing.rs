@@ -8,11 +8,9 @@
 //! nodes; then the reverse mode (its Jacobians by colouring, every GAF entry seeded) with its
 //! memory. Each figure is one run (these solves take seconds to minutes); the thread count is
 //! printed. `cargo bench -p gustkit-cfd --bench wing` runs the coarse level;
-//! `WING_LEVELS=coarse,medium` adds the medium one (about 10 minutes, 3.5 GB). The forward
-//! solutions wait for the reverse on disk as in the wing studies (`WING_FORWARD=memory` keeps
-//! them in memory); `WING_REVERSE=0` stops after the GAF table.
+//! `WING_LEVELS=coarse,medium` adds the medium one (about 10 minutes, 3.5 GB);
+//! `WING_REVERSE=0` stops after the GAF table.
 
-use gustkit_cfd::forward_store::ForwardStorage;
 use gustkit_cfd::ilu::{IluOrdering, IluParams, IluPrecision};
 use gustkit_cfd::lfd::{HarmonicGust, LfdOperator, Preconditioner, Symbol};
 use gustkit_cfd::lfd_model::Lfd;
@@ -170,12 +168,9 @@ fn main() {
         let t_rhs = t.elapsed().as_secs_f64();
         drop(f);
         // six smooth shapes on the wall (bending and torsion polynomials), 11 frequencies
-        // the forward solutions on disk as in the wing studies (`WING_FORWARD=memory`: kept in
-        // memory)
-        let mut model = Lfd::new(op, 1.0, 1.0, 5.0 * p[2]);
-        if std::env::var("WING_FORWARD").as_deref() != Ok("memory") {
-            model.forward_storage = ForwardStorage::Files(std::env::temp_dir());
-        }
+        // (the forward solutions stay in memory here: the studies' scratch files are
+        // gustkit's, whose `gustkit gafs` measures them)
+        let model = Lfd::new(op, 1.0, 1.0, 5.0 * p[2]);
         let pts = &model.surface().points;
         let mut modes = ModalSurface::zeros(6, pts.len());
         for (i, x) in pts.iter().enumerate() {

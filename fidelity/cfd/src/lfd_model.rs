@@ -590,7 +590,7 @@ impl Aerodynamics for Lfd {
         // the frequencies in rounds of one a thread: the factorizations and right-hand sides
         // of one round only are held at once; each frequency's solutions are projected, copied
         // for the warm start and stored (in memory or a file) as its round ends
-        let mut solved = ForwardSolutions::new(&self.forward_storage, n);
+        let mut solved = ForwardSolutions::new(&self.forward_storage);
         let mut parts = Vec::with_capacity(k.len());
         let (mut kept, mut iterations) = (Vec::new(), 0);
         for round in k.chunks(rayon::current_num_threads().max(1)) {
@@ -1369,31 +1369,86 @@ mod tests {
         (big, d)
     }
 
-    /// Forward solutions kept in scratch files instead of memory change no number: the table,
-    /// a reverse sweep (every entry seeded, the solutions read back from the files) and the
-    /// amplitude fields are those of the memory store bit for bit, and the files are gone once
-    /// the model is.
+    /// A spill that keeps each frequency's columns as little-endian bytes (as a file would),
+    /// counting what it holds.
+    #[derive(Debug, Default)]
+    struct ByteSpill {
+        held: std::sync::Arc<std::sync::atomic::AtomicUsize>,
+    }
+
+    struct ByteColumns {
+        bytes: Vec<u8>,
+        n: usize,
+        held: std::sync::Arc<std::sync::atomic::AtomicUsize>,
+    }
+
+    impl crate::forward_store::ForwardSpill for ByteSpill {
+        fn put(
+            &self,
+            columns: &[Vec<C64>],
+        ) -> Result<Box<dyn crate::forward_store::Spilled>, String> {
+            let bytes = columns
+                .iter()
+                .flatten()
+                .flat_map(|v| [v.re.to_le_bytes(), v.im.to_le_bytes()])
+                .flatten()
+                .collect();
+            self.held.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+            Ok(Box::new(ByteColumns {
+                bytes,
+                n: columns[0].len(),
+                held: self.held.clone(),
+            }))
+        }
+    }
+
+    impl crate::forward_store::Spilled for ByteColumns {
+        fn read(&self) -> Result<Vec<Vec<C64>>, String> {
+            let values: Vec<C64> = self
+                .bytes
+                .chunks(16)
+                .map(|c| {
+                    C64::new(
+                        f64::from_le_bytes(c[..8].try_into().unwrap()),
+                        f64::from_le_bytes(c[8..].try_into().unwrap()),
+                    )
+                })
+                .collect();
+            Ok(values.chunks(self.n).map(<[C64]>::to_vec).collect())
+        }
+    }
+
+    impl Drop for ByteColumns {
+        fn drop(&mut self) {
+            self.held.fetch_sub(1, std::sync::atomic::Ordering::SeqCst);
+        }
+    }
+
+    /// Forward solutions handed to a spill instead of kept in memory change no number: the
+    /// table, a reverse sweep (every entry seeded, the solutions read back) and the amplitude
+    /// fields are those of the memory store bit for bit; the spill holds one entry a frequency
+    /// and none once the model is gone.
     #[test]
-    fn forward_solutions_in_files_change_no_number() {
+    fn spilled_forward_solutions_change_no_number() {
         let flight = subsonic_test_flight();
         let ks = [0.0, 0.4];
         let mut aero = ilu_section();
         let modes = rigid_modes(&aero);
         let seed = random_seed(&flight, &ks, 2, 5);
-        let dir =
-            std::env::temp_dir().join(format!("gustkit_forward_store_test_{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let spill = std::sync::Arc::new(ByteSpill::default());
+        let held = spill.held.clone();
+        let count = || held.load(std::sync::atomic::Ordering::SeqCst);
         let mut runs = Vec::new();
-        for storage in [ForwardStorage::Memory, ForwardStorage::Files(dir.clone())] {
+        for storage in [ForwardStorage::Memory, ForwardStorage::Spill(spill)] {
             aero.forward_storage = storage;
             let table = aero.gafs(&flight, &modes, &ks).unwrap();
-            let files = std::fs::read_dir(&dir).unwrap().count();
+            let entries = count();
             let g = aero.gafs_vjp(&flight, &modes, &ks, &seed).unwrap();
             let fields = aero.amplitude_fields(0.4, "test");
-            runs.push((table, g, fields, files));
+            runs.push((table, g, fields, entries));
         }
-        let ((t0, g0, f0, files0), (t1, g1, f1, files1)) = (&runs[0], &runs[1]);
-        assert_eq!((*files0, *files1), (0, ks.len()));
+        let ((t0, g0, f0, held0), (t1, g1, f1, held1)) = (&runs[0], &runs[1]);
+        assert_eq!((*held0, *held1), (0, ks.len()));
         let bits = |t: &GafTable| -> Vec<u64> {
             let mut v = Vec::new();
             for i in 0..ks.len() {
@@ -1414,8 +1469,7 @@ mod tests {
         assert_eq!(f0.len(), 3);
         assert_eq!(f0, f1);
         drop(aero);
-        assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
-        std::fs::remove_dir(&dir).unwrap();
+        assert_eq!(count(), 0);
     }
 
     /// The ILU's factors stored in single precision change the GMRES's path, not its answer:

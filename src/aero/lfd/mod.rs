@@ -5,6 +5,7 @@
 
 mod artifacts;
 mod mesh_source;
+mod scratch;
 mod section;
 mod settings;
 mod steady_cache;
@@ -480,7 +481,9 @@ impl WingBuilder for LfdWingSpec {
         // solutions
         model.warm_start = wing.cache_dir.map(steady_cache::warm_start_store);
         model.forward_storage = match self.forward_solutions.unwrap_or_default() {
-            ForwardSolutionsSpec::Disk => ForwardStorage::Files(std::env::temp_dir()),
+            ForwardSolutionsSpec::Disk => ForwardStorage::Spill(std::sync::Arc::new(
+                scratch::ScratchFolder(std::env::temp_dir()),
+            )),
             ForwardSolutionsSpec::Memory => ForwardStorage::Memory,
         };
         if let Some(w) = &model.warm_start {
