@@ -590,6 +590,9 @@ impl Aerodynamics for Lfd {
         // the frequencies in rounds of one a thread: the factorizations and right-hand sides
         // of one round only are held at once; each frequency's solutions are projected, copied
         // for the warm start and stored (in memory or a file) as its round ends
+        // the last table's solutions are for another point: let them go before this table's
+        // arrive (not held beside them)
+        *self.last_forward.lock().unwrap_or_else(|e| e.into_inner()) = None;
         let mut solved = ForwardSolutions::new(&self.forward_storage);
         let mut parts = Vec::with_capacity(k.len());
         let (mut kept, mut iterations) = (Vec::new(), 0);
