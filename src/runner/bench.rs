@@ -164,7 +164,11 @@ pub fn bench(study: &Study, repeat: Option<usize>, optimization: bool) -> Result
             "  GAF reverse, first call (assembles the Jacobians), all variables {:>7.2} s",
             t.vjp_first_s
         );
-        println!("{}", t.vjp.line_s("GAF reverse, Jacobians reused"));
+        println!(
+            "{}",
+            t.vjp
+                .line_s("GAF reverse, Jacobians reused (∂R/∂x recomputed a call)")
+        );
         let cells = spec.mesh_spec().n_cells() as f64;
         for (what, peak) in [
             ("model (mesh, steady state, Jacobians)", t.peak_build_gb),

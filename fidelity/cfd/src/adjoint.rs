@@ -43,31 +43,42 @@ pub struct LfdReverse {
 }
 
 /// Bytes per cell a gradient holds beyond its GAF table whatever the threads (used to refuse a
-/// mesh that would not fit), with a margin: [`LfdReverse`] — most of it ∂R/∂x, a 5 × 3 block
-/// for each of the 80 cells within two face-neighbour steps of an interior node's eight cells
-/// (10.7 kB a node of a hexahedral mesh with the rest; 9.2 kB a cell measured on a 560-cell
-/// wing mesh) — and the sweep's per-mode fields (the modes' geometry tangents, node seeds).
-/// Measured on the coarse wing mesh with 11 modes and the four planform tangents: the reverse
-/// sweep's peak 0.513 GB on 1 thread and 0.649 GB on 2 against the GAF table's 0.324 and
-/// 0.418 GB, 26.4 and 32.2 kB a cell above it, so 20.6 kB shared and 5.8 kB a thread. The
-/// operation tapes the Jacobians replaced took about 2 800 entries of 40 bytes a cell (113 kB,
-/// up to twice that in their buffers).
-pub const BYTES_PER_CELL: usize = 22_000;
+/// mesh that would not fit), with a margin: [`LfdReverse`] without ∂R/∂x (recomputed by
+/// colouring once a gradient, for the adjoints summed over the frequencies: kept, it took a
+/// 5 × 3 block for each of the 80 cells within two face-neighbour steps of an interior node's
+/// eight cells, about 10 kB a node), the sweep's per-mode fields (the modes' geometry tangents,
+/// node seeds) and the mode columns' adjoints summed over the frequencies (80 B a cell a mode
+/// and seed). Measured with `gustkit bench studies/agard445_lfd_warm.json` (coarse wing mesh,
+/// 11 modes, the four planform tangents, one seed; single-precision ILU, forward solutions on
+/// disk): the reverse sweep's peak 47.5 kB a cell on 1 thread and 70.7 on 2 against the GAF
+/// table's 24.0 and 37.4, so 23.5 and 33.3 kB above it: 13.7 kB shared and 9.8 kB a thread
+/// (∂R/∂x kept: 31.4 and 40.7 kB above it, 22.1 shared). The operation tapes the Jacobians
+/// replaced took about 2 800 entries of 40 bytes a cell (113 kB, up to twice that in their
+/// buffers).
+pub const BYTES_PER_CELL: usize = 14_500;
 
-/// Bytes per cell and thread a gradient holds beyond its GAF table's own per-thread state: the
-/// geometry tangents' hyper-dual evaluations (the mesh, its geometry and the residual over
-/// numbers with four second directions, one evaluation a thread at a time) take 12 kB a cell a
-/// thread, but the frequency's factorization and GMRES basis are dropped before them, so they
-/// add 5.8 kB a cell a thread (measured, see [`BYTES_PER_CELL`]; 12 kB while the factorization
-/// was held beside them: 0.742 GB on 2 threads).
-pub const TANGENT_BYTES_PER_CELL: usize = 6_500;
+/// Bytes per cell and thread a gradient holds beyond its GAF table's own per-thread state:
+/// the geometry tangents' hyper-dual evaluations (the mesh, its geometry and the residual over
+/// numbers with four second directions, one evaluation a thread at a time), a frequency's
+/// adjoints and mode-column adjoints; the frequency's factorization and GMRES basis are dropped
+/// before the hyper-dual evaluations. Measured 9.8 kB (see [`BYTES_PER_CELL`]).
+pub const TANGENT_BYTES_PER_CELL: usize = 10_000;
 
 impl LfdReverse {
-    /// Assembles the linearizations of `lfd` at its steady state.
+    /// Assembles the linearizations of `lfd` at its steady state, ∂R/∂x kept.
     pub fn new(lfd: &LfdOperator) -> Self {
+        Self::assemble(lfd, MotionJacobian::new(&lfd.euler, &lfd.q0))
+    }
+
+    /// [`LfdReverse::new`] without keeping ∂R/∂x (about 10 kB a cell): each
+    /// [`LfdReverse::position_transpose`] recomputes it by colouring, for all its seeds at once.
+    pub fn recomputing(lfd: &LfdOperator) -> Self {
+        Self::assemble(lfd, MotionJacobian::recomputing(&lfd.euler, &lfd.q0))
+    }
+
+    fn assemble(lfd: &LfdOperator, motion: MotionJacobian) -> Self {
         let e = &lfd.euler;
         let mesh = &e.mesh;
-        let motion = MotionJacobian::new(e, &lfd.q0);
         let forces = ForceJacobian::new(e, &lfd.q0);
         // L: the swept volume of each face moving from x₀ to x₀ + ε x̂, differentiated per node
         let swept = mesh
@@ -111,20 +122,51 @@ impl LfdReverse {
         n_cells * (BYTES_PER_CELL + threads * TANGENT_BYTES_PER_CELL)
     }
 
-    /// Bᵀ w: the transpose of [`LfdOperator::motion_rhs`] at s, a seed per node (mesh frame).
+    /// Bᵀ w: the transpose of [`LfdOperator::motion_rhs`] at s, a seed per node (mesh frame):
+    /// [`LfdReverse::position_transpose`] plus [`LfdReverse::motion_rhs_transpose_s_terms`].
     pub fn motion_rhs_transpose(&self, lfd: &LfdOperator, s: C64, w: &[C64]) -> Vec<[C64; 3]> {
-        let n_cells = lfd.euler.mesh.n_cells;
+        let mut nodes = self
+            .position_transpose(lfd, &[w])
+            .pop()
+            .expect("one seed, one field");
+        for (a, b) in nodes
+            .iter_mut()
+            .zip(self.motion_rhs_transpose_s_terms(lfd, s, w))
+        {
+            for k in 0..3 {
+                a[k] += b[k];
+            }
+        }
+        nodes
+    }
+
+    /// ∂R/∂xᵀ w for every seed w: the part of Bᵀ w that does not depend on the frequency (a
+    /// reverse sweep applies it once, to the adjoints summed over the frequencies).
+    pub fn position_transpose(&self, lfd: &LfdOperator, ws: &[&[C64]]) -> Vec<Vec<[C64; 3]>> {
+        self.motion.node_transpose(&lfd.euler, &lfd.q0, ws)
+    }
+
+    /// The terms of Bᵀ w proportional to s: the cell volumes' s V̂ q₀ and the grid velocity's
+    /// s ∂R/∂v_G L x̂ (per node, mesh frame).
+    pub fn motion_rhs_transpose_s_terms(
+        &self,
+        lfd: &LfdOperator,
+        s: C64,
+        w: &[C64],
+    ) -> Vec<[C64; 3]> {
+        let mesh = &lfd.euler.mesh;
         // the s V̂ q₀ term: seed s Σ_k w_ck q₀_ck on each cell's volume
-        let seeds: Vec<C64> = (0..n_cells)
+        let seeds: Vec<C64> = (0..mesh.n_cells)
             .map(|c| {
                 s * (0..NVAR)
                     .map(|k| w[c * NVAR + k] * lfd.q0[c][k])
                     .sum::<C64>()
             })
             .collect();
-        let (mut nodes, vg) = self.motion.transpose(&lfd.euler.mesh, w, &seeds);
+        let mut nodes = self.motion.volume_transpose(&seeds);
         // the grid-velocity term s ∂R/∂v_G L x̂: Lᵀ (s ∂R/∂v_Gᵀ w)
-        for (fi, f) in lfd.euler.mesh.faces.iter().enumerate() {
+        let vg = self.motion.face_transpose(mesh, w);
+        for (fi, f) in mesh.faces.iter().enumerate() {
             let g = s * vg[fi];
             for (j, &n) in f.nodes.iter().enumerate() {
                 for k in 0..3 {
@@ -408,12 +450,7 @@ impl<'a> Probes<'a> {
     fn volume_flux_rhs(&self) -> gustkit_core::LinearizationCheck {
         let (lfd, w, g) = (self.lfd, &self.w, &self.g);
         let mesh = &lfd.euler.mesh;
-        let zero = C64::new(0.0, 0.0);
-        let adj = self
-            .rev
-            .motion
-            .transpose(mesh, &complex(w), &vec![zero; mesh.n_cells])
-            .1;
+        let adj = self.rev.motion.face_transpose(mesh, &complex(w));
         row(
             "dR/dv_G (grid-velocity and gust fluxes)",
             dot_re(w, &real(&lfd.volume_flux_rhs(&complex(g)))),
@@ -448,11 +485,7 @@ impl<'a> Probes<'a> {
                 .map(|(a, b)| a.d[0] * b)
                 .sum()
         };
-        let adj = self
-            .rev
-            .motion
-            .transpose(mesh, &vec![C64::new(0.0, 0.0); self.lfd.n()], &complex(wv))
-            .0;
+        let adj = self.rev.motion.volume_transpose(&complex(wv));
         row(
             "dV/dx_G (cell volumes)",
             forward,

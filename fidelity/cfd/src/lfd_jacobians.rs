@@ -174,23 +174,42 @@ fn reach(order: Order) -> usize {
 }
 
 /// ∂R/∂x, ∂V/∂x and ∂R/∂v_G at the steady state, in compressed columns.
+///
+/// ∂R/∂x is the bulk of it (a 5 × 3 block for each of the about 80 cells a node moves at second
+/// order: about 10 kB a node); built with [`MotionJacobian::recomputing`] it is not kept and each
+/// [`MotionJacobian::node_transpose`] evaluates it again by the same colouring, contracting every
+/// colour's columns with all its seeds at once and dropping them: the reverse sweep then applies
+/// it once, to the adjoints summed over the frequencies (it does not depend on them).
 pub struct MotionJacobian {
     /// Per node: the residual rows (cells) it moves.
     node_rows: Pattern,
-    /// ∂R_c/∂x_n for each (node, cell) of `node_rows`: 5 rows × 3 coordinates.
-    dr_dx: Vec<[[f64; 3]; NVAR]>,
+    /// Nodes whose rows are disjoint, seeded together in one evaluation.
+    node_classes: Vec<Vec<u32>>,
+    /// ∂R_c/∂x_n for each (node, cell) of `node_rows`: 5 rows × 3 coordinates (`None`: recomputed
+    /// in each transposed product).
+    dr_dx: Option<Vec<[[f64; 3]; NVAR]>>,
     /// Per node: the cells whose volume it moves.
     volume_rows: Pattern,
     dv_dx: Vec<[f64; 3]>,
     /// Per face: ∂R/∂v_G on its left and right cells (zero on the right of a boundary face).
     dr_dvg: Vec<[[f64; NVAR]; 2]>,
-    /// Residual evaluations of the assembly (colours of the nodes and of the faces).
+    /// Residual evaluations of the assembly (colours of the nodes and of the faces; the node
+    /// colours are evaluated again in each transposed product when ∂R/∂x is not kept).
     pub evaluations: usize,
 }
 
 impl MotionJacobian {
     /// Assembles the Jacobians of `euler`'s residual (at its order) and volumes at `q0`.
     pub fn new(euler: &Euler, q0: &[State<f64>]) -> Self {
+        Self::assemble(euler, q0, true)
+    }
+
+    /// [`MotionJacobian::new`] without keeping ∂R/∂x: its transposed products recompute it.
+    pub fn recomputing(euler: &Euler, q0: &[State<f64>]) -> Self {
+        Self::assemble(euler, q0, false)
+    }
+
+    fn assemble(euler: &Euler, q0: &[State<f64>], keep_dr_dx: bool) -> Self {
         let mesh = &euler.mesh;
         let order = euler.order;
         let nb = neighbours(mesh);
@@ -204,39 +223,7 @@ impl MotionJacobian {
         );
         let volume_rows = Pattern::from_lists(touching.into_iter());
         let node_classes = color_groups(&node_rows, mesh.n_cells);
-        let q: Vec<State<Dual<3>>> = q0.iter().map(|s| s.map(Dual::cst)).collect();
         let vg0 = &euler.face_vg;
-        // per colour: the derivatives of its nodes' rows, scattered as each round of colours
-        // (one a thread) ends, so that no more than a round's evaluations are held at once
-        let mut dr_dx = vec![[[0.0; 3]; NVAR]; node_rows.rows.len()];
-        for round in node_classes.chunks(rayon::current_num_threads().max(1)) {
-            let per_class: Vec<Vec<[[f64; 3]; NVAR]>> = round
-                .par_iter()
-                .map(|class| {
-                    let nodes = seeded_nodes(mesh, class.iter().map(|&n| n as usize));
-                    let vg: Vec<Dual<3>> = vg0.iter().map(|v| Dual::cst(*v)).collect();
-                    let geom = euler.geometry_at(&nodes, vg, order);
-                    let r = euler.residual_in(&q, &geom).0;
-                    let mut out = Vec::new();
-                    for &n in class {
-                        for &c in node_rows.of(n as usize) {
-                            let rc = &r[c as usize];
-                            out.push(std::array::from_fn(|i| std::array::from_fn(|k| rc[i].d[k])));
-                        }
-                    }
-                    out
-                })
-                .collect();
-            for (class, vals) in round.iter().zip(per_class) {
-                let mut it = vals.into_iter();
-                for &n in class {
-                    let n = n as usize;
-                    for slot in &mut dr_dx[node_rows.start[n]..node_rows.start[n + 1]] {
-                        *slot = it.next().expect("one block per row");
-                    }
-                }
-            }
-        }
         // the volumes: each node's cells, by the same colouring's classes (one cheap pass each)
         let mut dv_dx = vec![[0.0; 3]; volume_rows.rows.len()];
         let volume_classes = color_groups(&volume_rows, mesh.n_cells);
@@ -286,41 +273,162 @@ impl MotionJacobian {
         for (f, d) in per_face.into_iter().flatten() {
             dr_dvg[f] = d;
         }
-        Self {
+        let mut jac = Self {
             evaluations: node_classes.len() + face_classes.len(),
             node_rows,
-            dr_dx,
+            node_classes,
+            dr_dx: None,
             volume_rows,
             dv_dx,
             dr_dvg,
+        };
+        if keep_dr_dx {
+            let mut dr_dx = vec![[[0.0; 3]; NVAR]; jac.node_rows.rows.len()];
+            let rows = &jac.node_rows;
+            jac.by_node_colours(
+                euler,
+                q0,
+                |n, r| {
+                    rows.of(n)
+                        .iter()
+                        .map(|&c| {
+                            let rc = &r[c as usize];
+                            std::array::from_fn(|i| std::array::from_fn(|k| rc[i].d[k]))
+                        })
+                        .collect::<Vec<_>>()
+                },
+                |n, blocks| dr_dx[rows.start[n]..rows.start[n + 1]].copy_from_slice(&blocks),
+            );
+            jac.dr_dx = Some(dr_dx);
         }
+        jac
+    }
+
+    /// One residual evaluation in `Dual<3>` per colour of nodes (the colours in rounds of one a
+    /// thread): `per_node(n, residual)` for each node of the colour, its results handed to
+    /// `sink(n, result)` in the colours' order as each round ends, so that no more than a round's
+    /// evaluations and results are held at once.
+    fn by_node_colours<T: Send>(
+        &self,
+        euler: &Euler,
+        q0: &[State<f64>],
+        per_node: impl Fn(usize, &[State<Dual<3>>]) -> T + Sync,
+        mut sink: impl FnMut(usize, T),
+    ) {
+        let mesh = &euler.mesh;
+        let q: Vec<State<Dual<3>>> = q0.iter().map(|s| s.map(Dual::cst)).collect();
+        let vg0 = &euler.face_vg;
+        for round in self
+            .node_classes
+            .chunks(rayon::current_num_threads().max(1))
+        {
+            let per_class: Vec<Vec<T>> = round
+                .par_iter()
+                .map(|class| {
+                    let nodes = seeded_nodes(mesh, class.iter().map(|&n| n as usize));
+                    let vg: Vec<Dual<3>> = vg0.iter().map(|v| Dual::cst(*v)).collect();
+                    let geom = euler.geometry_at(&nodes, vg, euler.order);
+                    let r = euler.residual_in(&q, &geom).0;
+                    class.iter().map(|&n| per_node(n as usize, &r)).collect()
+                })
+                .collect();
+            for (class, vals) in round.iter().zip(per_class) {
+                for (&n, v) in class.iter().zip(vals) {
+                    sink(n as usize, v);
+                }
+            }
+        }
+    }
+
+    /// Whether ∂R/∂x is kept (else each transposed product recomputes it).
+    pub fn keeps_dr_dx(&self) -> bool {
+        self.dr_dx.is_some()
     }
 
     /// Memory held, bytes.
     pub fn bytes(&self) -> usize {
         self.node_rows.bytes()
-            + self.dr_dx.len() * std::mem::size_of::<[[f64; 3]; NVAR]>()
+            + self
+                .node_classes
+                .iter()
+                .map(|c| 24 + c.len() * 4)
+                .sum::<usize>()
+            + self
+                .dr_dx
+                .as_ref()
+                .map_or(0, |d| d.len() * std::mem::size_of::<[[f64; 3]; NVAR]>())
             + self.volume_rows.bytes()
             + self.dv_dx.len() * 24
             + self.dr_dvg.len() * std::mem::size_of::<[[f64; NVAR]; 2]>()
     }
 
-    /// The transposed products for a seed `w` on the residual (5 a cell) and `wv` on the cell
-    /// volumes: (∂R/∂xᵀ w + ∂V/∂xᵀ wv per node, ∂R/∂v_Gᵀ w per face).
-    pub fn transpose(&self, mesh: &Mesh, w: &[C64], wv: &[C64]) -> (Vec<[C64; 3]>, Vec<C64>) {
-        let nodes = (0..self.node_rows.n_groups())
-            .into_par_iter()
-            .map(|n| {
-                let mut acc = [C64::new(0.0, 0.0); 3];
-                let (a, b) = (self.node_rows.start[n], self.node_rows.start[n + 1]);
-                for (&c, d) in self.node_rows.rows[a..b].iter().zip(&self.dr_dx[a..b]) {
+    /// ∂R/∂xᵀ w per node for each seed `w` on the residual (5 a cell) of `euler` at `q0` (the
+    /// state it was assembled at): from the kept blocks, or by one coloured evaluation pass for
+    /// all the seeds together.
+    pub fn node_transpose(
+        &self,
+        euler: &Euler,
+        q0: &[State<f64>],
+        ws: &[&[C64]],
+    ) -> Vec<Vec<[C64; 3]>> {
+        let zero = [C64::new(0.0, 0.0); 3];
+        let contract = |rows: &[u32], block: &dyn Fn(usize) -> [[f64; 3]; NVAR]| {
+            let mut acc = vec![zero; ws.len()];
+            for (p, &c) in rows.iter().enumerate() {
+                let d = block(p);
+                for (a, w) in acc.iter_mut().zip(ws) {
                     let wc = &w[c as usize * NVAR..(c as usize + 1) * NVAR];
                     for i in 0..NVAR {
                         for k in 0..3 {
-                            acc[k] += wc[i] * d[i][k];
+                            a[k] += wc[i] * d[i][k];
                         }
                     }
                 }
+            }
+            acc
+        };
+        let n_nodes = self.node_rows.n_groups();
+        let mut out = vec![vec![zero; n_nodes]; ws.len()];
+        let mut sink = |n: usize, acc: Vec<[C64; 3]>| {
+            for (o, a) in out.iter_mut().zip(acc) {
+                o[n] = a;
+            }
+        };
+        match &self.dr_dx {
+            Some(dr_dx) => {
+                let per_node: Vec<Vec<[C64; 3]>> = (0..n_nodes)
+                    .into_par_iter()
+                    .map(|n| {
+                        let a = self.node_rows.start[n];
+                        contract(self.node_rows.of(n), &|p| dr_dx[a + p])
+                    })
+                    .collect();
+                for (n, acc) in per_node.into_iter().enumerate() {
+                    sink(n, acc);
+                }
+            }
+            None => self.by_node_colours(
+                euler,
+                q0,
+                |n, r| {
+                    let rows = self.node_rows.of(n);
+                    contract(rows, &|p| {
+                        let rc = &r[rows[p] as usize];
+                        std::array::from_fn(|i| std::array::from_fn(|k| rc[i].d[k]))
+                    })
+                },
+                &mut sink,
+            ),
+        }
+        out
+    }
+
+    /// ∂V/∂xᵀ wv per node for a seed `wv` on the cell volumes.
+    pub fn volume_transpose(&self, wv: &[C64]) -> Vec<[C64; 3]> {
+        (0..self.volume_rows.n_groups())
+            .into_par_iter()
+            .map(|n| {
+                let mut acc = [C64::new(0.0, 0.0); 3];
                 let (a, b) = (self.volume_rows.start[n], self.volume_rows.start[n + 1]);
                 for (&c, d) in self.volume_rows.rows[a..b].iter().zip(&self.dv_dx[a..b]) {
                     for k in 0..3 {
@@ -329,9 +437,12 @@ impl MotionJacobian {
                 }
                 acc
             })
-            .collect();
-        let faces = mesh
-            .faces
+            .collect()
+    }
+
+    /// ∂R/∂v_Gᵀ w per face for a seed `w` on the residual.
+    pub fn face_transpose(&self, mesh: &Mesh, w: &[C64]) -> Vec<C64> {
+        mesh.faces
             .par_iter()
             .zip(&self.dr_dvg)
             .map(|(f, d)| {
@@ -346,8 +457,7 @@ impl MotionJacobian {
                 }
                 acc
             })
-            .collect();
-        (nodes, faces)
+            .collect()
     }
 }
 
@@ -626,7 +736,8 @@ mod tests {
     }
 
     /// Every transposed product of the assembled Jacobians equals the operation tape's to
-    /// round-off (1e-12 of the largest entry) for random complex seeds: on a 2-D O-mesh at
+    /// round-off (1e-12 of the largest entry) for random complex seeds, ∂R/∂x both kept and
+    /// recomputed (two seeds in one pass, the second a complex multiple of the first): on a 2-D O-mesh at
     /// second and first order (symmetry planes, wall, far field) and on a small 3-D wing mesh
     /// whose sections close to zero thickness at the tip (degenerate faces).
     #[test]
@@ -657,6 +768,8 @@ mod tests {
             e.order = order;
             let q0 = perturbed(&e);
             let motion = MotionJacobian::new(&e, &q0);
+            let recomputing = MotionJacobian::recomputing(&e, &q0);
+            assert!(motion.keeps_dr_dx() && !recomputing.keeps_dr_dx());
             let forces = ForceJacobian::new(&e, &q0);
             let (nc, nn) = (e.mesh.n_cells, e.mesh.nodes.len());
             let w = rand_c(nc * NVAR, 1);
@@ -666,19 +779,49 @@ mod tests {
                 .map(|c| [c[0], c[1], c[2]])
                 .collect();
             let (m_ref, q_ref, x_ref) = taped(&e, &q0, &w, &wv, &u);
-            let (nodes, faces) = motion.transpose(&e.mesh, &w, &wv);
-            let nodes: Vec<C64> = nodes.into_iter().flatten().collect();
-            assert_close(&format!("case {case} dR/dx"), &nodes, &m_ref[..3 * nn]);
-            assert_close(&format!("case {case} dR/dv_G"), &faces, &m_ref[3 * nn..]);
+            // a second seed: the recomputing pass contracts several at once
+            let w2: Vec<C64> = w.iter().map(|z| z * C64::new(0.3, -2.0)).collect();
+            for (jac, how) in [(&motion, "kept"), (&recomputing, "recomputed")] {
+                let both = jac.node_transpose(&e, &q0, &[&w, &w2]);
+                let volumes = jac.volume_transpose(&wv);
+                let nodes: Vec<C64> = both[0]
+                    .iter()
+                    .zip(&volumes)
+                    .flat_map(|(a, b)| (0..3).map(move |k| a[k] + b[k]))
+                    .collect();
+                assert_close(
+                    &format!("case {case} dR/dx {how}"),
+                    &nodes,
+                    &m_ref[..3 * nn],
+                );
+                let scaled: Vec<C64> = both[0]
+                    .iter()
+                    .flatten()
+                    .map(|z| z * C64::new(0.3, -2.0))
+                    .collect();
+                let second: Vec<C64> = both[1].iter().flatten().copied().collect();
+                assert_close(
+                    &format!("case {case} dR/dx {how}, second seed"),
+                    &second,
+                    &scaled,
+                );
+                let faces = jac.face_transpose(&e.mesh, &w);
+                assert_close(
+                    &format!("case {case} dR/dv_G {how}"),
+                    &faces,
+                    &m_ref[3 * nn..],
+                );
+            }
             let (uq, ux) = forces.transpose(&u, nc, nn);
             let ux: Vec<C64> = ux.into_iter().flatten().collect();
             assert_close(&format!("case {case} df/dq"), &uq, &q_ref);
             assert_close(&format!("case {case} df/dx"), &ux, &x_ref);
             eprintln!(
-                "case {case}: {nc} cells, {} + {} evaluations, {:.0} + {:.0} B a cell",
+                "case {case}: {nc} cells, {} + {} evaluations, {:.0} (recomputing ∂R/∂x: {:.0}) + {:.0} B a cell",
                 motion.evaluations,
                 forces.evaluations,
                 motion.bytes() as f64 / nc as f64,
+                recomputing.bytes() as f64 / nc as f64,
                 forces.bytes() as f64 / nc as f64
             );
         }
