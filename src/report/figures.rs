@@ -641,6 +641,13 @@ impl Figure for LinePlot {
             pts().map(|p| p.1).fold(f64::MIN, f64::max),
         );
         let x1 = if x1 > x0 { x1 } else { x0 + 1.0 };
+        // markers at the ends of the x range would sit on the plot's border: a little room
+        let x_pad = if self.dotted.is_empty() {
+            0.0
+        } else {
+            0.03 * (x1 - x0)
+        };
+        let (x0, x1) = (x0 - x_pad, x1 + x_pad);
         let entries: Vec<LegendEntry> = self
             .series
             .iter()
