@@ -173,6 +173,12 @@ fn reach(order: Order) -> usize {
     }
 }
 
+/// One cell's ∂R_c/∂x_n block (5 rows × 3 coordinates) from its residual in `Dual<3>` with
+/// node n seeded: the same for kept and recomputed ∂R/∂x, so both give the same numbers.
+fn node_block(rc: &State<Dual<3>>) -> [[f64; 3]; NVAR] {
+    std::array::from_fn(|i| std::array::from_fn(|k| rc[i].d[k]))
+}
+
 /// ∂R/∂x, ∂V/∂x and ∂R/∂v_G at the steady state, in compressed columns.
 ///
 /// ∂R/∂x is the bulk of it (a 5 × 3 block for each of the about 80 cells a node moves at second
@@ -193,8 +199,8 @@ pub struct MotionJacobian {
     dv_dx: Vec<[f64; 3]>,
     /// Per face: ∂R/∂v_G on its left and right cells (zero on the right of a boundary face).
     dr_dvg: Vec<[[f64; NVAR]; 2]>,
-    /// Residual evaluations of the assembly (colours of the nodes and of the faces; the node
-    /// colours are evaluated again in each transposed product when ∂R/∂x is not kept).
+    /// Residual evaluations of the assembly: the colours of the faces, and of the nodes when
+    /// ∂R/∂x is kept (not kept, each transposed product evaluates the node colours instead).
     pub evaluations: usize,
 }
 
@@ -274,7 +280,7 @@ impl MotionJacobian {
             dr_dvg[f] = d;
         }
         let mut jac = Self {
-            evaluations: node_classes.len() + face_classes.len(),
+            evaluations: face_classes.len() + if keep_dr_dx { node_classes.len() } else { 0 },
             node_rows,
             node_classes,
             dr_dx: None,
@@ -291,10 +297,7 @@ impl MotionJacobian {
                 |n, r| {
                     rows.of(n)
                         .iter()
-                        .map(|&c| {
-                            let rc = &r[c as usize];
-                            std::array::from_fn(|i| std::array::from_fn(|k| rc[i].d[k]))
-                        })
+                        .map(|&c| node_block(&r[c as usize]))
                         .collect::<Vec<_>>()
                 },
                 |n, blocks| dr_dx[rows.start[n]..rows.start[n + 1]].copy_from_slice(&blocks),
@@ -412,10 +415,7 @@ impl MotionJacobian {
                 q0,
                 |n, r| {
                     let rows = self.node_rows.of(n);
-                    contract(rows, &|p| {
-                        let rc = &r[rows[p] as usize];
-                        std::array::from_fn(|i| std::array::from_fn(|k| rc[i].d[k]))
-                    })
+                    contract(rows, &|p| node_block(&r[rows[p] as usize]))
                 },
                 &mut sink,
             ),
