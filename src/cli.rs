@@ -108,6 +108,11 @@ pub enum Command {
         /// resolution, whose doubled lattice would need many times its memory).
         #[arg(long)]
         no_resolution_check: bool,
+        /// Analyse the final design of a run (its results.json) instead of the study's initial
+        /// design: another run's optimum with this study's fidelity, lattice and modes. The
+        /// report goes to reports/<study>_at_<run folder>/.
+        #[arg(long, value_name = "RESULTS_JSON")]
+        design: Option<PathBuf>,
     },
     /// Adjoint gradient of the gust RMS against finite differences (like paper Table 4).
     CheckGradient {
@@ -201,8 +206,12 @@ pub fn dispatch(cli: Cli) -> Result<runner::Outcome> {
             json,
             reports,
             no_resolution_check,
+            design,
         } => done(runner::wing::flutter::flutter(
-            &wing(&study, "flutter")?,
+            &match design {
+                Some(d) => wing(&study, "flutter")?.at_final_design(&d)?,
+                None => wing(&study, "flutter")?,
+            },
             json,
             &reports,
             !no_resolution_check,

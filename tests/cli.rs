@@ -1539,3 +1539,85 @@ fn small_flagship(name: &str) -> serde_json::Value {
     v["gust"]["points"] = 300.into();
     v
 }
+
+/// `gustkit flutter --design`: the flagship DLM optimum of the reference report analysed from
+/// its results.json (thicknesses and planform carried through the study's inches and degrees)
+/// flutters where that run's own check put it: the same model (11 modes, 10 × 15 boxes, the
+/// same speeds), so the speeds agree but for the unit round trip's 1e-16 change of the design
+/// (measured 6e-14 relative; asked 1e-9). The report goes to its own folder; the
+/// study's initial design, with the same sweep, flutters elsewhere.
+#[test]
+fn flutter_of_a_runs_final_design() {
+    let dir = scratch("flutter_design");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let reference = root.join("reports/reference/agard445_dlm/results.json");
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&reference).unwrap()).unwrap();
+    let check = &r["flutter_check"];
+    let modes = check["modes"].as_u64().unwrap();
+    let speeds = check["final_sweep"]["curves"][0]["velocity_m_s"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect::<Vec<_>>();
+    let mut v: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(root.join("studies/agard445_dlm.json")).unwrap(),
+    )
+    .unwrap();
+    v["structure"]["modes"] = modes.into();
+    v["flutter"] = serde_json::json!({
+        "velocity_min_m_s": speeds[0],
+        "velocity_max_m_s": speeds[speeds.len() - 1],
+        "points": speeds.len(),
+    });
+    let f = dir.join("flagship.json");
+    std::fs::write(&f, v.to_string()).unwrap();
+    let flutter = |design: Option<&Path>| -> f64 {
+        let mut c = gustkit();
+        c.args([
+            "flutter",
+            f.to_str().unwrap(),
+            "--json",
+            "--no-resolution-check",
+        ])
+        .arg("--reports")
+        .arg(&dir);
+        if let Some(d) = design {
+            c.arg("--design").arg(d);
+        }
+        let o = c.output().unwrap();
+        assert_success(&o);
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        j["flutter_speed_m_s"].as_f64().unwrap()
+    };
+    let at_optimum = flutter(Some(&reference));
+    let want = check["final"]["speed_m_s"].as_f64().unwrap();
+    assert!(
+        (at_optimum / want - 1.0).abs() < 1e-9,
+        "{at_optimum} against the run's {want}"
+    );
+    assert!(dir
+        .join("agard445_dlm_at_agard445_dlm/flutter.json")
+        .exists());
+    let initial = flutter(None);
+    assert!(
+        (initial / want - 1.0).abs() > 0.05,
+        "{initial} against {want}"
+    );
+    // a results.json that is not one: the file and the reason, exit 1
+    let bad = dir.join("bad.json");
+    std::fs::write(&bad, "{}").unwrap();
+    let o = gustkit()
+        .args(["flutter", f.to_str().unwrap(), "--design"])
+        .arg(&bad)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("bad.json") && err.contains("holds no finished optimization"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -49,7 +49,7 @@ fn warm_start_reads_checks_and_refuses() {
     assert_eq!(e.path, "optimization.warm_start.from", "{e}");
     assert!(
         e.reason
-            .contains("cannot read no/such/agard445_dlm/results.json")
+            .contains("no/such/agard445_dlm/results.json: cannot read the file")
             && e.reason.contains("gustkit run")
             && e.reason.contains("agard445_dlm"),
         "{e}"
@@ -178,5 +178,59 @@ fn warm_start_hessian_is_carried_to_this_studys_scaling() {
             fixed[i][j]
         );
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `gustkit flutter --design`: a run's final design becomes the analysed wing. Read back in SI
+/// from the study written in inches and degrees, it is the recorded design to rounding (the
+/// unit conversion's 1e-15, asked 1e-13 relative); the report name says whose design it is; a
+/// design from another parametrization or with a thickness ≤ 0 is refused naming the results
+/// file and its field.
+#[test]
+fn a_runs_final_design_becomes_the_analysed_wing() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let reference = root.join("reports/reference/agard445_dlm/results.json");
+    let s = load(&flagship()).unwrap();
+    let at = s.at_final_design(&reference).unwrap();
+    assert_eq!(at.spec.name, "agard445_dlm_at_agard445_dlm");
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&reference).unwrap()).unwrap();
+    let want: Vec<f64> = r["final"]["design_variables"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d.as_f64().unwrap())
+        .collect();
+    let got = at.initial_design().unwrap().to_vec();
+    assert_eq!(got.len(), want.len());
+    for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+        assert!((g - w).abs() <= 1e-13 * w.abs(), "{i}: {g} against {w}");
+    }
+    // the initial design differs from the optimum: the wing was replaced
+    let initial = s.initial_design().unwrap().to_vec();
+    assert!(initial.iter().zip(&want).any(|(a, b)| (a - b).abs() > 1e-6));
+    let dir = std::env::temp_dir().join(format!("gustkit-at-design-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let other = dir.join("results.json");
+    let mut small = r.clone();
+    small["design_variable_names"] = serde_json::json!(["t[0]", "t[1]", "span"]);
+    small["final"]["design_variables"] = serde_json::json!([0.001, 0.001, 0.7]);
+    std::fs::write(&other, small.to_string()).unwrap();
+    let e = s.at_final_design(&other).unwrap_err();
+    assert_eq!(e.file, other);
+    assert_eq!(e.path, "final.design_variables", "{e}");
+    assert!(
+        e.reason.contains("has 3 design variables, this study 104"),
+        "{e}"
+    );
+    let mut negative = r.clone();
+    negative["final"]["design_variables"][7] = serde_json::json!(-0.001);
+    std::fs::write(&other, negative.to_string()).unwrap();
+    let e = s.at_final_design(&other).unwrap_err();
+    assert_eq!(e.path, "final.design_variables", "{e}");
+    assert!(
+        e.reason.contains("structure.thickness[7]") && e.reason.contains("positive"),
+        "{e}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

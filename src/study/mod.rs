@@ -7,10 +7,12 @@
 //!
 //! The `Study` methods live by idea: `load` (reading and the cross-section checks),
 //! `structure` (the wing in SI, the design variables, the modal rule), `fidelity` (the
-//! aerodynamic builder's checks and the comparison's second fidelity), `warm_start` (another
-//! run's design and BFGS matrix) and `resolve` (the resolved [`Case`] the pipeline takes). The
+//! aerodynamic builder's checks and the comparison's second fidelity), `design_file` (another
+//! run's final design read into the study), `warm_start` (that design and the run's BFGS matrix
+//! as a starting point) and `resolve` (the resolved [`Case`] the pipeline takes). The
 //! runners read the study; nothing below them does (`tests/architecture.rs`).
 
+mod design_file;
 pub mod discrete;
 mod fidelity;
 pub mod limits;

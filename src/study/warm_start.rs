@@ -31,68 +31,15 @@ impl Study {
                 format!("gustkit run on the optimization study named '{name}'")
             }
         };
-        let text = read_text(file).map_err(|e| {
-            self.err(
-                path,
-                format!(
-                    "cannot read {} ({e}): run the optimization that writes it first ({})",
-                    file.display(),
-                    maker()
-                ),
-            )
+        let x = self.final_design_in(file, &maker).map_err(|e| {
+            let reason = match e.path.as_str() {
+                "." => format!("{}: {}", file.display(), e.reason),
+                at => format!("{}: {at}: {}", file.display(), e.reason),
+            };
+            self.err(path, reason)
         })?;
-        let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
-            self.err(
-                path,
-                format!("{} is not a results.json ({e})", file.display()),
-            )
-        })?;
-        let names = v.get("design_variable_names").and_then(|n| n.as_array());
-        let design = v
-            .get("final")
-            .and_then(|f| f.get("design_variables"))
-            .and_then(|d| d.as_array());
-        let (Some(names), Some(design)) = (names, design) else {
-            return Err(self.err(
-                path,
-                format!(
-                    "{} holds no finished optimization (no design_variable_names and final.design_variables): {}",
-                    file.display(),
-                    maker()
-                ),
-            ));
-        };
         let own = self.initial_design()?;
-        let n = own.to_vec().len();
-        let theirs: Vec<String> = names
-            .iter()
-            .map(|s| s.as_str().unwrap_or("?").to_string())
-            .collect();
-        if theirs.len() != n || design.len() != n {
-            return Err(self.err(
-                path,
-                format!(
-                    "{} has {} design variables, this study {n}: the warm start needs the same plate mesh and planform parametrization",
-                    file.display(),
-                    theirs.len()
-                ),
-            ));
-        }
-        if let Some(i) = (0..n).find(|&i| theirs[i] != own.name(i)) {
-            return Err(self.err(
-                path,
-                format!(
-                    "{}: design variable {i} is '{}', this study's is '{}'",
-                    file.display(),
-                    theirs[i],
-                    own.name(i)
-                ),
-            ));
-        }
-        let x: Vec<f64> = design
-            .iter()
-            .map(|d| d.as_f64().unwrap_or(f64::NAN))
-            .collect();
+        let n = x.len();
         let (lower, upper) = self.design_bounds()?;
         if let Some(i) = (0..n).find(|&i| !(x[i] >= lower[i] && x[i] <= upper[i])) {
             return Err(self.err(
