@@ -1175,3 +1175,150 @@ fn an_optimization_records_its_gmres_iterations() {
     assert!(f[1] < f[0], "{f:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The GMRES warm-start store on disk (`warm_start.bin`, written with each optimization
+/// checkpoint, read by `--resume`): a process that reads it back solves the next design's table
+/// from the stored solutions in fewer iterations than from zero (as the process that kept them
+/// in memory would), and to the same answer (RMS within 1e-9 relative, the GMRES tolerance being
+/// 1e-12); a store of another mesh gives no guess (the first model of this mesh drops it, saying
+/// so): the same iterations as from zero; a damaged file is not read.
+#[test]
+fn the_warm_start_store_survives_the_process() {
+    let (study, dir) = small_lfd_study("warm_file");
+    let settings = study.gust_settings().unwrap();
+    let case = study.resolve().unwrap();
+    let x0 = study.initial_design().unwrap().to_vec();
+    let x1: Vec<f64> = x0
+        .iter()
+        .enumerate()
+        .map(|(i, v)| v * if i + 4 < x0.len() { 1.01 } else { 1.0 })
+        .collect();
+    let lfd = gustkit::aero::lfd::WARM_START_FILE;
+    gustkit::aero::lfd::clear_warm_start(&dir);
+    gustkit::pipeline::evaluate(&case, &settings, &x0).unwrap();
+    let bytes = gustkit::aero::lfd::save_warm_start(&dir).unwrap().unwrap();
+    let on_disk = std::fs::metadata(dir.join(lfd)).unwrap().len();
+    // 768 cells × 5 unknowns × 8 bytes × 6 k × 5 columns, plus the length fields
+    assert_eq!(bytes, 768 * 5 * 8 * 6 * 5);
+    assert!(on_disk > bytes && on_disk < bytes + 4096, "{on_disk}");
+    // a new process: the store empty, then read from the file
+    gustkit::aero::lfd::clear_warm_start(&dir);
+    assert!(gustkit::aero::lfd::load_warm_start(&dir));
+    let warm = gustkit::pipeline::evaluate(&case, &settings, &x1).unwrap();
+    let warm_it = gustkit::aero::lfd::warm_start_iterations(&dir).0.unwrap();
+    gustkit::aero::lfd::clear_warm_start(&dir);
+    let cold = gustkit::pipeline::evaluate(&case, &settings, &x1).unwrap();
+    let cold_it = gustkit::aero::lfd::warm_start_iterations(&dir).0.unwrap();
+    eprintln!(
+        "GMRES iterations a right-hand side at x1: from the file {warm_it}, from zero {cold_it}"
+    );
+    assert!(warm_it < 0.7 * cold_it, "{warm_it} against {cold_it}");
+    assert!(
+        (warm.rms_m[0] / cold.rms_m[0] - 1.0).abs() < 1e-9,
+        "{} against {}",
+        warm.rms_m[0],
+        cold.rms_m[0]
+    );
+    // another mesh (more spanwise cells) reading this mesh's file: dropped, solved from zero
+    let mut v = serde_json::to_value(&study.spec).unwrap();
+    v["aero"]["fidelity"]["lfd"]["mesh_sizes"]["n_span"] = 6.into();
+    let mut other = load(&v).unwrap();
+    other.cache_dir = Some(dir.clone());
+    let other_case = other.resolve().unwrap();
+    gustkit::aero::lfd::clear_warm_start(&dir);
+    gustkit::pipeline::evaluate(&other_case, &settings, &x0).unwrap();
+    let other_cold = gustkit::aero::lfd::warm_start_iterations(&dir).0.unwrap();
+    gustkit::aero::lfd::clear_warm_start(&dir);
+    assert!(gustkit::aero::lfd::load_warm_start(&dir));
+    gustkit::pipeline::evaluate(&other_case, &settings, &x0).unwrap();
+    let other_read = gustkit::aero::lfd::warm_start_iterations(&dir).0.unwrap();
+    assert_eq!(other_read, other_cold);
+    // a damaged file (cut short) is not read
+    let b = std::fs::read(dir.join(lfd)).unwrap();
+    std::fs::write(dir.join(lfd), &b[..b.len() / 2]).unwrap();
+    assert!(!gustkit::aero::lfd::load_warm_start(&dir));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `gustkit run --resume` of an LFD optimization reads the run folder's GMRES warm-start store,
+/// says so, and trusts it only on its own mesh: a store of 7 cells is dropped with a line naming
+/// the file; the store file is gone once the optimization has ended (it is no result). A small
+/// LFD optimization (576 cells, 3 modes, 4 k) stopped by its iteration limit, then resumed.
+#[test]
+fn a_resumed_run_reads_the_warm_start_store_of_its_own_mesh_only() {
+    let dir = std::env::temp_dir().join(format!("gustkit-lfd-resume-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut v = flagship();
+    v["name"] = "lfd_resume".into();
+    v["structure"]["modes"] = 3.into();
+    v["aero"]["reduced_frequencies"] = serde_json::json!([0.0, 0.3, 1.0, 2.0]);
+    v["aero"]["fidelity"] = serde_json::json!({"lfd": {"mesh_sizes": {
+        "n_around": 16, "n_radial": 6, "n_span": 4, "n_outboard": 2, "first_spacing_chords": 0.02
+    }}});
+    v["gust"]["points"] = 300.into();
+    v["optimization"]["max_iterations"] = 1.into();
+    let file = dir.join("lfd_resume.json");
+    std::fs::write(&file, v.to_string()).unwrap();
+    let run = |extra: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_gustkit"))
+            .arg("run")
+            .arg(&file)
+            .arg("--reports")
+            .arg(&dir)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let o = run(&[]);
+    assert_eq!(
+        o.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let store_name = gustkit::aero::lfd::WARM_START_FILE;
+    assert!(
+        !dir.join("lfd_resume").join(store_name).exists(),
+        "an ended optimization keeps no store"
+    );
+    // where a killed run leaves its store: the staging folder (the checkpoint is copied there
+    // from the finished folder by --resume)
+    let stage = dir.join(".lfd_resume.partial");
+    std::fs::create_dir_all(&stage).unwrap();
+    let store = stage.join(store_name);
+    // a store of another mesh: 7 cells × 5 unknowns, one k, one column of zeros
+    let mut bytes = b"GKWARM01".to_vec();
+    for n in [35u64, 1, 1, 1] {
+        bytes.extend(n.to_le_bytes());
+    }
+    bytes.extend(0.0f64.to_le_bytes());
+    bytes.extend(1u64.to_le_bytes());
+    bytes.extend(35u64.to_le_bytes());
+    bytes.extend(vec![0u8; 35 * 8]);
+    bytes.extend(0u64.to_le_bytes());
+    std::fs::write(&store, &bytes).unwrap();
+    v["optimization"]["max_iterations"] = 2.into();
+    std::fs::write(&file, v.to_string()).unwrap();
+    let o = run(&["--resume"]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(
+        o.status.code(),
+        Some(3),
+        "{out}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        out.lines()
+            .any(|l| l.contains("GMRES warm start") && l.contains("warm_start.bin")),
+        "{out}"
+    );
+    assert!(
+        out.lines().any(|l| l.contains("warm_start.bin")
+            && l.contains("another mesh (7 cells")
+            && l.contains("not used")),
+        "{out}"
+    );
+    assert!(!stage.exists() && !dir.join("lfd_resume").join(store_name).exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}

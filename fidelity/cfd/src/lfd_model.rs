@@ -93,6 +93,9 @@ pub struct WarmStart {
     /// Right-hand sides of the last table and of the last reverse sweep's adjoint solves.
     pub last_rhs: usize,
     pub last_adjoint_rhs: usize,
+    /// The file this store was read from, until a model of a mesh checks that it fits (see
+    /// [`WarmStart::fits`]).
+    pub from_file: Option<std::path::PathBuf>,
 }
 
 impl Default for WarmStart {
@@ -106,11 +109,36 @@ impl Default for WarmStart {
             last_adjoint_iterations: 0,
             last_rhs: 0,
             last_adjoint_rhs: 0,
+            from_file: None,
         }
     }
 }
 
 impl WarmStart {
+    /// Whether the kept solutions fit a mesh of `n` unknowns (cells × 5). A store read from a
+    /// file of another mesh is emptied here (keeping its `designs`) and the reason returned once,
+    /// for the caller to say; a store that grew in this process fits or is replaced by
+    /// [`WarmStart::keep`] as before.
+    pub fn fits(&mut self, n: usize) -> Result<(), String> {
+        let Some(file) = self.from_file.take() else {
+            return Ok(());
+        };
+        if self.n == 0 || self.n == n {
+            return Ok(());
+        }
+        let reason = format!(
+            "{}: GMRES guesses of another mesh ({} cells; this mesh has {}): not used",
+            file.display(),
+            self.n / crate::gas::NVAR,
+            n / crate::gas::NVAR
+        );
+        *self = WarmStart {
+            designs: self.designs,
+            ..Default::default()
+        };
+        Err(reason)
+    }
+
     /// The guesses for reduced frequency `k`, per column the kept designs' solutions (none where
     /// this store holds another mesh's).
     fn guesses(&self, k: f64, n: usize) -> Vec<Vec<Guess<'_>>> {
@@ -188,6 +216,8 @@ impl WarmStart {
         columns
     }
 }
+
+mod warm_file;
 
 /// The file name of the steady flow field among an LFD model's artifacts (legacy VTK).
 pub const STEADY_FLOW_FILE: &str = "steady_lfd_flow.vtk";

@@ -487,7 +487,12 @@ impl WingBuilder for LfdWingSpec {
             ForwardSolutionsSpec::Memory => ForwardStorage::Memory,
         };
         if let Some(w) = &model.warm_start {
-            w.lock().unwrap_or_else(|e| e.into_inner()).designs = self.warm_start_designs();
+            let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
+            w.designs = self.warm_start_designs();
+            // a store read from a resumed run's file is used only on its own mesh
+            if let Err(why) = w.fits(model.lfd.n()) {
+                println!("{why}");
+            }
         }
         let Some(mesh) = built_in else {
             // an external mesh: its wall nodes placed on the planform, or why they do not fit

@@ -161,3 +161,64 @@ pub fn clear_warm_start(dir: &Path) {
     let mut w = s.lock().unwrap_or_else(|e| e.into_inner());
     *w = Default::default();
 }
+
+/// The file in a run folder that keeps the GMRES warm-start store across processes (written with
+/// each optimization checkpoint, read by `--resume`, removed when the optimization ends).
+pub const WARM_START_FILE: &str = "warm_start.bin";
+
+/// Writes the warm-start store of the run folder `dir` to [`WARM_START_FILE`] atomically;
+/// the bytes written, or None when the store holds nothing (no LFD model of that folder solved).
+pub fn save_warm_start(dir: &Path) -> std::io::Result<Option<u64>> {
+    let Some(store) = STORES.get().and_then(|s| {
+        s.lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .get(dir)
+            .cloned()
+    }) else {
+        return Ok(None);
+    };
+    let w = store.lock().unwrap_or_else(|e| e.into_inner());
+    if w.unknowns() == 0 {
+        return Ok(None);
+    }
+    let bytes = w.file_bytes();
+    crate::atomic::write_with(&dir.join(WARM_START_FILE), |f| w.write_to(f))?;
+    Ok(Some(bytes))
+}
+
+/// Fills the warm-start store of the run folder `dir` from its [`WARM_START_FILE`] (a resumed
+/// run): true when read. A file that is not a store, is damaged or holds non-finite values is
+/// ignored with a line saying so; one of another mesh is dropped, with a line, by the first
+/// model that checks it ([`gustkit_cfd::lfd_model::WarmStart::fits`]).
+pub fn load_warm_start(dir: &Path) -> bool {
+    let file = dir.join(WARM_START_FILE);
+    let Ok(f) = std::fs::File::open(&file) else {
+        return false;
+    };
+    match gustkit_cfd::lfd_model::WarmStart::read_from(&mut std::io::BufReader::new(f)) {
+        Ok(mut read) => {
+            let s = warm_start_store(dir);
+            let mut w = s.lock().unwrap_or_else(|e| e.into_inner());
+            read.designs = w.designs;
+            read.from_file = Some(file);
+            *w = read;
+            true
+        }
+        Err(e) => {
+            let e = match e.kind() {
+                std::io::ErrorKind::UnexpectedEof => "the file ends early".to_string(),
+                _ => e.to_string(),
+            };
+            println!(
+                "{}: not a usable warm-start store ({e}): not used, the GMRES solves start from zero",
+                file.display()
+            );
+            false
+        }
+    }
+}
+
+/// Removes the run folder's [`WARM_START_FILE`] (an ended optimization resumes no more).
+pub fn remove_warm_start_file(dir: &Path) {
+    let _ = std::fs::remove_file(dir.join(WARM_START_FILE));
+}

@@ -127,6 +127,14 @@ pub fn optimize_pass(
     let mut store = FileCheckpoint {
         path: checkpoint_path,
     };
+    // a resumed LFD run starts its GMRES from the solutions kept with the checkpoint (read after
+    // the initial design's evaluation above, which would otherwise be the newest guess)
+    if checkpoint.is_some() && crate::aero::lfd::load_warm_start(dir) && !quiet {
+        println!(
+            "GMRES warm start: the last designs' solutions read from {}",
+            dir.join(crate::aero::lfd::WARM_START_FILE).display()
+        );
+    }
     let mut problem = DesignProblem::new(&fixed_basis, settings.clone(), spec.clone());
     let info = Executor::new(params, &problem_id)
         .resume(checkpoint)
@@ -136,6 +144,8 @@ pub fn optimize_pass(
         .run(&mut problem, x_start.as_deref().unwrap_or(&x0));
     observer.bar.finish_and_clear();
     let info = info.map_err(|e| anyhow::anyhow!("optimization: {e}"))?;
+    // an ended optimization resumes no more: its warm-start store is not part of the report
+    crate::aero::lfd::remove_warm_start_file(dir);
     // over every session of a resumed run
     let wall_time_s = info.elapsed_s;
     let timing = Timing {

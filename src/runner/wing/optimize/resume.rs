@@ -14,7 +14,18 @@ impl Checkpointing for FileCheckpoint {
         serde_json::to_vec(cp)
             .map_err(anyhow::Error::from)
             .and_then(|b| write_atomic(&self.path, &b))
-            .map_err(|e| format!("{e:#}"))
+            .map_err(|e| format!("{e:#}"))?;
+        // the LFD's GMRES warm-start store beside it, so that `--resume` in another process
+        // starts from the last designs' solutions; a failed write costs only iterations
+        if let Some(dir) = self.path.parent() {
+            if let Err(e) = crate::aero::lfd::save_warm_start(dir) {
+                eprintln!(
+                    "warning: cannot write {} ({e}): a resumed run starts its GMRES from zero",
+                    dir.join(crate::aero::lfd::WARM_START_FILE).display()
+                );
+            }
+        }
+        Ok(())
     }
 }
 
