@@ -48,7 +48,7 @@ pub struct LfdReverse {
 /// 5 × 3 block for each of the 80 cells within two face-neighbour steps of an interior node's
 /// eight cells, about 10 kB a node), the sweep's per-mode fields (the modes' geometry tangents,
 /// node seeds) and the mode columns' adjoints summed over the frequencies (80 B a cell a mode
-/// and seed). Measured with `gustkit bench studies/agard445_lfd_warm.json` (coarse wing mesh,
+/// and seed). Measured with `gustkit bench studies/agard445_lfd_coarse_warm.json` (coarse wing mesh,
 /// 11 modes, the four planform tangents, one seed; single-precision ILU, forward solutions on
 /// disk): the reverse sweep's peak 47.5 kB a cell on 1 thread and 70.7 on 2 against the GAF
 /// table's 24.0 and 37.4, so 23.5 and 33.3 kB above it: 13.7 kB shared and 9.8 kB a thread
