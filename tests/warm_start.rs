@@ -10,6 +10,19 @@ fn flagship() -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
 }
 
+/// A results.json and its final design.
+fn reference_results(file: &Path) -> (serde_json::Value, Vec<f64>) {
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
+    let want = r["final"]["design_variables"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d.as_f64().unwrap())
+        .collect();
+    (r, want)
+}
+
 fn load(v: &serde_json::Value) -> Result<Study, gustkit::study::StudyError> {
     Study::from_str(Path::new("warm.json"), &v.to_string())
 }
@@ -25,14 +38,7 @@ fn warm_start_reads_checks_and_refuses() {
     v["optimization"]["warm_start"] = serde_json::json!({ "from": reference });
     let s = load(&v).unwrap();
     let x = s.warm_start_design().unwrap().unwrap();
-    let r: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&reference).unwrap()).unwrap();
-    let want: Vec<f64> = r["final"]["design_variables"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|d| d.as_f64().unwrap())
-        .collect();
+    let (r, want) = reference_results(&reference);
     assert_eq!(x, want);
     // the study as a checkpoint records it: the new optional fields left out when unset (a
     // checkpoint of an earlier run keeps resuming)
@@ -193,14 +199,7 @@ fn a_runs_final_design_becomes_the_analysed_wing() {
     let s = load(&flagship()).unwrap();
     let at = s.at_final_design(&reference).unwrap();
     assert_eq!(at.spec.name, "agard445_dlm_at_agard445_dlm");
-    let r: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&reference).unwrap()).unwrap();
-    let want: Vec<f64> = r["final"]["design_variables"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|d| d.as_f64().unwrap())
-        .collect();
+    let (r, want) = reference_results(&reference);
     let got = at.initial_design().unwrap().to_vec();
     assert_eq!(got.len(), want.len());
     for (i, (g, w)) in got.iter().zip(&want).enumerate() {
