@@ -23,6 +23,22 @@ fn reference_results(file: &Path) -> (serde_json::Value, Vec<f64>) {
     (r, want)
 }
 
+/// A results.json like `r` with three design variables (another parametrization), in a scratch
+/// folder named after `tag`: the folder and the file.
+fn three_variable_results(
+    r: &serde_json::Value,
+    tag: &str,
+) -> (std::path::PathBuf, std::path::PathBuf) {
+    let dir = std::env::temp_dir().join(format!("gustkit-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let other = dir.join("results.json");
+    let mut small = r.clone();
+    small["design_variable_names"] = serde_json::json!(["t[0]", "t[1]", "span"]);
+    small["final"]["design_variables"] = serde_json::json!([0.001, 0.001, 0.7]);
+    std::fs::write(&other, small.to_string()).unwrap();
+    (dir, other)
+}
+
 fn load(v: &serde_json::Value) -> Result<Study, gustkit::study::StudyError> {
     Study::from_str(Path::new("warm.json"), &v.to_string())
 }
@@ -61,13 +77,7 @@ fn warm_start_reads_checks_and_refuses() {
         "{e}"
     );
     // another parametrization: a results.json with three design variables
-    let dir = std::env::temp_dir().join(format!("gustkit-warm-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let other = dir.join("results.json");
-    let mut small = r.clone();
-    small["design_variable_names"] = serde_json::json!(["t[0]", "t[1]", "span"]);
-    small["final"]["design_variables"] = serde_json::json!([0.001, 0.001, 0.7]);
-    std::fs::write(&other, small.to_string()).unwrap();
+    let (dir, other) = three_variable_results(&r, "warm");
     v["optimization"]["warm_start"] = serde_json::json!({ "from": other });
     let e = load(&v).unwrap_err();
     assert!(
@@ -208,13 +218,7 @@ fn a_runs_final_design_becomes_the_analysed_wing() {
     // the initial design differs from the optimum: the wing was replaced
     let initial = s.initial_design().unwrap().to_vec();
     assert!(initial.iter().zip(&want).any(|(a, b)| (a - b).abs() > 1e-6));
-    let dir = std::env::temp_dir().join(format!("gustkit-at-design-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let other = dir.join("results.json");
-    let mut small = r.clone();
-    small["design_variable_names"] = serde_json::json!(["t[0]", "t[1]", "span"]);
-    small["final"]["design_variables"] = serde_json::json!([0.001, 0.001, 0.7]);
-    std::fs::write(&other, small.to_string()).unwrap();
+    let (dir, other) = three_variable_results(&r, "at-design");
     let e = s.at_final_design(&other).unwrap_err();
     assert_eq!(e.file, other);
     assert_eq!(e.path, "final.design_variables", "{e}");
