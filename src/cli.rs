@@ -33,6 +33,12 @@ pub enum Command {
         /// Continue an interrupted optimization from its checkpoint in the report folder.
         #[arg(long)]
         resume: bool,
+        /// Analyse the final design of a run (its results.json) instead of the study's initial
+        /// design, for an analysis study (no `optimization` section): another run's optimum with
+        /// this study's fidelity, lattice, modes and gust. The report goes to
+        /// reports/<study>_at_<run folder>/.
+        #[arg(long, value_name = "RESULTS_JSON", conflicts_with = "resume")]
+        design: Option<PathBuf>,
     },
     /// Run the study's `sweep` section: every case in parallel, then a table, CSV and figure in
     /// reports/<study>/sweep/.
@@ -179,7 +185,14 @@ pub fn dispatch(cli: Cli) -> Result<runner::Outcome> {
             study,
             reports,
             resume,
+            design: None,
         } => runner::run(&study, &reports, resume),
+        Command::Run {
+            study,
+            reports,
+            design: Some(design),
+            ..
+        } => runner::run_design(&study, &reports, &design),
         Command::Report { run_dir } => done(runner::report(&run_dir)),
         Command::Compare { run_dirs, out } => {
             done(crate::report::compare::compare(&run_dirs, &out))

@@ -1621,3 +1621,57 @@ fn flutter_of_a_runs_final_design() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `gustkit run --design` with an analysis study: the flagship's DLM model (11 modes, 10 × 15
+/// boxes, its gust) without the optimization section, on the reference run's final design,
+/// finds the RMS that run recorded at its optimum (the same model; the design through the
+/// study's inches and degrees: measured 1e-12 relative, asked 1e-9), in its own report folder.
+/// An optimization study is refused (its design to start from is `optimization.warm_start`),
+/// and `--design` with `--resume` is a usage error.
+#[test]
+fn run_of_a_runs_final_design() {
+    let dir = scratch("run_design");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let reference = root.join("reports/reference/agard445_dlm/results.json");
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&reference).unwrap()).unwrap();
+    let flagship = root.join("studies/agard445_dlm.json");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&flagship).unwrap()).unwrap();
+    v.as_object_mut().unwrap().remove("optimization");
+    v["structure"]["modes"] = r["flutter_check"]["modes"].clone();
+    let f = dir.join("flagship_analysis.json");
+    std::fs::write(&f, v.to_string()).unwrap();
+    let o = gustkit()
+        .args(["run", f.to_str().unwrap(), "--reports"])
+        .arg(&dir)
+        .arg("--design")
+        .arg(&reference)
+        .output()
+        .unwrap();
+    assert_success(&o);
+    let out: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("agard445_dlm_at_agard445_dlm/results.json")).unwrap(),
+    )
+    .unwrap();
+    let rms = out["gust"]["outputs"][0]["rms"].as_f64().unwrap();
+    let want = r["final"]["rms"].as_f64().unwrap();
+    assert!((rms / want - 1.0).abs() < 1e-9, "{rms} against {want}");
+    let o = gustkit()
+        .args(["run", flagship.to_str().unwrap(), "--reports"])
+        .arg(&dir)
+        .arg("--design")
+        .arg(&reference)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("optimization.warm_start"), "{err}");
+    let o = gustkit()
+        .args(["run", f.to_str().unwrap(), "--resume", "--design"])
+        .arg(&reference)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

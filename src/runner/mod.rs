@@ -52,6 +52,29 @@ pub fn run(file: &Path, reports: &Path, resume: bool) -> Result<Outcome> {
     }
 }
 
+/// `gustkit run STUDY --design RUN/results.json`: the analyses of a wing study without an
+/// optimization section, on the final design of another run. An optimization study is refused:
+/// its constraints' modal basis depends on its flutter margin, and a design to start from is
+/// `optimization.warm_start`.
+pub fn run_design(file: &Path, reports: &Path, design: &Path) -> Result<Outcome> {
+    let study = match LoadedStudy::load(file)? {
+        LoadedStudy::Wing(study) => study,
+        _ => anyhow::bail!(
+            "{}: --design applies to wing studies (the plate wing whose design variables a run records)",
+            file.display()
+        ),
+    };
+    if study.spec.optimization.is_some() {
+        anyhow::bail!(
+            "{}: --design analyses a run's design with an analysis study, and this one has an `optimization` section: to start an optimization from the design use optimization.warm_start; for its flutter, `gustkit flutter {} --design {}`",
+            file.display(),
+            file.display(),
+            design.display()
+        );
+    }
+    wing::run(&study.at_final_design(design)?, reports, false)
+}
+
 /// `gustkit report RUN_DIR`: every figure and the summary again, from results.json alone (or,
 /// for a sweep folder, from sweep_results.json). The kind recorded in results.json chooses the
 /// renderer.
