@@ -130,7 +130,11 @@ impl Study {
         if let Some(i) = design.thickness.iter().position(|t| !(*t > 0.0)) {
             return Err(check(self.err(
                 &format!("structure.thickness[{i}]"),
-                format!("{} m is not a positive thickness", design.thickness[i]),
+                format!(
+                    "{} {} is not a positive thickness",
+                    design.thickness[i] / to_m,
+                    self.spec.length_unit.name()
+                ),
             )));
         }
         Ok(out)
