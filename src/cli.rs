@@ -221,9 +221,9 @@ pub fn dispatch(cli: Cli) -> Result<runner::Outcome> {
             no_resolution_check,
             design,
         } => done(runner::wing::flutter::flutter(
-            &match design {
-                Some(d) => wing(&study, "flutter")?.at_final_design(&d)?,
-                None => wing(&study, "flutter")?,
+            &match (wing(&study, "flutter")?, design) {
+                (s, Some(d)) => s.at_final_design(&d)?,
+                (s, None) => s,
             },
             json,
             &reports,

@@ -1627,7 +1627,7 @@ fn flutter_of_a_runs_final_design() {
 /// finds the RMS that run recorded at its optimum (the same model; the design through the
 /// study's inches and degrees: measured 1e-12 relative, asked 1e-9), in its own report folder.
 /// An optimization study is refused (its design to start from is `optimization.warm_start`),
-/// and `--design` with `--resume` is a usage error.
+/// and so is a study of another kind; `--design` with `--resume` is a usage error.
 #[test]
 fn run_of_a_runs_final_design() {
     let dir = scratch("run_design");
@@ -1673,5 +1673,17 @@ fn run_of_a_runs_final_design() {
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
+    // a study of another kind has no plate design to take
+    let section = root.join("studies/typical_section_lfd.json");
+    let o = gustkit()
+        .args(["run", section.to_str().unwrap(), "--reports"])
+        .arg(&dir)
+        .arg("--design")
+        .arg(&reference)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("works on wing studies"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

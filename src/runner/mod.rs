@@ -57,13 +57,7 @@ pub fn run(file: &Path, reports: &Path, resume: bool) -> Result<Outcome> {
 /// its constraints' modal basis depends on its flutter margin, and a design to start from is
 /// `optimization.warm_start`.
 pub fn run_design(file: &Path, reports: &Path, design: &Path) -> Result<Outcome> {
-    let study = match LoadedStudy::load(file)? {
-        LoadedStudy::Wing(study) => study,
-        _ => anyhow::bail!(
-            "{}: --design applies to wing studies (the plate wing whose design variables a run records)",
-            file.display()
-        ),
-    };
+    let study = LoadedStudy::load(file)?.into_wing(file, "run --design")?;
     if study.spec.optimization.is_some() {
         anyhow::bail!(
             "{}: --design analyses a run's design with an analysis study, and this one has an `optimization` section: to start an optimization from the design use optimization.warm_start; for its flutter, `gustkit flutter {} --design {}`",
