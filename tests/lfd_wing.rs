@@ -122,7 +122,8 @@ fn lfd_gradients_match_differences() {
 
 /// Bad LFD settings are named by their JSON path: a mesh whose memory estimate exceeds the
 /// limit (refused before anything is allocated), odd point counts, an unknown level or
-/// preconditioner, a warm start of no designs or of more than it may keep.
+/// preconditioner, a warm start of no designs or of more than it may keep, a GMRES batch of none
+/// or of more than 64, or one whose bases do not fit.
 #[test]
 fn lfd_settings_are_checked_at_load() {
     let mut v = flagship();
@@ -153,6 +154,15 @@ fn lfd_settings_are_checked_at_load() {
     assert_eq!(e.path, "aero.fidelity.lfd.ilu_ordering", "{e}");
     let e = with(serde_json::json!({"lfd": {"steady_max_iterations": 0}}));
     assert_eq!(e.path, "aero.fidelity.lfd.steady_max_iterations", "{e}");
+    for batch in [0, 65] {
+        let e = with(serde_json::json!({"lfd": {"gmres_batch": batch}}));
+        assert_eq!(e.path, "aero.fidelity.lfd.gmres_batch", "{e}");
+        assert!(e.reason.contains("1 to 64"), "{e}");
+    }
+    // a batch's GMRES bases count in the memory estimate: 64 columns of 81 vectors a thread do
+    // not fit the medium mesh in 12 GB
+    let e = with(serde_json::json!({"lfd": {"mesh": "medium", "gmres_batch": 64}}));
+    assert_eq!(e.path, "aero.fidelity.lfd.mesh", "{e}");
     for designs in [0, 9] {
         let e = with(serde_json::json!({"lfd": {"warm_start_designs": designs}}));
         assert_eq!(e.path, "aero.fidelity.lfd.warm_start_designs", "{e}");
@@ -230,7 +240,8 @@ fn table_differences(
 /// to 1e-12) the GAF table with the default block ILU(1) in RCM order, with ILU(0) in the mesh's
 /// order and with the exact Jacobian's sparse LU (a direct solve) agree to 1e-9 of the largest
 /// entry of each table — the solver tolerance times the conditioning, far below any modelling
-/// difference.
+/// difference. Solving a frequency's right-hand sides in lockstep batches (`gmres_batch`) gives
+/// the table to round-off (1e-12).
 #[test]
 fn gafs_do_not_depend_on_the_preconditioner() {
     let (study, dir) = small_lfd_study("preconditioners");
@@ -246,6 +257,18 @@ fn gafs_do_not_depend_on_the_preconditioner() {
         s.aero_model(&plate).unwrap().gafs(&plate, &modes).unwrap()
     };
     let default = table(serde_json::json!({}));
+    // the right-hand sides of a frequency in lockstep batches of 3 (4 modes and the gust: two
+    // batches). The solves are the one-at-a-time ones bit for bit (gustkit-cfd's
+    // `batched_solves_are_those_of_one_at_a_time`); the tables of two builds of one model
+    // differ at round-off (the second reads the steady state back from its cache; measured
+    // 1.6e-13 of the largest entry, the same for the batched table), so 1e-12 here
+    let batched = table(serde_json::json!({"gmres_batch": 3}));
+    for (k, diff, scale) in table_differences(&default, &batched) {
+        assert!(
+            diff < 1e-12 * scale,
+            "gmres_batch: k = {k}, difference {diff:e} of {scale:e}"
+        );
+    }
     for other in [
         serde_json::json!({"ilu_fill": 0, "ilu_ordering": "natural"}),
         serde_json::json!({"preconditioner": "exact_lu"}),

@@ -9,7 +9,10 @@
 //! memory. Each figure is one run (these solves take seconds to minutes); the thread count is
 //! printed. `cargo bench -p gustkit-cfd --bench wing` runs the coarse level;
 //! `WING_LEVELS=coarse,medium` adds the medium one (about 10 minutes, 3.5 GB);
-//! `WING_REVERSE=0` stops after the GAF table.
+//! `WING_REVERSE=0` stops after the GAF table. `WING_BATCHES=1,4,12` times one frequency's 12
+//! right-hand sides (k = 0.5, forward and transposed) solved by GMRES in lockstep batches of
+//! each size (`WING_REPEAT` repetitions after a warm-up, default 3; `WING_RESTART` sets their
+//! GMRES restart length, default 80); `WING_TABLE=0` stops after it; `WING_PRECONDITIONERS=none` skips the preconditioner table.
 
 use gustkit_cfd::ilu::{IluOrdering, IluParams, IluPrecision};
 use gustkit_cfd::lfd::{HarmonicGust, LfdOperator, Preconditioner, Symbol};
@@ -73,6 +76,9 @@ fn gust_rhs(op: &LfdOperator, omega: f64, mach: f64) -> Vec<num_complex::Complex
 fn preconditioner_table(e: &Euler, q0: &[gustkit_cfd::residual::State<f64>], mach: f64, c: f64) {
     let list = std::env::var("WING_PRECONDITIONERS")
         .unwrap_or_else(|_| "first:0:natural,first:1:rcm:double,first:1:rcm".into());
+    if list == "none" {
+        return;
+    }
     let omega = 0.98 * mach / (0.5 * c);
     for item in list.split(',') {
         let f: Vec<&str> = item.split(':').collect();
@@ -122,6 +128,96 @@ fn preconditioner_table(e: &Euler, q0: &[gustkit_cfd::residual::State<f64>], mac
     }
 }
 
+/// Median, min and max of some timings.
+fn spread(mut t: Vec<f64>) -> (f64, f64, f64) {
+    t.sort_by(f64::total_cmp);
+    (t[t.len() / 2], t[0], t[t.len() - 1])
+}
+
+/// One frequency's 12 right-hand sides (gusts convected at 0.6 to 1.15 times the free stream:
+/// as many distinct solutions as a table's modes and gust) solved forward and transposed in
+/// lockstep batches of each size of `WING_BATCHES`: time (median, min, max of `WING_REPEAT`
+/// after a warm-up), GMRES iterations, and whether the answers are the one-at-a-time ones.
+fn batch_table(op: &mut LfdOperator, f: &gustkit_cfd::lfd::Factored, omega: f64, mach: f64) {
+    let Ok(list) = std::env::var("WING_BATCHES") else {
+        return;
+    };
+    let repeat: usize = std::env::var("WING_REPEAT")
+        .ok()
+        .and_then(|r| r.parse().ok())
+        .unwrap_or(3)
+        .max(1);
+    let rhs: Vec<_> = (0..12)
+        .map(|i| {
+            op.gust_rhs(
+                omega,
+                &HarmonicGust {
+                    convection: mach * (0.6 + 0.05 * i as f64),
+                    x0: 0.0,
+                },
+            )
+        })
+        .collect();
+    let reverse = gustkit_cfd::adjoint::LfdReverse::new(op);
+    let restart = op.params.restart;
+    if let Some(r) = std::env::var("WING_RESTART")
+        .ok()
+        .and_then(|r| r.parse().ok())
+    {
+        op.params.restart = r;
+    }
+    println!(
+        "  12 right-hand sides at k = 0.5, GMRES restart {}, tolerance {:.0e}:",
+        op.params.restart, op.params.tolerance
+    );
+    let mut first: Option<Vec<Vec<num_complex::Complex64>>> = None;
+    for b in list
+        .split(',')
+        .map(|b| b.trim().parse::<usize>().expect("batch size"))
+    {
+        op.params.batch = b;
+        let (mut forward, mut transposed) = (Vec::new(), Vec::new());
+        let mut its = (0, 0);
+        let mut answers = Vec::new();
+        for rep in 0..=repeat {
+            let t = Instant::now();
+            let fw = op.solve(f, &rhs).expect("forward solves");
+            let t_fw = t.elapsed().as_secs_f64();
+            let t = Instant::now();
+            let tr = reverse
+                .solve_transpose(op, f, &rhs)
+                .expect("transposed solves");
+            let t_tr = t.elapsed().as_secs_f64();
+            if rep > 0 {
+                forward.push(t_fw);
+                transposed.push(t_tr);
+            }
+            its = (
+                fw.iter().map(|s| s.1.iterations).sum::<usize>(),
+                tr.iter().map(|s| s.1.iterations).sum::<usize>(),
+            );
+            answers = fw.into_iter().chain(tr).map(|s| s.0).collect();
+        }
+        let same = match &first {
+            None => {
+                first = Some(answers);
+                "the reference".to_string()
+            }
+            Some(a) => (a == &answers).to_string(),
+        };
+        let (fm, fl, fh) = spread(forward);
+        let (tm, tl, th) = spread(transposed);
+        println!(
+            "  batch {b:>2}: 12 forward solves {fm:.2} s (min {fl:.2}, max {fh:.2}; {} GMRES iterations), 12 transposed {tm:.2} s (min {tl:.2}, max {th:.2}; {} iterations), {repeat} repetitions after a warm-up; answers equal to batch-1's bit for bit: {same}; peak memory {:.2} GB",
+            its.0,
+            its.1,
+            peak_gb()
+        );
+    }
+    op.params.batch = 1;
+    op.params.restart = restart;
+}
+
 fn main() {
     let levels = std::env::var("WING_LEVELS").unwrap_or_else(|_| "coarse".into());
     let threads = rayon::current_num_threads();
@@ -166,7 +262,15 @@ fn main() {
         let t = Instant::now();
         let sol = op.solve(&f, &[gust]).expect("solve");
         let t_rhs = t.elapsed().as_secs_f64();
+        batch_table(&mut op, &f, omega, mach);
         drop(f);
+        if std::env::var("WING_TABLE").as_deref() == Ok("0") {
+            println!(
+                "{level}: {n} cells; steady {t_steady:.1} s; Jacobian {t_jac:.2} s; ILU(1) factor {t_fac:.2} s; one right-hand side {t_rhs:.2} s ({} GMRES iterations); GAF table not run (WING_TABLE=0)",
+                sol[0].1.iterations
+            );
+            continue;
+        }
         // six smooth shapes on the wall (bending and torsion polynomials), 11 frequencies
         // (the forward solutions stay in memory here: the studies' scratch files are
         // gustkit's, whose `gustkit gafs` measures them)

@@ -204,8 +204,8 @@ impl LfdReverse {
         rhs: &[Field],
         guesses: &[Vec<crate::lfd::Guess>],
     ) -> Result<Vec<(Field, GmresInfo)>, LfdError> {
-        let prec = |v: &[C64]| lfd.precondition_transpose(f, v);
-        let op = |v: &[C64]| lfd.apply_transpose(f.s, v);
+        let prec = |vs: &[&[C64]]| lfd.precondition_transpose_many(f, vs);
+        let op = |vs: &[&[C64]]| lfd.apply_transpose_many(f.s, vs);
         crate::lfd::solve_each(&op, &prec, rhs, guesses, (&lfd.params, f.omega), false)
     }
 }

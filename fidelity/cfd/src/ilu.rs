@@ -91,6 +91,20 @@ impl Stored<C64> for C32 {
     }
 }
 
+/// Cell i's five unknowns of a field, copied.
+fn cell<T: Copy>(v: &[T], i: usize) -> [T; NVAR] {
+    v[i * NVAR..(i + 1) * NVAR]
+        .try_into()
+        .expect("a cell has NVAR unknowns")
+}
+
+/// Cell i's five unknowns of a field, in place.
+fn cell_mut<T>(v: &mut [T], i: usize) -> &mut [T; NVAR] {
+    (&mut v[i * NVAR..(i + 1) * NVAR])
+        .try_into()
+        .expect("a cell has NVAR unknowns")
+}
+
 /// A field whose ILU factors may be stored in single precision.
 pub trait IluField: Field {
     type Single: Stored<Self>;
@@ -510,96 +524,123 @@ impl<T: IluField> BlockIlu<T> {
 
     /// x = (LU)⁻¹ b by forward and backward block substitution.
     pub fn apply(&self, b: &[T]) -> Vec<T> {
-        let y = self.to_new(b);
-        let x = match &self.factors {
-            Factors::Double((off, inv)) => self.substitute(off, inv, y),
-            Factors::Single((off, inv)) => self.substitute(off, inv, y),
-        };
-        self.to_old(x)
+        self.apply_many(&[b]).pop().expect("one vector in, one out")
     }
 
     /// x = (LU)⁻ᵀ b (transposed, not conjugated).
     pub fn apply_transpose(&self, b: &[T]) -> Vec<T> {
-        let r = self.to_new(b);
-        let x = match &self.factors {
-            Factors::Double((off, inv)) => self.substitute_transpose(off, inv, r),
-            Factors::Single((off, inv)) => self.substitute_transpose(off, inv, r),
-        };
-        self.to_old(x)
+        self.apply_transpose_many(&[b])
+            .pop()
+            .expect("one vector in, one out")
     }
 
-    /// L U x = y in the factorization's order, in place.
-    fn substitute<S: Stored<T>>(
-        &self,
-        off: &[Block<S>],
-        inv: &[Block<S>],
-        mut y: Vec<T>,
-    ) -> Vec<T> {
+    /// [`BlockIlu::apply`] on several vectors in one sweep over the factors (each block is read
+    /// once for all of them); each result is that of `apply` on its vector, bit for bit.
+    pub fn apply_many(&self, bs: &[&[T]]) -> Vec<Vec<T>> {
+        let mut ys: Vec<Vec<T>> = bs.iter().map(|b| self.to_new(b)).collect();
+        match &self.factors {
+            Factors::Double((off, inv)) => self.substitute(off, inv, &mut ys),
+            Factors::Single((off, inv)) => self.substitute(off, inv, &mut ys),
+        }
+        ys.into_iter().map(|x| self.to_old(x)).collect()
+    }
+
+    /// [`BlockIlu::apply_transpose`] on several vectors in one sweep over the factors.
+    pub fn apply_transpose_many(&self, bs: &[&[T]]) -> Vec<Vec<T>> {
+        let mut rs: Vec<Vec<T>> = bs.iter().map(|b| self.to_new(b)).collect();
+        match &self.factors {
+            Factors::Double((off, inv)) => self.substitute_transpose(off, inv, &mut rs),
+            Factors::Single((off, inv)) => self.substitute_transpose(off, inv, &mut rs),
+        }
+        rs.into_iter().map(|x| self.to_old(x)).collect()
+    }
+
+    /// L U x = y in the factorization's order, in place, for every y.
+    fn substitute<S: Stored<T>>(&self, off: &[Block<S>], inv: &[Block<S>], ys: &mut [Vec<T>]) {
         let n = inv.len();
+        let load = |b: &Block<S>| -> Block<T> { b.map(|r| r.map(S::load)) };
         for i in 0..n {
             for p in self.row_start[i]..self.upper[i] {
-                let (k, l) = (self.cols[p] as usize, &off[p]);
-                for a in 0..NVAR {
-                    let s = (0..NVAR).fold(T::zero(), |s, c| s + l[a][c].load() * y[k * NVAR + c]);
-                    y[i * NVAR + a] = y[i * NVAR + a] - s;
+                let (k, l) = (self.cols[p] as usize, load(&off[p]));
+                for y in ys.iter_mut() {
+                    let yk = cell(y, k);
+                    let yi = cell_mut(y, i);
+                    for a in 0..NVAR {
+                        let s = (0..NVAR).fold(T::zero(), |s, c| s + l[a][c] * yk[c]);
+                        yi[a] = yi[a] - s;
+                    }
                 }
             }
         }
+        let mut rs: Vec<[T; NVAR]> = vec![[T::zero(); NVAR]; ys.len()];
         for i in (0..n).rev() {
-            let mut r: [T; NVAR] = std::array::from_fn(|a| y[i * NVAR + a]);
+            for (r, y) in rs.iter_mut().zip(ys.iter()) {
+                *r = cell(y, i);
+            }
             for q in self.upper[i]..self.row_start[i + 1] {
-                let (j, u) = (self.cols[q] as usize, &off[q]);
-                for a in 0..NVAR {
-                    r[a] = r[a]
-                        - (0..NVAR).fold(T::zero(), |s, c| s + u[a][c].load() * y[j * NVAR + c]);
+                let (j, u) = (self.cols[q] as usize, load(&off[q]));
+                for (r, y) in rs.iter_mut().zip(ys.iter()) {
+                    let yj = cell(y, j);
+                    for a in 0..NVAR {
+                        r[a] = r[a] - (0..NVAR).fold(T::zero(), |s, c| s + u[a][c] * yj[c]);
+                    }
                 }
             }
-            let d = &inv[i];
-            for a in 0..NVAR {
-                y[i * NVAR + a] = (0..NVAR).fold(T::zero(), |s, c| s + d[a][c].load() * r[c]);
+            let d = load(&inv[i]);
+            for (r, y) in rs.iter().zip(ys.iter_mut()) {
+                let yi = cell_mut(y, i);
+                for a in 0..NVAR {
+                    yi[a] = (0..NVAR).fold(T::zero(), |s, c| s + d[a][c] * r[c]);
+                }
             }
         }
-        y
     }
 
-    /// (L U)ᵀ x = r in the factorization's order, in place: Uᵀ y = r forward, then Lᵀ x = y
-    /// backward, both column by column over the stored rows.
+    /// (L U)ᵀ x = r in the factorization's order, in place, for every r: Uᵀ y = r forward, then
+    /// Lᵀ x = y backward, both column by column over the stored rows.
     fn substitute_transpose<S: Stored<T>>(
         &self,
         off: &[Block<S>],
         inv: &[Block<S>],
-        mut r: Vec<T>,
-    ) -> Vec<T> {
+        rs: &mut [Vec<T>],
+    ) {
         let n = inv.len();
+        let load = |b: &Block<S>| -> Block<T> { b.map(|r| r.map(S::load)) };
+        let mut ys: Vec<[T; NVAR]> = vec![[T::zero(); NVAR]; rs.len()];
         for i in 0..n {
-            let d = &inv[i];
-            let y: [T; NVAR] = std::array::from_fn(|a| {
-                (0..NVAR).fold(T::zero(), |s, c| s + d[c][a].load() * r[i * NVAR + c])
-            });
-            for a in 0..NVAR {
-                r[i * NVAR + a] = y[a];
+            let d = load(&inv[i]);
+            for (y, r) in ys.iter_mut().zip(rs.iter_mut()) {
+                let ri = cell_mut(r, i);
+                *y = std::array::from_fn(|a| (0..NVAR).fold(T::zero(), |s, c| s + d[c][a] * ri[c]));
+                *ri = *y;
             }
             for q in self.upper[i]..self.row_start[i + 1] {
-                let (j, u) = (self.cols[q] as usize, &off[q]);
-                for c in 0..NVAR {
-                    let s = (0..NVAR).fold(T::zero(), |s, a| s + u[a][c].load() * y[a]);
-                    r[j * NVAR + c] = r[j * NVAR + c] - s;
+                let (j, u) = (self.cols[q] as usize, load(&off[q]));
+                for (y, r) in ys.iter().zip(rs.iter_mut()) {
+                    let rj = cell_mut(r, j);
+                    for c in 0..NVAR {
+                        let s = (0..NVAR).fold(T::zero(), |s, a| s + u[a][c] * y[a]);
+                        rj[c] = rj[c] - s;
+                    }
                 }
             }
         }
         for i in (0..n).rev() {
-            let x: [T; NVAR] = std::array::from_fn(|a| r[i * NVAR + a]);
+            for (x, r) in ys.iter_mut().zip(rs.iter()) {
+                *x = cell(r, i);
+            }
             for p in self.row_start[i]..self.upper[i] {
-                let (k, l) = (self.cols[p] as usize, &off[p]);
-                for c in 0..NVAR {
-                    let s = (0..NVAR).fold(T::zero(), |s, a| s + l[a][c].load() * x[a]);
-                    r[k * NVAR + c] = r[k * NVAR + c] - s;
+                let (k, l) = (self.cols[p] as usize, load(&off[p]));
+                for (x, r) in ys.iter().zip(rs.iter_mut()) {
+                    let rk = cell_mut(r, k);
+                    for c in 0..NVAR {
+                        let s = (0..NVAR).fold(T::zero(), |s, a| s + l[a][c] * x[a]);
+                        rk[c] = rk[c] - s;
+                    }
                 }
             }
         }
-        r
     }
-
     /// Row r's stored columns, the diagonal included (for tests of the pattern).
     #[cfg(test)]
     fn row_columns(&self, r: usize) -> Vec<usize> {

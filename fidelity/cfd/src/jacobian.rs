@@ -130,41 +130,69 @@ impl BlockRows {
 
     /// y = A x.
     pub fn mul<T: Field>(&self, x: &[T]) -> Vec<T> {
-        let n = self.start.len() - 1;
-        let mut y = vec![T::zero(); n * NVAR];
-        for r in 0..n {
-            let mut acc = [T::zero(); NVAR];
-            for p in self.start[r]..self.start[r + 1] {
-                let (c, b) = (self.cols[p], &self.vals[p]);
-                for i in 0..NVAR {
-                    for j in 0..NVAR {
-                        acc[i] = acc[i] + x[c * NVAR + j] * b[i][j];
-                    }
-                }
-            }
-            y[r * NVAR..(r + 1) * NVAR].copy_from_slice(&acc);
-        }
-        y
+        self.mul_many(&[x]).pop().expect("one vector in, one out")
     }
 
     /// y = Aᵀ x (transposed, not conjugated).
     pub fn mul_transpose<T: Field>(&self, x: &[T]) -> Vec<T> {
+        self.mul_transpose_many(&[x])
+            .pop()
+            .expect("one vector in, one out")
+    }
+
+    /// A x for several x in one pass over the blocks (each read once for all of them); each
+    /// product is that of [`BlockRows::mul`], bit for bit.
+    pub fn mul_many<T: Field>(&self, xs: &[&[T]]) -> Vec<Vec<T>> {
         let n = self.start.len() - 1;
-        let mut y = vec![T::zero(); n * NVAR];
+        let mut ys = vec![vec![T::zero(); n * NVAR]; xs.len()];
+        let mut acc = vec![[T::zero(); NVAR]; xs.len()];
         for r in 0..n {
-            let xr = &x[r * NVAR..(r + 1) * NVAR];
+            acc.iter_mut().for_each(|a| *a = [T::zero(); NVAR]);
             for p in self.start[r]..self.start[r + 1] {
                 let (c, b) = (self.cols[p], &self.vals[p]);
-                for j in 0..NVAR {
-                    let mut acc = T::zero();
+                for (a, x) in acc.iter_mut().zip(xs) {
+                    let xc: &[T; NVAR] = x[c * NVAR..(c + 1) * NVAR]
+                        .try_into()
+                        .expect("a cell has NVAR unknowns");
                     for i in 0..NVAR {
-                        acc = acc + xr[i] * b[i][j];
+                        for j in 0..NVAR {
+                            a[i] = a[i] + xc[j] * b[i][j];
+                        }
                     }
-                    y[c * NVAR + j] = y[c * NVAR + j] + acc;
+                }
+            }
+            for (y, a) in ys.iter_mut().zip(&acc) {
+                y[r * NVAR..(r + 1) * NVAR].copy_from_slice(a);
+            }
+        }
+        ys
+    }
+
+    /// Aᵀ x for several x in one pass over the blocks.
+    pub fn mul_transpose_many<T: Field>(&self, xs: &[&[T]]) -> Vec<Vec<T>> {
+        let n = self.start.len() - 1;
+        let mut ys = vec![vec![T::zero(); n * NVAR]; xs.len()];
+        for r in 0..n {
+            for p in self.start[r]..self.start[r + 1] {
+                let (c, b) = (self.cols[p], &self.vals[p]);
+                for (y, x) in ys.iter_mut().zip(xs) {
+                    let xr: &[T; NVAR] = x[r * NVAR..(r + 1) * NVAR]
+                        .try_into()
+                        .expect("a cell has NVAR unknowns");
+                    let yc: &mut [T; NVAR] = (&mut y[c * NVAR..(c + 1) * NVAR])
+                        .try_into()
+                        .expect("a cell has NVAR unknowns");
+                    for j in 0..NVAR {
+                        let mut acc = T::zero();
+                        for i in 0..NVAR {
+                            acc = acc + xr[i] * b[i][j];
+                        }
+                        yc[j] = yc[j] + acc;
+                    }
                 }
             }
         }
-        y
+        ys
     }
 }
 

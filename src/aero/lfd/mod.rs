@@ -82,6 +82,14 @@ pub struct LfdWingSpec {
     pub gmres_restart: usize,
     #[serde(default = "default_gmres_max")]
     pub gmres_max_iterations: usize,
+    /// The right-hand sides of one reduced frequency (the modes and the gust, or their
+    /// adjoints) are solved by GMRES in lockstep batches of this many: each step applies the
+    /// operator and the ILU to the whole batch, reading their matrices once for all of it, and
+    /// each column keeps its own GMRES basis (restart + 1 vectors of 80 bytes a cell), so the
+    /// memory a thread grows with the batch. The answers are those of one at a time, bit for
+    /// bit. Absent: 1 (not written back: a study's serialized form fingerprints partial results).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gmres_batch: Option<usize>,
     /// Mode shapes reach the volume mesh by inverse-distance weighting blended to zero at this
     /// many root chords from the wall.
     #[serde(default = "default_deform_radius")]
@@ -110,12 +118,21 @@ pub struct LfdWingSpec {
 }
 
 impl LfdWingSpec {
+    /// How many right-hand sides GMRES solves in one lockstep batch (the key, or 1).
+    pub fn gmres_batch(&self) -> usize {
+        self.gmres_batch.unwrap_or(1)
+    }
+
     /// How many designs' solutions the warm start combines (the key, or its default).
     pub fn warm_start_designs(&self) -> usize {
         self.warm_start_designs
             .unwrap_or(gustkit_cfd::lfd_model::DEFAULT_WARM_DESIGNS)
     }
 }
+
+/// The most right-hand sides [`LfdWingSpec::gmres_batch`] may put in one batch (a frequency
+/// of the flagship has 12).
+const MAX_GMRES_BATCH: usize = 64;
 
 /// The most designs [`LfdWingSpec::warm_start_designs`] may keep (more span little more).
 const MAX_WARM_DESIGNS: usize = 8;
@@ -196,7 +213,7 @@ impl LfdWingSpec {
     /// kept for the reverse sweep (11 k × 7 columns × 80 B, 6.2 kB); per thread the block
     /// ILU(k) of one frequency (6.9 blocks a row for ILU(0) and the fill blocks of ILU(k), the
     /// diagonal's inverse among them: 25 complex numbers each, 200 B in single precision or
-    /// 400 B in double, and a 4-byte column), the GMRES basis of one right-hand side (restart +
+    /// 400 B in double, and a 4-byte column), the GMRES bases of one batch of right-hand sides (`gmres_batch` × (restart +
     /// 1 complex vectors of 5 unknowns; the preconditioned vectors are not kept) and the
     /// frequency's right-hand sides and dual-number geometry (3 kB). 32 kB a cell on 2 threads
     /// at the defaults (restart 80, ILU(1) in single precision, forward solutions on disk),
@@ -220,7 +237,10 @@ impl LfdWingSpec {
         7.5e3
             + forward
             + threads
-                * (ilu_blocks * block + 16.0 + (self.gmres_restart as f64 + 1.0) * 5.0 * 16.0 + 3e3)
+                * (ilu_blocks * block
+                    + 16.0
+                    + self.gmres_batch() as f64 * (self.gmres_restart as f64 + 1.0) * 5.0 * 16.0
+                    + 3e3)
     }
 
     /// Whether the ILU's factors are stored in single precision (the default).
@@ -239,6 +259,7 @@ impl LfdWingSpec {
             tolerance: self.gmres_tolerance,
             restart: self.gmres_restart,
             max_iterations: self.gmres_max_iterations,
+            batch: self.gmres_batch(),
             ilu: IluParams {
                 fill: self.ilu_fill,
                 ordering: match self.ilu_ordering {
@@ -306,6 +327,15 @@ impl WingBuilder for LfdWingSpec {
                     format!("cannot read {}: {e}", file.path),
                 ));
             }
+        }
+        if !(1..=MAX_GMRES_BATCH).contains(&self.gmres_batch()) {
+            return Err(fail(
+                "gmres_batch",
+                format!(
+                    "must be 1 to {MAX_GMRES_BATCH} right-hand sides solved together (got {})",
+                    self.gmres_batch()
+                ),
+            ));
         }
         self.params()
             .ilu
