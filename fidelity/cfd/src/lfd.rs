@@ -1129,14 +1129,15 @@ pub(crate) mod tests {
             .map(|v| C32::new(v.re as f32, v.im as f32))
             .collect();
         let guesses = vec![vec![], vec![], vec![], vec![guess.as_slice()]];
-        let reverse = crate::adjoint::LfdReverse::new(&lfd);
         let mut runs = Vec::new();
         for batch in [1, 3, 4] {
             lfd.params.batch = batch;
             let forward = lfd.solve_from(&f, &rhs, &guesses).unwrap();
-            let transposed = reverse
-                .solve_transpose_from(&lfd, &f, &rhs, &guesses)
-                .unwrap();
+            // the adjoint's solves: the transposed operator and preconditioner
+            let op = |vs: &[&[C64]]| lfd.apply_transpose_many(f.s, vs);
+            let prec = |vs: &[&[C64]]| lfd.precondition_transpose_many(&f, vs);
+            let transposed =
+                solve_each(&op, &prec, &rhs, &guesses, (&lfd.params, f.omega), false).unwrap();
             runs.push((forward, transposed));
         }
         let its =
