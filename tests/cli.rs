@@ -1657,15 +1657,19 @@ fn run_of_a_runs_final_design() {
     let rms = out["gust"]["outputs"][0]["rms"].as_f64().unwrap();
     let want = r["final"]["rms"].as_f64().unwrap();
     assert!((rms / want - 1.0).abs() < 1e-9, "{rms} against {want}");
-    let o = gustkit()
-        .args(["run", flagship.to_str().unwrap(), "--reports"])
-        .arg(&dir)
-        .arg("--design")
-        .arg(&reference)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
+    // `run --design` of a study that cannot take the design: exit 1 and the reason
+    let refused = |study: &Path| {
+        let o = gustkit()
+            .args(["run", study.to_str().unwrap(), "--reports"])
+            .arg(&dir)
+            .arg("--design")
+            .arg(&reference)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(1), "{o:?}");
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let err = refused(&flagship);
     assert!(err.contains("optimization.warm_start"), "{err}");
     let o = gustkit()
         .args(["run", f.to_str().unwrap(), "--resume", "--design"])
@@ -1674,16 +1678,7 @@ fn run_of_a_runs_final_design() {
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
     // a study of another kind has no plate design to take
-    let section = root.join("studies/typical_section_lfd.json");
-    let o = gustkit()
-        .args(["run", section.to_str().unwrap(), "--reports"])
-        .arg(&dir)
-        .arg("--design")
-        .arg(&reference)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
+    let err = refused(&root.join("studies/typical_section_lfd.json"));
     assert!(err.contains("works on wing studies"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

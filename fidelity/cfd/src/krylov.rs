@@ -170,22 +170,14 @@ pub fn gmres_batch<T: Field>(
             .copied()
             .filter(|&i| cols[i].needs_product())
             .collect();
-        let products = op(&need
-            .iter()
-            .map(|&i| cols[i].x.as_slice())
-            .collect::<Vec<_>>());
-        let mut products = need.iter().copied().zip(products);
-        let mut next = products.next();
+        let mut products: Vec<Option<Vec<T>>> = vec![None; cols.len()];
+        let xs: Vec<&[T]> = need.iter().map(|&i| cols[i].x.as_slice()).collect();
+        for (&i, ax) in need.iter().zip(op(&xs)) {
+            products[i] = Some(ax);
+        }
         let mut cycling = Vec::with_capacity(running.len());
         for &i in &running {
-            let ax = match &next {
-                Some((j, _)) if *j == i => {
-                    let ax = next.take().map(|(_, p)| p);
-                    next = products.next();
-                    ax
-                }
-                _ => None,
-            };
+            let ax = products[i].take();
             if cols[i].start_cycle(bs[i], ax.as_deref()) {
                 cycling.push(i);
             }
@@ -245,8 +237,6 @@ struct Column<T: Field> {
     g: Vec<T>,
     /// The cycle ended on the tolerance (or a lucky breakdown).
     converged: bool,
-    /// The cycle's Arnoldi steps are over (tolerance, breakdown, iteration limit).
-    cycle_over: bool,
     done: Option<Result<(), ()>>,
 }
 
@@ -278,7 +268,6 @@ impl<T: Field> Column<T> {
             sn: Vec::new(),
             g: Vec::new(),
             converged: false,
-            cycle_over: false,
             done,
         }
     }
@@ -314,7 +303,6 @@ impl<T: Field> Column<T> {
         self.sn.clear();
         self.g = vec![T::from_re(beta)];
         self.converged = false;
-        self.cycle_over = false;
         true
     }
 
@@ -368,11 +356,8 @@ impl<T: Field> Column<T> {
             w.iter_mut().for_each(|a| *a = *a * (1.0 / next_norm));
             self.v.push(w);
         }
-        if rel <= self.tol || next_norm == 0.0 || self.total >= self.max_iter {
-            self.converged = rel <= self.tol || next_norm == 0.0;
-            self.cycle_over = true;
-        }
-        !self.cycle_over
+        self.converged = rel <= self.tol || next_norm == 0.0;
+        !(self.converged || self.total >= self.max_iter)
     }
 
     /// V y with y from the cycle's triangular system: the step before the preconditioner.

@@ -229,12 +229,14 @@ fn partial_file(dir: &Path, level: WingMeshLevel) -> std::path::PathBuf {
 }
 
 /// A hash of the level's study file (its design, modes, frequencies and LFD settings), without
-/// the LFD's `warm_start_designs` (it chooses where a GMRES starts, not what it converges to):
+/// the LFD's `warm_start_designs` and `gmres_batch` (they choose where a GMRES starts and how
+/// many right-hand sides share a pass, not what it converges to):
 /// the FNV-1a hash the checkpoints and the sweep use, stable across Rust releases.
 fn fingerprint(s: &Study) -> Result<String> {
     let mut spec = s.spec.clone();
     if let Some(FidelitySpec::Lfd(l)) = spec.aero.as_mut().map(|a| &mut a.fidelity) {
         l.warm_start_designs = None;
+        l.gmres_batch = None;
     }
     Ok(format!(
         "{:016x}",
@@ -622,7 +624,7 @@ mod tests {
     }
 
     /// The fingerprint of a level's study is that of the solution: the warm start's
-    /// `warm_start_designs` leaves it, the GMRES tolerance changes it.
+    /// `warm_start_designs` and `gmres_batch` leave it, the GMRES tolerance changes it.
     #[test]
     fn the_warm_start_leaves_the_fingerprint() {
         let file =
@@ -639,6 +641,7 @@ mod tests {
         let plain = print(&|_| {});
         assert_eq!(plain, print(&|l| l.warm_start_designs = Some(1)));
         assert_eq!(plain, print(&|l| l.warm_start_designs = Some(3)));
+        assert_eq!(plain, print(&|l| l.gmres_batch = Some(12)));
         assert_ne!(plain, print(&|l| l.gmres_tolerance *= 0.1));
     }
 

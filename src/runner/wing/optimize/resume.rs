@@ -48,7 +48,9 @@ pub(super) fn defining_spec(study: &Study) -> Result<serde_json::Value> {
             m.remove(key);
         }
         // the second fidelity only analyses the designs the optimization reaches; the LFD's
-        // warm start chooses where its GMRES starts, not what it converges to
+        // warm start chooses where its GMRES starts, not what it converges to, and its batch
+        // how many right-hand sides share a pass (the answers are those of one at a time, bit
+        // for bit)
         if let Some(a) = m.get_mut("aero").and_then(|a| a.as_object_mut()) {
             a.remove("compare_with");
             if let Some(l) = a
@@ -57,6 +59,7 @@ pub(super) fn defining_spec(study: &Study) -> Result<serde_json::Value> {
                 .and_then(|l| l.as_object_mut())
             {
                 l.remove("warm_start_designs");
+                l.remove("gmres_batch");
             }
         }
         if let Some(o) = m.get_mut("optimization").and_then(|o| o.as_object_mut()) {
@@ -180,7 +183,7 @@ pub(super) fn open_checkpoint(
                 None => "the checkpoint belongs to another problem (or to an earlier gustkit's formulation of the constraints)".to_string(),
             };
             anyhow::bail!(
-                "{}: --resume: {what}; only the description, the reference, max_iterations, tolerance, aero.compare_with, aero.fidelity.lfd.warm_start_designs, the flutter sweep and the sweep section may change between a run and its resumption. Run without --resume to start over",
+                "{}: --resume: {what}; only the description, the reference, max_iterations, tolerance, aero.compare_with, aero.fidelity.lfd.warm_start_designs, aero.fidelity.lfd.gmres_batch, the flutter sweep and the sweep section may change between a run and its resumption. Run without --resume to start over",
                 study.file.display()
             );
         }
@@ -204,9 +207,10 @@ pub(super) fn open_checkpoint(
 mod tests {
     use super::*;
 
-    /// The LFD study's problem is the same whatever warm start its GMRES takes (a run resumes
-    /// with another `warm_start_designs`), and another whenever what it converges to changes
-    /// (the GMRES tolerance, say).
+    /// The LFD study's problem is the same whatever warm start its GMRES takes and however many
+    /// right-hand sides it batches (a run resumes with another `warm_start_designs` or
+    /// `gmres_batch`), and another whenever what it converges to changes (the GMRES tolerance,
+    /// say).
     #[test]
     fn the_warm_start_does_not_define_the_problem() {
         let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_lfd_analysis.json");
@@ -219,6 +223,7 @@ mod tests {
         };
         let plain = with(serde_json::json!({}));
         assert_eq!(plain, with(serde_json::json!({"warm_start_designs": 1})));
+        assert_eq!(plain, with(serde_json::json!({"gmres_batch": 12})));
         assert_ne!(plain, with(serde_json::json!({"gmres_tolerance": 1e-9})));
     }
 }
