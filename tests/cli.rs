@@ -1642,14 +1642,16 @@ fn run_of_a_runs_final_design() {
     v["structure"]["modes"] = r["flutter_check"]["modes"].clone();
     let f = dir.join("flagship_analysis.json");
     std::fs::write(&f, v.to_string()).unwrap();
-    let o = gustkit()
-        .args(["run", f.to_str().unwrap(), "--reports"])
-        .arg(&dir)
-        .arg("--design")
-        .arg(&reference)
-        .output()
-        .unwrap();
-    assert_success(&o);
+    let run_design = |study: &Path| {
+        gustkit()
+            .args(["run", study.to_str().unwrap(), "--reports"])
+            .arg(&dir)
+            .arg("--design")
+            .arg(&reference)
+            .output()
+            .unwrap()
+    };
+    assert_success(&run_design(&f));
     let out: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(dir.join("agard445_dlm_at_agard445_dlm/results.json")).unwrap(),
     )
@@ -1659,13 +1661,7 @@ fn run_of_a_runs_final_design() {
     assert!((rms / want - 1.0).abs() < 1e-9, "{rms} against {want}");
     // `run --design` of a study that cannot take the design: exit 1 and the reason
     let refused = |study: &Path| {
-        let o = gustkit()
-            .args(["run", study.to_str().unwrap(), "--reports"])
-            .arg(&dir)
-            .arg("--design")
-            .arg(&reference)
-            .output()
-            .unwrap();
+        let o = run_design(study);
         assert_eq!(o.status.code(), Some(1), "{o:?}");
         String::from_utf8_lossy(&o.stderr).into_owned()
     };

@@ -537,22 +537,25 @@ impl<T: IluField> BlockIlu<T> {
     /// [`BlockIlu::apply`] on several vectors in one sweep over the factors (each block is read
     /// once for all of them); each result is that of `apply` on its vector, bit for bit.
     pub fn apply_many(&self, bs: &[&[T]]) -> Vec<Vec<T>> {
-        let mut ys: Vec<Vec<T>> = bs.iter().map(|b| self.to_new(b)).collect();
-        match &self.factors {
-            Factors::Double((off, inv)) => self.substitute(off, inv, &mut ys),
-            Factors::Single((off, inv)) => self.substitute(off, inv, &mut ys),
-        }
-        ys.into_iter().map(|x| self.to_old(x)).collect()
+        self.sweep_many(bs, false)
     }
 
     /// [`BlockIlu::apply_transpose`] on several vectors in one sweep over the factors.
     pub fn apply_transpose_many(&self, bs: &[&[T]]) -> Vec<Vec<T>> {
-        let mut rs: Vec<Vec<T>> = bs.iter().map(|b| self.to_new(b)).collect();
-        match &self.factors {
-            Factors::Double((off, inv)) => self.substitute_transpose(off, inv, &mut rs),
-            Factors::Single((off, inv)) => self.substitute_transpose(off, inv, &mut rs),
+        self.sweep_many(bs, true)
+    }
+
+    /// The forward (`transpose` false) or transposed substitutions on several vectors, in the
+    /// factorization's order and back.
+    fn sweep_many(&self, bs: &[&[T]], transpose: bool) -> Vec<Vec<T>> {
+        let mut ys: Vec<Vec<T>> = bs.iter().map(|b| self.to_new(b)).collect();
+        match (&self.factors, transpose) {
+            (Factors::Double((off, inv)), false) => self.substitute(off, inv, &mut ys),
+            (Factors::Single((off, inv)), false) => self.substitute(off, inv, &mut ys),
+            (Factors::Double((off, inv)), true) => self.substitute_transpose(off, inv, &mut ys),
+            (Factors::Single((off, inv)), true) => self.substitute_transpose(off, inv, &mut ys),
         }
-        rs.into_iter().map(|x| self.to_old(x)).collect()
+        ys.into_iter().map(|x| self.to_old(x)).collect()
     }
 
     /// L U x = y in the factorization's order, in place, for every y.

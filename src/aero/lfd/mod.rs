@@ -328,15 +328,17 @@ impl WingBuilder for LfdWingSpec {
                 ));
             }
         }
-        if !(1..=MAX_GMRES_BATCH).contains(&self.gmres_batch()) {
-            return Err(fail(
-                "gmres_batch",
-                format!(
-                    "must be 1 to {MAX_GMRES_BATCH} right-hand sides solved together (got {})",
-                    self.gmres_batch()
-                ),
-            ));
-        }
+        // a count of 1 to `max` `what`
+        let count = |key: &str, got: usize, max: usize, what: &str| match (1..=max).contains(&got) {
+            true => Ok(()),
+            false => Err(fail(key, format!("must be 1 to {max} {what} (got {got})"))),
+        };
+        count(
+            "gmres_batch",
+            self.gmres_batch(),
+            MAX_GMRES_BATCH,
+            "right-hand sides solved together",
+        )?;
         self.params()
             .ilu
             .validate()
@@ -344,15 +346,12 @@ impl WingBuilder for LfdWingSpec {
         self.params()
             .validate()
             .map_err(|r| fail("gmres_tolerance", r))?;
-        if !(1..=MAX_WARM_DESIGNS).contains(&self.warm_start_designs()) {
-            return Err(fail(
-                "warm_start_designs",
-                format!(
-                    "must be 1 to {MAX_WARM_DESIGNS} previous designs (got {})",
-                    self.warm_start_designs()
-                ),
-            ));
-        }
+        count(
+            "warm_start_designs",
+            self.warm_start_designs(),
+            MAX_WARM_DESIGNS,
+            "previous designs",
+        )?;
         if self.steady_max_iterations == 0 {
             return Err(fail(
                 "steady_max_iterations",
