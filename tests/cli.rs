@@ -521,8 +521,9 @@ fn run_optimization_and_resume() {
     let resumed = results();
     finished(&o, &resumed);
     // the first session's records travel with the checkpoint: the evaluation times of both
-    // sessions (the resumed session evaluates its starting point once more), the wall time of
-    // both, every iterate's damping peak without evaluating again
+    // sessions (the resumed session takes its starting point's values and gradients from the
+    // checkpoint: no evaluation more than the uninterrupted run's), the wall time of both, every
+    // iterate's damping peak without evaluating again
     let reps =
         |r: &serde_json::Value, what: &str| r["timing"][what]["repetitions"].as_u64().unwrap();
     eprintln!(
@@ -532,8 +533,8 @@ fn run_optimization_and_resume() {
         reps(&r, "gradient"),
         reps(&resumed, "gradient")
     );
-    assert_eq!(reps(&resumed, "function"), reps(&r, "function") + 1);
-    assert_eq!(reps(&resumed, "gradient"), reps(&r, "gradient") + 1);
+    assert_eq!(reps(&resumed, "function"), reps(&r, "function"));
+    assert_eq!(reps(&resumed, "gradient"), reps(&r, "gradient"));
     assert!(resumed["wall_time_s"].as_f64().unwrap() > first["wall_time_s"].as_f64().unwrap());
     let peaks = |r: &serde_json::Value| -> Vec<f64> {
         r["history"]

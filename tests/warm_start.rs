@@ -147,6 +147,7 @@ fn warm_start_hessian_is_carried_to_this_studys_scaling() {
         elapsed_s: 0.0,
         problem_state: serde_json::Value::Null,
         stopped: None,
+        point: None,
     };
     std::fs::write(
         dir.join("checkpoint.json"),

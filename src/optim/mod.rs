@@ -226,6 +226,19 @@ pub struct Checkpoint {
     /// `--resume` then says so at once instead of failing the same way.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stopped: Option<String>,
+    /// The values and gradients at `z`, so that a resumed run goes on from them as the run that
+    /// wrote the checkpoint would have, without evaluating the point again (one function and one
+    /// gradient: minutes with the LFD). A checkpoint without them (an earlier gustkit's) has its
+    /// point evaluated again on resume.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub point: Option<PointEvaluation>,
+}
+
+/// The values and gradients at a checkpoint's point.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PointEvaluation {
+    pub values: Values,
+    pub gradients: Gradients,
 }
 
 mod sqp;

@@ -2,7 +2,8 @@
 
 use super::qp::{self, QpData};
 use super::{
-    Checkpoint, Gradients, Iterate, Problem, SqpError, SqpInfo, SqpParams, SqpStatus, Values,
+    Checkpoint, Gradients, Iterate, PointEvaluation, Problem, SqpError, SqpInfo, SqpParams,
+    SqpStatus, Values,
 };
 
 /// What an observer tells the run after an iteration.
@@ -390,6 +391,8 @@ struct Start {
     evaluations: usize,
     /// Wall time of the sessions before this one.
     elapsed_s: f64,
+    /// The values and gradients at `z` a checkpoint kept (none: evaluate the point).
+    point: Option<PointEvaluation>,
 }
 
 impl Start {
@@ -436,6 +439,7 @@ impl Start {
             iteration: c.iteration,
             evaluations: c.evaluations,
             elapsed_s: c.elapsed_s,
+            point: c.point.filter(|p| fits(p, n)),
         })
     }
 
@@ -471,8 +475,30 @@ impl Start {
             iteration: 0,
             evaluations: 0,
             elapsed_s: 0.0,
+            point: None,
         })
     }
+}
+
+/// A kept point evaluation that fits `n` variables: finite, a gradient row of length `n` for the
+/// objective and for every constraint (else the point is evaluated again).
+fn fits(p: &PointEvaluation, n: usize) -> bool {
+    let (v, g) = (&p.values, &p.gradients);
+    let rows_fit = |rows: &[Vec<f64>], count: usize| {
+        rows.len() == count && rows.iter().all(|r| r.len() == n && finite(r))
+    };
+    v.f.is_finite()
+        && finite(&v.eq)
+        && finite(&v.ineq)
+        && g.f.len() == n
+        && finite(&g.f)
+        && rows_fit(&g.eq, v.eq.len())
+        && rows_fit(&g.ineq, v.ineq.len())
+}
+
+/// Every entry finite.
+fn finite(v: &[f64]) -> bool {
+    v.iter().all(|a| a.is_finite())
 }
 
 /// A given initial BFGS matrix: n × n, finite, symmetric to round-off, with a positive diagonal.
@@ -624,23 +650,28 @@ impl SqpState {
         problem: &mut dyn Problem,
         scaling: &Scaling,
     ) -> Result<Self, SqpError> {
-        let values = problem
-            .values(&scaling.x(&start.z))
-            .map_err(SqpError::Start)?;
-        let grads =
-            problem
-                .gradients(&scaling.x(&start.z))
-                .map_err(|source| SqpError::Gradient {
-                    iteration: start.iteration,
-                    source,
+        let (values, grads, evaluations) = match start.point {
+            Some(p) => (p.values, p.gradients, start.evaluations),
+            None => {
+                let values = problem
+                    .values(&scaling.x(&start.z))
+                    .map_err(SqpError::Start)?;
+                let grads = problem.gradients(&scaling.x(&start.z)).map_err(|source| {
+                    SqpError::Gradient {
+                        iteration: start.iteration,
+                        source,
+                    }
                 })?;
+                (values, grads, start.evaluations + 1)
+            }
+        };
         Ok(Self {
             z: start.z,
             hess: start.hess,
             penalty: start.penalty,
             history: start.history,
             iteration: start.iteration,
-            evaluations: start.evaluations + 1,
+            evaluations,
             values,
             grads,
         })
@@ -667,6 +698,10 @@ impl SqpState {
             elapsed_s,
             problem_state,
             stopped,
+            point: Some(PointEvaluation {
+                values: self.values.clone(),
+                gradients: self.grads.clone(),
+            }),
         }
     }
 

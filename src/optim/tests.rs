@@ -218,8 +218,35 @@ fn convex_qp() {
     assert!(r.iterations <= 6);
 }
 
+/// A problem that counts its evaluations.
+struct Counted<P: Problem> {
+    inner: P,
+    values: usize,
+    gradients: usize,
+}
+
+impl<P: Problem> Problem for Counted<P> {
+    fn lower(&self) -> Vec<f64> {
+        self.inner.lower()
+    }
+    fn upper(&self) -> Vec<f64> {
+        self.inner.upper()
+    }
+    fn values(&mut self, x: &[f64]) -> Result<Values, EvalError> {
+        self.values += 1;
+        self.inner.values(x)
+    }
+    fn gradients(&mut self, x: &[f64]) -> Result<Gradients, EvalError> {
+        self.gradients += 1;
+        self.inner.gradients(x)
+    }
+}
+
 /// Stopping after 3 iterations and resuming from the checkpoint gives the same final result as an
-/// uninterrupted run; a checkpoint of another problem is refused.
+/// uninterrupted run, with no evaluation more: the checkpoint keeps its point's values and
+/// gradients. A checkpoint without them (an earlier gustkit's) has its point evaluated again, to
+/// the same end; one whose kept gradients do not fit is evaluated again too; a checkpoint of
+/// another problem is refused.
 #[test]
 fn resume_from_checkpoint_reproduces_the_run() {
     let params = SqpParams {
@@ -244,11 +271,30 @@ fn resume_from_checkpoint_reproduces_the_run() {
     let mut stop = StopAt(3, None);
     let part = minimize(&mut hs71(), &x0, &params, "hs71", None, &mut stop).unwrap();
     assert!(!part.converged && part.iterations == 3);
-    let resumed = minimize(&mut hs71(), &x0, &params, "hs71", stop.1.clone(), &mut ()).unwrap();
+    let counted = || Counted {
+        inner: hs71(),
+        values: 0,
+        gradients: 0,
+    };
+    let mut p = counted();
+    let resumed = minimize(&mut p, &x0, &params, "hs71", stop.1.clone(), &mut ()).unwrap();
     assert!(resumed.converged);
     assert_eq!(resumed.iterations, full.iterations);
     assert_eq!(resumed.x, full.x);
-    assert_eq!(resumed.history.len(), full.history.len());
+    assert_eq!(resumed.history, full.history);
+    assert_eq!(resumed.evaluations, full.evaluations);
+    assert_eq!(p.values, full.evaluations - part.evaluations);
+    // without the kept point (or with one that does not fit): one evaluation more, same end
+    let without = stop.1.clone().map(|c| Checkpoint { point: None, ..c });
+    let mut mangled = stop.1.clone().unwrap();
+    mangled.point.as_mut().unwrap().gradients.f.pop();
+    for c in [without, Some(mangled)] {
+        let mut p = counted();
+        let again = minimize(&mut p, &x0, &params, "hs71", c, &mut ()).unwrap();
+        assert_eq!(again.x, full.x);
+        assert_eq!(again.evaluations, full.evaluations + 1);
+        assert_eq!(p.values, full.evaluations - part.evaluations + 1);
+    }
     let e = minimize(&mut hs71(), &x0, &params, "other", stop.1, &mut ()).unwrap_err();
     assert!(matches!(e, SqpError::Checkpoint(_)), "{e}");
 }
