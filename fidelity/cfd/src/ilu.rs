@@ -5,7 +5,7 @@
 //! linear in the number of blocks of the pattern.
 
 use crate::gas::NVAR;
-use crate::jacobian::Blocks;
+use crate::jacobian::{cell, cell_mut, Blocks};
 use crate::krylov::Field;
 use num_complex::{Complex32 as C32, Complex64 as C64};
 
@@ -91,18 +91,16 @@ impl Stored<C64> for C32 {
     }
 }
 
-/// Cell i's five unknowns of a field, copied.
-fn cell<T: Copy>(v: &[T], i: usize) -> [T; NVAR] {
-    v[i * NVAR..(i + 1) * NVAR]
-        .try_into()
-        .expect("a cell has NVAR unknowns")
-}
-
-/// Cell i's five unknowns of a field, in place.
-fn cell_mut<T>(v: &mut [T], i: usize) -> &mut [T; NVAR] {
-    (&mut v[i * NVAR..(i + 1) * NVAR])
-        .try_into()
-        .expect("a cell has NVAR unknowns")
+/// Cell j of every field r less Bᵀ x of its own x: one block of a transposed substitution
+/// applied to a whole batch.
+fn subtract_transposed<T: Field>(b: &Block<T>, xs: &[[T; NVAR]], rs: &mut [Vec<T>], j: usize) {
+    for (x, r) in xs.iter().zip(rs.iter_mut()) {
+        let rj = cell_mut(r, j);
+        for c in 0..NVAR {
+            let s = (0..NVAR).fold(T::zero(), |s, a| s + b[a][c] * x[a]);
+            rj[c] = rj[c] - s;
+        }
+    }
 }
 
 /// A field whose ILU factors may be stored in single precision.
@@ -618,14 +616,7 @@ impl<T: IluField> BlockIlu<T> {
                 *ri = *y;
             }
             for q in self.upper[i]..self.row_start[i + 1] {
-                let (j, u) = (self.cols[q] as usize, load(&off[q]));
-                for (y, r) in ys.iter().zip(rs.iter_mut()) {
-                    let rj = cell_mut(r, j);
-                    for c in 0..NVAR {
-                        let s = (0..NVAR).fold(T::zero(), |s, a| s + u[a][c] * y[a]);
-                        rj[c] = rj[c] - s;
-                    }
-                }
+                subtract_transposed(&load(&off[q]), &ys, rs, self.cols[q] as usize);
             }
         }
         for i in (0..n).rev() {
@@ -633,14 +624,7 @@ impl<T: IluField> BlockIlu<T> {
                 *x = cell(r, i);
             }
             for p in self.row_start[i]..self.upper[i] {
-                let (k, l) = (self.cols[p] as usize, load(&off[p]));
-                for (x, r) in ys.iter().zip(rs.iter_mut()) {
-                    let rk = cell_mut(r, k);
-                    for c in 0..NVAR {
-                        let s = (0..NVAR).fold(T::zero(), |s, a| s + l[a][c] * x[a]);
-                        rk[c] = rk[c] - s;
-                    }
-                }
+                subtract_transposed(&load(&off[p]), &ys, rs, self.cols[p] as usize);
             }
         }
     }

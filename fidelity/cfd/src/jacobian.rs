@@ -100,6 +100,20 @@ pub struct BlockRows {
     vals: Vec<[[f64; NVAR]; NVAR]>,
 }
 
+/// Cell i's five unknowns of a flattened field, copied.
+pub(crate) fn cell<T: Copy>(v: &[T], i: usize) -> [T; NVAR] {
+    v[i * NVAR..(i + 1) * NVAR]
+        .try_into()
+        .expect("a cell has NVAR unknowns")
+}
+
+/// Cell i's five unknowns of a flattened field, in place.
+pub(crate) fn cell_mut<T>(v: &mut [T], i: usize) -> &mut [T; NVAR] {
+    (&mut v[i * NVAR..(i + 1) * NVAR])
+        .try_into()
+        .expect("a cell has NVAR unknowns")
+}
+
 impl BlockRows {
     /// The matrix of `blocks` over `n` block rows (repeated positions add).
     pub fn new(n: usize, blocks: &Blocks) -> Self {
@@ -151,9 +165,7 @@ impl BlockRows {
             for p in self.start[r]..self.start[r + 1] {
                 let (c, b) = (self.cols[p], &self.vals[p]);
                 for (a, x) in acc.iter_mut().zip(xs) {
-                    let xc: &[T; NVAR] = x[c * NVAR..(c + 1) * NVAR]
-                        .try_into()
-                        .expect("a cell has NVAR unknowns");
+                    let xc = cell(x, c);
                     for i in 0..NVAR {
                         for j in 0..NVAR {
                             a[i] = a[i] + xc[j] * b[i][j];
@@ -176,12 +188,8 @@ impl BlockRows {
             for p in self.start[r]..self.start[r + 1] {
                 let (c, b) = (self.cols[p], &self.vals[p]);
                 for (y, x) in ys.iter_mut().zip(xs) {
-                    let xr: &[T; NVAR] = x[r * NVAR..(r + 1) * NVAR]
-                        .try_into()
-                        .expect("a cell has NVAR unknowns");
-                    let yc: &mut [T; NVAR] = (&mut y[c * NVAR..(c + 1) * NVAR])
-                        .try_into()
-                        .expect("a cell has NVAR unknowns");
+                    let xr = cell(x, r);
+                    let yc = cell_mut(y, c);
                     for j in 0..NVAR {
                         let mut acc = T::zero();
                         for i in 0..NVAR {

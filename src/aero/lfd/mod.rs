@@ -213,8 +213,9 @@ impl LfdWingSpec {
     /// kept for the reverse sweep (11 k × 7 columns × 80 B, 6.2 kB); per thread the block
     /// ILU(k) of one frequency (6.9 blocks a row for ILU(0) and the fill blocks of ILU(k), the
     /// diagonal's inverse among them: 25 complex numbers each, 200 B in single precision or
-    /// 400 B in double, and a 4-byte column), the GMRES bases of one batch of right-hand sides (`gmres_batch` × (restart +
-    /// 1 complex vectors of 5 unknowns; the preconditioned vectors are not kept) and the
+    /// 400 B in double, and a 4-byte column), the GMRES bases of one batch of right-hand sides
+    /// (`gmres_batch` × (restart + 1) complex vectors of 5 unknowns; the preconditioned vectors
+    /// are not kept) and the
     /// frequency's right-hand sides and dual-number geometry (3 kB). 32 kB a cell on 2 threads
     /// at the defaults (restart 80, ILU(1) in single precision, forward solutions on disk),
     /// 43 kB with double-precision factors and the solutions in memory; measured on the medium
