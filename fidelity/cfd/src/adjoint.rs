@@ -54,8 +54,10 @@ pub struct LfdReverse {
 /// table's 24.0 and 37.4, so 23.5 and 33.3 kB above it: 13.7 kB shared and 9.8 kB a thread
 /// (∂R/∂x kept: 31.4 and 40.7 kB above it, 22.1 shared). The operation tapes the Jacobians
 /// replaced took about 2 800 entries of 40 bytes a cell (113 kB, up to twice that in their
-/// buffers).
-pub const BYTES_PER_CELL: usize = 14_500;
+/// buffers). Since measured, the sweep also keeps the mode motions' swept face volumes for all
+/// frequencies (80 B a face and mode a batch of four tangents: 2.7 kB a cell with 11 modes on
+/// the wing meshes' 3.1 faces a cell), added here.
+pub const BYTES_PER_CELL: usize = 17_500;
 
 /// Bytes per cell and thread a gradient holds beyond its GAF table's own per-thread state:
 /// the geometry tangents' hyper-dual evaluations (the mesh, its geometry and the residual over

@@ -54,6 +54,10 @@ pub enum Column<'a, const M: usize = 1> {
     Motion {
         x_hat: &'a [[C64; 3]],
         dx_hat: [&'a [[C64; 3]]; M],
+        /// The faces' swept volumes of this motion along these directions
+        /// ([`LfdOperator::swept_volumes`]): they do not depend on the frequency, so a reverse
+        /// sweep computes them once a column instead of once a column and frequency.
+        swept: &'a [SweptFace<M>],
     },
     Gust {
         g: &'a [C64],
@@ -61,7 +65,67 @@ pub enum Column<'a, const M: usize = 1> {
     },
 }
 
+/// A face's volume swept from X to X + ε x̂ as both move along `M` mesh directions δ: its ε part
+/// L_X(x̂) and the ε δ_m parts, the derivatives of that linearization. The grid-velocity flux of
+/// a motion column at s is s times them.
+pub type SweptFace<const M: usize> = (C64, [C64; M]);
+
+/// A column's mode motion x̂ and its tangents δx̂ along `M` mesh directions.
+type Motion<'a, const M: usize> = (&'a [[C64; 3]], [&'a [[C64; 3]]; M]);
+
+/// The hyper-dual position of node `n`: the mesh's, moving along the `M` directions `d_nodes`,
+/// plus ε times a column's motion x̂ (with its tangents δx̂) where one is given.
+fn hd_node<const M: usize>(
+    mesh: &crate::mesh::Mesh,
+    d_nodes: [&[[f64; 3]]; M],
+    motion: Option<Motion<M>>,
+    n: usize,
+) -> [Hd<M>; 3] {
+    let zero = C64::new(0.0, 0.0);
+    std::array::from_fn(|k| {
+        let b = std::array::from_fn(|m| d_nodes[m][n][k]);
+        match motion {
+            Some((x_hat, dx_hat)) => hd(
+                mesh.nodes[n][k],
+                x_hat[n][k],
+                b,
+                std::array::from_fn(|m| dx_hat[m][n][k]),
+            ),
+            None => hd(mesh.nodes[n][k], zero, b, [zero; M]),
+        }
+    })
+}
+
 impl LfdOperator {
+    /// Every face's swept volume of the mode motion `x_hat` (tangents `dx_hat`) along the `M`
+    /// mesh directions `d_nodes`, for [`Column::Motion`]: one hyper-dual evaluation of each
+    /// face's swept volume from X to X + ε x̂, both moving with δ.
+    pub fn swept_volumes<const M: usize>(
+        &self,
+        x_hat: &[[C64; 3]],
+        dx_hat: [&[[C64; 3]]; M],
+        d_nodes: [&[[f64; 3]]; M],
+    ) -> Vec<SweptFace<M>> {
+        let mesh = &self.euler.mesh;
+        mesh.faces
+            .iter()
+            .map(|f| {
+                let a: Vec<[Hd<M>; 3]> = f
+                    .nodes
+                    .iter()
+                    .map(|&n| hd_node(mesh, d_nodes, None, n))
+                    .collect();
+                let b: Vec<[Hd<M>; 3]> = f
+                    .nodes
+                    .iter()
+                    .map(|&n| hd_node(mesh, d_nodes, Some((x_hat, dx_hat)), n))
+                    .collect();
+                let l = crate::mesh::swept_volume(&a, &b);
+                (a_part(l), std::array::from_fn(|m| ab_part(l, m)))
+            })
+            .collect()
+    }
+
     /// The steady tangent δq₀ = −(∂R/∂q)⁻¹ ∂R/∂X δX of a mesh motion δX (flattened like a
     /// field), by GMRES with the ω = 0 preconditioner.
     pub fn steady_tangent(&self, d_nodes: &[[f64; 3]]) -> Result<Vec<f64>, LfdError> {
@@ -104,21 +168,13 @@ impl LfdOperator {
         let mesh = &e.mesh;
         let zero = C64::new(0.0, 0.0);
         let order = e.order;
-        let node = |n: usize, with_motion: bool| -> [Hd<M>; 3] {
-            std::array::from_fn(|k| {
-                let b = std::array::from_fn(|m| d_nodes[m][n][k]);
-                match (column, with_motion) {
-                    (Column::Motion { x_hat, dx_hat }, true) => hd(
-                        mesh.nodes[n][k],
-                        x_hat[n][k],
-                        b,
-                        std::array::from_fn(|m| dx_hat[m][n][k]),
-                    ),
-                    _ => hd(mesh.nodes[n][k], zero, b, [zero; M]),
-                }
-            })
+        let motion = match column {
+            Column::Motion { x_hat, dx_hat, .. } => Some((*x_hat, *dx_hat)),
+            Column::Gust { .. } => None,
         };
-        let nodes: Vec<[Hd<M>; 3]> = (0..mesh.nodes.len()).map(|n| node(n, true)).collect();
+        let nodes: Vec<[Hd<M>; 3]> = (0..mesh.nodes.len())
+            .map(|n| hd_node(mesh, d_nodes, motion, n))
+            .collect();
         let q: Vec<State<Hd<M>>> = self
             .q0
             .iter()
@@ -136,24 +192,14 @@ impl LfdOperator {
             })
             .collect();
         let vg: Vec<Hd<M>> = match column {
-            Column::Motion { .. } => mesh
-                .faces
-                .iter()
-                .enumerate()
-                .map(|(fi, f)| {
-                    // the swept volume from X to X + ε x̂, both moving with δ: its ε part is
-                    // L_X(x̂), its εδ parts the derivatives of that linearization
-                    let a: Vec<[Hd<M>; 3]> = f.nodes.iter().map(|&n| node(n, false)).collect();
-                    let b: Vec<[Hd<M>; 3]> = f.nodes.iter().map(|&n| nodes[n]).collect();
-                    let l = crate::mesh::swept_volume(&a, &b);
-                    hd(
-                        e.face_vg[fi],
-                        s * a_part(l),
-                        [0.0; M],
-                        std::array::from_fn(|m| s * ab_part(l, m)),
-                    )
-                })
-                .collect(),
+            Column::Motion { swept, .. } => {
+                assert_eq!(swept.len(), mesh.faces.len(), "one swept volume a face");
+                swept
+                    .iter()
+                    .zip(&e.face_vg)
+                    .map(|((l, dl), vg)| hd(*vg, s * l, [0.0; M], dl.map(|d| s * d)))
+                    .collect()
+            }
             Column::Gust { g, dg } => (0..mesh.faces.len())
                 .map(|fi| {
                     hd(
@@ -251,12 +297,14 @@ mod tests {
         };
         let (x_hat, dx_hat) = (motion(0), motion(1));
         let s = C64::new(0.0, 0.7);
+        let swept = lfd.swept_volumes(&x_hat, [&dx_hat], [&d_nodes]);
         let [(t, df)] = lfd.column_tangents(
             s,
             &q_hat,
             &Column::Motion {
                 x_hat: &x_hat,
                 dx_hat: [&dx_hat],
+                swept: &swept,
             },
             [&d_nodes],
             [&dq0],
@@ -346,9 +394,12 @@ mod tests {
             )
         };
         let dirs = [scaled(1.0), scaled(-0.5), scaled(2.0)];
+        let dx3: [&[[C64; 3]]; 3] = std::array::from_fn(|m| dirs[m].2.as_slice());
+        let swept3 = lfd.swept_volumes(&x_hat, dx3, std::array::from_fn(|m| dirs[m].0.as_slice()));
         let column: Column<3> = Column::Motion {
             x_hat: &x_hat,
-            dx_hat: std::array::from_fn(|m| dirs[m].2.as_slice()),
+            dx_hat: dx3,
+            swept: &swept3,
         };
         let many = lfd.column_tangents(
             s,
@@ -358,12 +409,14 @@ mod tests {
             std::array::from_fn(|m| dirs[m].1.as_slice()),
         );
         for (m, (t3, f3)) in many.iter().enumerate() {
+            let swept1 = lfd.swept_volumes(&x_hat, [&dirs[m].2], [&dirs[m].0]);
             let [(t1, f1)] = lfd.column_tangents(
                 s,
                 &q_hat,
                 &Column::Motion {
                     x_hat: &x_hat,
                     dx_hat: [&dirs[m].2],
+                    swept: &swept1,
                 },
                 [&dirs[m].0],
                 [&dirs[m].1],
