@@ -523,7 +523,7 @@ impl Lfd {
 
     /// The mode motions' swept face volumes for every batch of [`TANGENT_BATCH`] geometry
     /// tangents (indexed batch, then mode; the last batch padded like the sweep's): they do not
-    /// depend on the frequency, so a reverse sweep computes them once, in parallel, and every
+    /// depend on the frequency, so a reverse sweep computes them once, in parallel over the modes, and every
     /// frequency's column tangents reuse them (about a third of their work on the coarse wing
     /// mesh). Memory: faces × modes × 80 B a batch.
     fn swept_per_batch(
@@ -532,27 +532,22 @@ impl Lfd {
         geometry: &[(Vec<f64>, Vec<NodeField>)],
     ) -> Vec<Vec<Vec<SweptFace<TANGENT_BATCH>>>> {
         let n_geo = geometry.len();
-        let batches: Vec<usize> = (0..n_geo).step_by(TANGENT_BATCH).collect();
-        let items: Vec<(usize, usize)> = batches
-            .iter()
-            .flat_map(|&start| (0..x_hat.len()).map(move |j| (start, j)))
-            .collect();
-        let mut swept = items
-            .par_iter()
-            .map(|&(start, j)| {
-                let ds: [usize; TANGENT_BATCH] =
-                    std::array::from_fn(|m| (start + m).min(n_geo - 1));
-                self.lfd.swept_volumes(
-                    &x_hat[j],
-                    ds.map(|d| geometry[d].1[j].as_slice()),
-                    ds.map(|d| self.tangents[d].nodes.as_slice()),
-                )
+        (0..n_geo)
+            .step_by(TANGENT_BATCH)
+            .map(|start| {
+                let ds = tangent_batch(start, n_geo);
+                x_hat
+                    .par_iter()
+                    .enumerate()
+                    .map(|(j, x)| {
+                        self.lfd.swept_volumes(
+                            x,
+                            ds.map(|d| geometry[d].1[j].as_slice()),
+                            ds.map(|d| self.tangents[d].nodes.as_slice()),
+                        )
+                    })
+                    .collect()
             })
-            .collect::<Vec<_>>()
-            .into_iter();
-        batches
-            .iter()
-            .map(|_| swept.by_ref().take(x_hat.len()).collect())
             .collect()
     }
 
@@ -1154,9 +1149,8 @@ impl SeedSweep<'_> {
         let n_geo = self.geometry.len();
         let mut geo = vec![vec![0.0; tangents.len()]; coefficients.len()];
         // the tangents in batches of TANGENT_BATCH, one hyper-dual evaluation a batch and column
-        // (the last batch padded with repeats of its last tangent, whose results are dropped)
         for start in (0..n_geo).step_by(TANGENT_BATCH) {
-            let ds: [usize; TANGENT_BATCH] = std::array::from_fn(|m| (start + m).min(n_geo - 1));
+            let ds = tangent_batch(start, n_geo);
             for col in 0..self.n_cols {
                 let gust_fluxes: Vec<(Vec<C64>, Vec<C64>)>;
                 let column = if col < self.nm {
@@ -1280,6 +1274,12 @@ impl SeedSweep<'_> {
 /// Mesh tangents (geometry parameters) differentiated in one hyper-dual evaluation: the
 /// planform's four.
 const TANGENT_BATCH: usize = 4;
+
+/// The tangents of the batch starting at `start` among `n_geo`: the last batch padded with
+/// repeats of the last tangent, whose results are dropped.
+fn tangent_batch(start: usize, n_geo: usize) -> [usize; TANGENT_BATCH] {
+    std::array::from_fn(|m| (start + m).min(n_geo - 1))
+}
 
 /// One seed's coefficients at one frequency: column j's adjoint is Σ_i of(i, j) μ_i.
 struct Coefficients<'a> {
