@@ -12,14 +12,17 @@
 //! `WING_REVERSE=0` stops after the GAF table. `WING_BATCHES=1,4,12` times one frequency's 12
 //! right-hand sides (k = 0.5, forward and transposed) solved by GMRES in lockstep batches of
 //! each size (`WING_REPEAT` repetitions after a warm-up, default 3; `WING_RESTART` sets their
-//! GMRES restart length, default 80); `WING_TABLE=0` stops after it; `WING_PRECONDITIONERS=none` skips the preconditioner table.
+//! GMRES restart length, default 80); `WING_TABLE=0` stops after it; `WING_PRECONDITIONERS=none` skips the preconditioner table;
+//! `WING_DEFORM=0` skips the mesh deformation's figures (one mode shape a call against all at once).
 
+use gustkit_cfd::deform::Deformation;
 use gustkit_cfd::ilu::{IluOrdering, IluParams, IluPrecision};
 use gustkit_cfd::lfd::{HarmonicGust, LfdOperator, Preconditioner, Symbol};
 use gustkit_cfd::lfd_model::Lfd;
 use gustkit_cfd::residual::{free_stream, Euler};
 use gustkit_cfd::steady::{NewtonLinearSolver, SteadyParams};
 use gustkit_cfd::wing_mesh::{WingMesh, WingMeshSpec};
+use gustkit_core::scalar::Dual;
 use gustkit_core::{Aerodynamics, AerodynamicsReverse, FlightCondition, ModalSurface};
 use std::time::Instant;
 
@@ -218,6 +221,115 @@ fn batch_table(op: &mut LfdOperator, f: &gustkit_cfd::lfd::Factored, omega: f64,
     op.params.restart = restart;
 }
 
+/// One way of computing a deformation figure, returning the bits of its answers.
+type Timed<'a> = Box<dyn Fn() -> Vec<Vec<u64>> + 'a>;
+
+/// The mesh deformation of 11 mode shapes (the design loop's function), its transpose for 22
+/// seeds (two gradients' modes) and its dual-number form along one planform tangent (the
+/// gradient's geometry part, once a tangent): one field a call against all in one call (a
+/// node's distances and weights once for all fields), `WING_REPEAT` repetitions after a
+/// warm-up, with whether the answers agree bit for bit. `WING_DEFORM=0` skips it.
+fn deform_table(mesh: &gustkit_cfd::mesh::Mesh, root_chord: f64) {
+    if std::env::var("WING_DEFORM").as_deref() == Ok("0") {
+        return;
+    }
+    let repeat: usize = std::env::var("WING_REPEAT")
+        .ok()
+        .and_then(|r| r.parse().ok())
+        .unwrap_or(3)
+        .max(1);
+    let d = Deformation::new(mesh, 5.0 * root_chord);
+    let nw = d.wall_nodes.len();
+    let walls: Vec<Vec<[f64; 3]>> = (0..11)
+        .map(|m| {
+            (0..nw)
+                .map(|i| {
+                    let x = i as f64 / nw as f64;
+                    [0.0, 0.0, (x * (m + 1) as f64).sin()]
+                })
+                .collect()
+        })
+        .collect();
+    let walls: Vec<&[[f64; 3]]> = walls.iter().map(Vec::as_slice).collect();
+    let seeds: Vec<Vec<[f64; 3]>> = (0..22)
+        .map(|m| {
+            (0..mesh.nodes.len())
+                .map(|n| [0.0, ((n * (m + 1)) as f64 * 1e-3).cos(), 1.0])
+                .collect()
+        })
+        .collect();
+    let seeds: Vec<&[[f64; 3]]> = seeds.iter().map(Vec::as_slice).collect();
+    let nodes: Vec<[Dual<1>; 3]> = mesh
+        .nodes
+        .iter()
+        .map(|p| std::array::from_fn(|k| Dual::new(p[k], [0.1 * p[k]])))
+        .collect();
+    let radius = Dual::new(d.radius, [0.5]);
+    let time = |f: &dyn Fn() -> Vec<Vec<u64>>| {
+        let mut times = Vec::new();
+        let mut out = Vec::new();
+        for rep in 0..=repeat {
+            let t = Instant::now();
+            out = f();
+            if rep > 0 {
+                times.push(t.elapsed().as_secs_f64());
+            }
+        }
+        (spread(times), out)
+    };
+    let bits = |v: &[[f64; 3]]| v.iter().flatten().map(|x| x.to_bits()).collect();
+    let dual_bits = |v: &[[Dual<1>; 3]]| {
+        v.iter()
+            .flatten()
+            .flat_map(|x| [x.v.to_bits(), x.d[0].to_bits()])
+            .collect()
+    };
+    let cases: [(&str, Timed, Timed); 3] = [
+        (
+            "11 mode shapes spread",
+            Box::new(|| walls.iter().map(|w| bits(&d.apply(w))).collect()),
+            Box::new(|| d.apply_many(&walls).iter().map(|v| bits(v)).collect()),
+        ),
+        (
+            "22 seeds through the transpose",
+            Box::new(|| seeds.iter().map(|s| bits(&d.apply_transpose(s))).collect()),
+            Box::new(|| {
+                d.apply_transpose_many(&seeds)
+                    .iter()
+                    .map(|v| bits(v))
+                    .collect()
+            }),
+        ),
+        (
+            "11 mode shapes along a planform tangent (dual numbers)",
+            Box::new(|| {
+                walls
+                    .iter()
+                    .map(|w| dual_bits(&d.apply_at(&nodes, radius, w)))
+                    .collect()
+            }),
+            Box::new(|| {
+                d.apply_at_many(&nodes, radius, &walls)
+                    .iter()
+                    .map(|v| dual_bits(v))
+                    .collect()
+            }),
+        ),
+    ];
+    println!(
+        "  mesh deformation ({} nodes, {nw} wall nodes), {repeat} repetitions after a warm-up:",
+        mesh.nodes.len()
+    );
+    for (name, one, many) in &cases {
+        let ((om, ol, oh), a) = time(one.as_ref());
+        let ((mm, ml, mh), b) = time(many.as_ref());
+        println!(
+            "    {name}: one a call {om:.3} s (min {ol:.3}, max {oh:.3}), together {mm:.3} s (min {ml:.3}, max {mh:.3}); the same bits: {}",
+            a == b
+        );
+    }
+}
+
 fn main() {
     let levels = std::env::var("WING_LEVELS").unwrap_or_else(|_| "coarse".into());
     let threads = rayon::current_num_threads();
@@ -230,6 +342,7 @@ fn main() {
         let wing = WingMesh::new(p, &naca65a004, &spec);
         let t_mesh = t.elapsed().as_secs_f64();
         let q = wing.quality();
+        deform_table(&wing.mesh, p[2]);
         let e = Euler::new(wing.mesh.clone(), free_stream(mach, 0.0));
         let n = e.mesh.n_cells;
         let t = Instant::now();

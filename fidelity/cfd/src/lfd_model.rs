@@ -381,17 +381,17 @@ impl Lfd {
     /// frame) for the projection of the forces.
     fn mode_motion(&self, modes: &ModalSurface) -> (Vec<NodeField>, Vec<Vec<[f64; 3]>>) {
         let l = self.length_m;
-        let x_hat: Vec<Vec<[C64; 3]>> = modes
+        let walls: Vec<Vec<[f64; 3]>> = modes
             .disp
             .iter()
-            .map(|d| {
-                let wall: Vec<[f64; 3]> = d.iter().map(|v| swap_yz(*v).map(|x| x / l)).collect();
-                self.deform
-                    .apply(&wall)
-                    .iter()
-                    .map(|p| p.map(|v| C64::new(v, 0.0)))
-                    .collect()
-            })
+            .map(|d| d.iter().map(|v| swap_yz(*v).map(|x| x / l)).collect())
+            .collect();
+        let walls: Vec<&[[f64; 3]]> = walls.iter().map(Vec::as_slice).collect();
+        let x_hat: Vec<Vec<[C64; 3]>> = self
+            .deform
+            .apply_many(&walls)
+            .iter()
+            .map(|x| x.iter().map(|p| p.map(|v| C64::new(v, 0.0))).collect())
             .collect();
         let shapes = x_hat
             .iter()
@@ -487,13 +487,22 @@ impl Lfd {
     ) -> Result<Vec<(Vec<f64>, Vec<NodeField>)>, AeroError> {
         let l = self.length_m;
         let mesh = &self.lfd.euler.mesh;
-        self.tangents
+        let d_nodes: Vec<&[[f64; 3]]> = self.tangents.iter().map(|t| t.nodes.as_slice()).collect();
+        let dq0 = self
+            .lfd
+            .steady_tangents(&d_nodes)
+            .map_err(|e| solver_error(e, 0.0, 0))?;
+        let walls: Vec<Vec<[f64; 3]>> = modes
+            .disp
             .iter()
-            .map(|t| {
-                let dq0 = self
-                    .lfd
-                    .steady_tangent(&t.nodes)
-                    .map_err(|e| solver_error(e, 0.0, 0))?;
+            .map(|d| d.iter().map(|v| swap_yz(*v).map(|x| x / l)).collect())
+            .collect();
+        let walls: Vec<&[[f64; 3]]> = walls.iter().map(Vec::as_slice).collect();
+        Ok(self
+            .tangents
+            .iter()
+            .zip(dq0)
+            .map(|(t, dq0)| {
                 let nodes: Vec<[gustkit_core::scalar::Dual<1>; 3]> = mesh
                     .nodes
                     .iter()
@@ -503,22 +512,15 @@ impl Lfd {
                     })
                     .collect();
                 let radius = gustkit_core::scalar::Dual::new(self.deform.radius, [t.radius]);
-                let dx: Vec<NodeField> = modes
-                    .disp
+                let dx: Vec<NodeField> = self
+                    .deform
+                    .apply_at_many(&nodes, radius, &walls)
                     .iter()
-                    .map(|d| {
-                        let wall: Vec<[f64; 3]> =
-                            d.iter().map(|v| swap_yz(*v).map(|x| x / l)).collect();
-                        self.deform
-                            .apply_at(&nodes, radius, &wall)
-                            .iter()
-                            .map(|p| p.map(|v| C64::new(v.d[0], 0.0)))
-                            .collect()
-                    })
+                    .map(|x| x.iter().map(|p| p.map(|v| C64::new(v.d[0], 0.0))).collect())
                     .collect();
-                Ok((dq0, dx))
+                (dq0, dx)
             })
-            .collect()
+            .collect())
     }
 
     /// The mode motions' swept face volumes for every batch of [`TANGENT_BATCH`] geometry
@@ -1323,13 +1325,20 @@ impl Lfd {
     fn finish_gradients(&self, sum: FrequencySum, nm: usize) -> Vec<GafGradient> {
         let wall = self.wall_nodes();
         let l = self.length_m;
+        // every seed's and mode's motion seed through the transpose at once (seeds, then modes)
+        let motions: Vec<&[[f64; 3]]> = sum
+            .nodes
+            .iter()
+            .flat_map(|(_, motion)| motion.iter().take(nm).map(Vec::as_slice))
+            .collect();
+        let mut through_mesh = self.deform.apply_transpose_many(&motions).into_iter();
         sum.nodes
-            .into_iter()
+            .iter()
             .zip(sum.geometry)
-            .map(|((proj, motion), geometry)| {
+            .map(|((proj, _), geometry)| {
                 let mut grad = ModalSurface::zeros(nm, wall.len());
                 for m in 0..nm {
-                    let through_mesh = self.deform.apply_transpose(&motion[m]);
+                    let through_mesh = through_mesh.next().expect("one a seed and mode");
                     for (w, &n) in wall.iter().enumerate() {
                         let v: [f64; 3] =
                             std::array::from_fn(|c| proj[m][n][c] + through_mesh[w][c] / l);

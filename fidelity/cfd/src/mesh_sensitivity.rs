@@ -19,6 +19,7 @@ use crate::residual::State;
 use gustkit_core::hyperdual::HyperDual;
 use gustkit_core::scalar::{Dual, Scalar};
 use num_complex::Complex64 as C64;
+use rayon::prelude::*;
 
 /// A direction of mesh motion: the nodes' rates (mesh units per unit of the parameter) and the
 /// deformation radius's rate.
@@ -126,30 +127,41 @@ impl LfdOperator {
             .collect()
     }
 
-    /// The steady tangent δq₀ = −(∂R/∂q)⁻¹ ∂R/∂X δX of a mesh motion δX (flattened like a
-    /// field), by GMRES with the ω = 0 preconditioner.
-    pub fn steady_tangent(&self, d_nodes: &[[f64; 3]]) -> Result<Vec<f64>, LfdError> {
+    /// The steady tangents δq₀ = −(∂R/∂q)⁻¹ ∂R/∂X δX of mesh motions δX (each flattened like a
+    /// field): the right-hand sides in parallel, then one ω = 0 factorization for all of them
+    /// and one GMRES call (batched like the GAF table's right-hand sides).
+    pub fn steady_tangents(&self, d_nodes: &[&[[f64; 3]]]) -> Result<Vec<Vec<f64>>, LfdError> {
         let e = &self.euler;
-        let nodes: Vec<[Dual<1>; 3]> = e
-            .mesh
-            .nodes
-            .iter()
-            .zip(d_nodes)
-            .map(|(p, d)| std::array::from_fn(|k| Dual::new(p[k], [d[k]])))
+        let rhs: Vec<Field> = d_nodes
+            .par_iter()
+            .map(|d_nodes| {
+                let nodes: Vec<[Dual<1>; 3]> = e
+                    .mesh
+                    .nodes
+                    .iter()
+                    .zip(d_nodes.iter())
+                    .map(|(p, d)| std::array::from_fn(|k| Dual::new(p[k], [d[k]])))
+                    .collect();
+                let vg = e.face_vg.iter().map(|v| Dual::cst(*v)).collect();
+                let geom = e.geometry_at(&nodes, vg, e.order);
+                let q: Vec<State<Dual<1>>> = self.q0.iter().map(|s| s.map(Dual::cst)).collect();
+                e.residual_in(&q, &geom)
+                    .0
+                    .iter()
+                    .flatten()
+                    .map(|r| C64::new(r.d[0], 0.0))
+                    .collect()
+            })
             .collect();
-        let vg = e.face_vg.iter().map(|v| Dual::cst(*v)).collect();
-        let geom = e.geometry_at(&nodes, vg, e.order);
-        let q: Vec<State<Dual<1>>> = self.q0.iter().map(|s| s.map(Dual::cst)).collect();
-        let b: Field = e
-            .residual_in(&q, &geom)
-            .0
-            .iter()
-            .flatten()
-            .map(|r| C64::new(r.d[0], 0.0))
-            .collect();
+        if rhs.is_empty() {
+            return Ok(Vec::new());
+        }
         let f = self.factor(0.0, Symbol::Exact)?;
-        let (x, _) = self.solve(&f, &[b])?.pop().expect("one right-hand side");
-        Ok(x.iter().map(|z| z.re).collect())
+        Ok(self
+            .solve(&f, &rhs)?
+            .into_iter()
+            .map(|(x, _)| x.iter().map(|z| z.re).collect())
+            .collect())
     }
 
     /// The tangents δX · ∂/∂X at fixed LFD solution q̂ of one column along `M` mesh directions
