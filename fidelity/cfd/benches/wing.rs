@@ -137,6 +137,15 @@ fn spread(mut t: Vec<f64>) -> (f64, f64, f64) {
     (t[t.len() / 2], t[0], t[t.len() - 1])
 }
 
+/// The timed repetitions after a warm-up (`WING_REPEAT`, default 3, at least 1).
+fn repeat_count() -> usize {
+    std::env::var("WING_REPEAT")
+        .ok()
+        .and_then(|r| r.parse().ok())
+        .unwrap_or(3)
+        .max(1)
+}
+
 /// One frequency's 12 right-hand sides (gusts convected at 0.6 to 1.15 times the free stream:
 /// as many distinct solutions as a table's modes and gust) solved forward and transposed in
 /// lockstep batches of each size of `WING_BATCHES`: time (median, min, max of `WING_REPEAT`
@@ -145,11 +154,7 @@ fn batch_table(op: &mut LfdOperator, f: &gustkit_cfd::lfd::Factored, omega: f64,
     let Ok(list) = std::env::var("WING_BATCHES") else {
         return;
     };
-    let repeat: usize = std::env::var("WING_REPEAT")
-        .ok()
-        .and_then(|r| r.parse().ok())
-        .unwrap_or(3)
-        .max(1);
+    let repeat = repeat_count();
     let rhs: Vec<_> = (0..12)
         .map(|i| {
             op.gust_rhs(
@@ -233,11 +238,7 @@ fn deform_table(mesh: &gustkit_cfd::mesh::Mesh, root_chord: f64) {
     if std::env::var("WING_DEFORM").as_deref() == Ok("0") {
         return;
     }
-    let repeat: usize = std::env::var("WING_REPEAT")
-        .ok()
-        .and_then(|r| r.parse().ok())
-        .unwrap_or(3)
-        .max(1);
+    let repeat = repeat_count();
     let d = Deformation::new(mesh, 5.0 * root_chord);
     let nw = d.wall_nodes.len();
     let walls: Vec<Vec<[f64; 3]>> = (0..11)

@@ -377,15 +377,22 @@ impl Lfd {
         }
     }
 
+    /// Each mode's wall-node displacements in the mesh's frame and units (what the deformation
+    /// spreads).
+    fn wall_motion(&self, modes: &ModalSurface) -> Vec<Vec<[f64; 3]>> {
+        let l = self.length_m;
+        modes
+            .disp
+            .iter()
+            .map(|d| d.iter().map(|v| swap_yz(*v).map(|x| x / l)).collect())
+            .collect()
+    }
+
     /// The node displacements of each mode: mesh units (complex) for the LFD, and metres (mesh
     /// frame) for the projection of the forces.
     fn mode_motion(&self, modes: &ModalSurface) -> (Vec<NodeField>, Vec<Vec<[f64; 3]>>) {
         let l = self.length_m;
-        let walls: Vec<Vec<[f64; 3]>> = modes
-            .disp
-            .iter()
-            .map(|d| d.iter().map(|v| swap_yz(*v).map(|x| x / l)).collect())
-            .collect();
+        let walls = self.wall_motion(modes);
         let walls: Vec<&[[f64; 3]]> = walls.iter().map(Vec::as_slice).collect();
         let x_hat: Vec<Vec<[C64; 3]>> = self
             .deform
@@ -485,18 +492,13 @@ impl Lfd {
         &self,
         modes: &ModalSurface,
     ) -> Result<Vec<(Vec<f64>, Vec<NodeField>)>, AeroError> {
-        let l = self.length_m;
         let mesh = &self.lfd.euler.mesh;
         let d_nodes: Vec<&[[f64; 3]]> = self.tangents.iter().map(|t| t.nodes.as_slice()).collect();
         let dq0 = self
             .lfd
             .steady_tangents(&d_nodes)
             .map_err(|e| solver_error(e, 0.0, 0))?;
-        let walls: Vec<Vec<[f64; 3]>> = modes
-            .disp
-            .iter()
-            .map(|d| d.iter().map(|v| swap_yz(*v).map(|x| x / l)).collect())
-            .collect();
+        let walls = self.wall_motion(modes);
         let walls: Vec<&[[f64; 3]]> = walls.iter().map(Vec::as_slice).collect();
         Ok(self
             .tangents
