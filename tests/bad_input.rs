@@ -209,6 +209,13 @@ fn errors_say_what_is_wrong() {
         &["between 0 and 3", "got 9"],
     );
     refused(
+        "run",
+        "optimization.nonmonotone_memory",
+        0.into(),
+        "optimization.nonmonotone_memory",
+        &["between 1 (the monotone line search) and 20", "got 0"],
+    );
+    refused(
         "modes",
         "aero.reduced_frequencies",
         serde_json::json!([0.0, 0.5, 0.2, 1.0, 2.0]),

@@ -61,6 +61,20 @@ pub struct SqpParams {
     pub elastic_penalty: f64,
     /// Smallest line-search step before the iteration is declared stalled.
     pub min_step: f64,
+    /// How many accepted points the line search compares a trial point's merit with: the trial
+    /// is accepted below the largest of their merits (Grippo–Lampariello–Lucidi; NLPQLP's
+    /// MAXNM), which takes the full step where the constraints' curvature raises the merit by
+    /// a second-order amount (the Maratos effect) instead of paying a second-order correction's
+    /// evaluation. 1: the monotone search. Absent in checkpoints from before it: 1.
+    #[serde(default = "monotone")]
+    pub nonmonotone_memory: usize,
+}
+
+/// The largest `nonmonotone_memory` accepted (NLPQLP suggests about 10).
+pub const MAX_NONMONOTONE_MEMORY: usize = 20;
+
+fn monotone() -> usize {
+    1
 }
 
 impl SqpParams {
@@ -79,6 +93,12 @@ impl SqpParams {
                 return bad(format!("{name} must be positive and finite (got {v})"));
             }
         }
+        if !(1..=MAX_NONMONOTONE_MEMORY).contains(&self.nonmonotone_memory) {
+            return bad(format!(
+                "nonmonotone_memory must lie between 1 (the monotone line search) and {MAX_NONMONOTONE_MEMORY} (got {})",
+                self.nonmonotone_memory
+            ));
+        }
         if self.min_step >= 1.0 {
             return bad(format!(
                 "min_step must lie below 1, the full step (got {})",
@@ -96,6 +116,7 @@ impl Default for SqpParams {
             tolerance: 1e-4,
             elastic_penalty: 1e4,
             min_step: 1e-8,
+            nonmonotone_memory: 1,
         }
     }
 }

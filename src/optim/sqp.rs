@@ -413,8 +413,11 @@ impl Start {
                 c.z.len()
             )));
         }
+        // the settings that only decide when to stop or what to accept from here on may change
         let same_settings = SqpParams {
             max_iterations: params.max_iterations,
+            tolerance: params.tolerance,
+            nonmonotone_memory: params.nonmonotone_memory,
             ..c.params.clone()
         } == *params;
         if !same_settings {
@@ -784,6 +787,9 @@ impl SqpState {
     /// halving down to `min_step`), with a second-order correction of a rejected full step (the
     /// Maratos effect: the curvature of the constraints raises the violation along the QP
     /// step; the QP is solved again with its constraints shifted by the trial point's values).
+    /// The Armijo test is against the largest merit of the last `nonmonotone_memory` accepted
+    /// points, each with today's penalty (Panier & Tits 1991); with a memory of 1 that is φ
+    /// at the current point.
     #[allow(clippy::too_many_arguments)]
     fn line_search(
         &mut self,
@@ -797,6 +803,14 @@ impl SqpState {
     ) -> LineSearch {
         let phi = |v: &Values| v.f + penalty * infeasibility_sum(v);
         let phi0 = phi(&self.values);
+        // the history ends with the current point's record
+        let phi_ref = self
+            .history
+            .iter()
+            .rev()
+            .take(params.nonmonotone_memory)
+            .map(|it| phi(&it.values))
+            .fold(phi0, f64::max);
         let deriv =
             dot(&lin.g, &step.d) - penalty * (infeasibility_sum(&self.values) - step.elastic);
         let z = &self.z;
@@ -808,7 +822,7 @@ impl SqpState {
             self.evaluations += 1;
             match trial {
                 Ok(v) => {
-                    if phi(&v) <= phi0 + 1e-4 * alpha * deriv.min(0.0) {
+                    if phi(&v) <= phi_ref + 1e-4 * alpha * deriv.min(0.0) {
                         break Some((zt, v));
                     }
                     if alpha == 1.0 {
@@ -826,7 +840,7 @@ impl SqpState {
                             let zc: Vec<f64> = z.iter().zip(&soc.d).map(|(a, b)| a + b).collect();
                             self.evaluations += 1;
                             match problem.values(&scaling.x(&zc)) {
-                                Ok(vc) if phi(&vc) <= phi0 + 1e-4 * deriv.min(0.0) => {
+                                Ok(vc) if phi(&vc) <= phi_ref + 1e-4 * deriv.min(0.0) => {
                                     break Some((zc, vc));
                                 }
                                 Ok(_) => {}

@@ -594,6 +594,7 @@ pub fn run(study: &NastranStudyFile, reports: &Path, resume: bool) -> Result<sup
     let params = crate::optim::SqpParams {
         max_iterations: study.optimization.max_iterations,
         tolerance: study.optimization.tolerance,
+        nonmonotone_memory: study.optimization.nonmonotone_memory,
         ..Default::default()
     };
     let mut progress = Progress {

@@ -120,6 +120,10 @@ pub struct NastranOptimizationSpec {
     pub max_iterations: usize,
     #[serde(default = "tolerance")]
     pub tolerance: f64,
+    /// The SQP line search's memory (1: monotone), as `optimization.nonmonotone_memory` of a
+    /// wing study.
+    #[serde(default = "super::schema::default_nonmonotone_memory")]
+    pub nonmonotone_memory: usize,
 }
 
 fn max_iterations() -> usize {
@@ -135,6 +139,7 @@ impl Default for NastranOptimizationSpec {
         Self {
             max_iterations: max_iterations(),
             tolerance: tolerance(),
+            nonmonotone_memory: super::schema::default_nonmonotone_memory(),
         }
     }
 }
@@ -350,6 +355,16 @@ impl NastranStudyFile {
             return bad(
                 "optimization.tolerance".into(),
                 format!("must lie in (0, 1) (got {})", o.tolerance),
+            );
+        }
+        if !(1..=crate::optim::MAX_NONMONOTONE_MEMORY).contains(&o.nonmonotone_memory) {
+            return bad(
+                "optimization.nonmonotone_memory".into(),
+                format!(
+                    "must lie between 1 (the monotone line search) and {} (got {})",
+                    crate::optim::MAX_NONMONOTONE_MEMORY,
+                    o.nonmonotone_memory
+                ),
             );
         }
         Ok(())

@@ -118,6 +118,14 @@ pub struct OptimizationSpec {
     pub max_iterations: usize,
     #[serde(default = "default_tolerance")]
     pub tolerance: f64,
+    /// The SQP line search's memory: a trial point is accepted below the largest ℓ1 merit of the
+    /// last this many accepted points (1: monotone). Left out of the serialized study at 1, so
+    /// checkpoints of runs from before this field still resume.
+    #[serde(
+        default = "default_nonmonotone_memory",
+        skip_serializing_if = "is_default_nonmonotone_memory"
+    )]
+    pub nonmonotone_memory: usize,
     /// How many times the optimization continues, from its optimum, with the RMS limit scaled by
     /// the constrained / refined RMS ratio of the resolution check when the refined RMS exceeds
     /// the limit beyond its tolerance (0: never; the run then exits 3 on such a design).
@@ -178,6 +186,12 @@ fn is_default_resolution_corrections(n: &usize) -> bool {
 }
 fn default_tolerance() -> f64 {
     1e-4
+}
+pub(crate) fn default_nonmonotone_memory() -> usize {
+    1
+}
+fn is_default_nonmonotone_memory(n: &usize) -> bool {
+    *n == default_nonmonotone_memory()
 }
 
 /// Published results of the same optimization, for the report's side-by-side table.

@@ -112,6 +112,7 @@ pub fn optimize_pass(
     let params = crate::optim::SqpParams {
         max_iterations: o.max_iterations,
         tolerance: o.tolerance,
+        nonmonotone_memory: o.nonmonotone_memory,
         ..Default::default()
     };
     let (problem_id, checkpoint) = open_checkpoint(study, dir, pass.number, resume, quiet)?;

@@ -37,7 +37,8 @@ pub(crate) fn fnv(text: &str) -> u64 {
 }
 
 /// The part of a study that defines its optimization problem: everything but what only labels
-/// the run (description, reference), decides when it stops (max_iterations, tolerance), belongs
+/// the run (description, reference), decides when it stops or what the line search accepts from
+/// here on (max_iterations, tolerance, nonmonotone_memory), belongs
 /// to other analyses (the flutter sweep, the sweep section) or only starts the LFD's GMRES
 /// (`warm_start_designs`). A checkpoint resumes only when this
 /// is unchanged.
@@ -66,6 +67,7 @@ pub(super) fn defining_spec(study: &Study) -> Result<serde_json::Value> {
             for key in [
                 "max_iterations",
                 "tolerance",
+                "nonmonotone_memory",
                 "reference",
                 "resolution_corrections",
             ] {
@@ -183,7 +185,7 @@ pub(super) fn open_checkpoint(
                 None => "the checkpoint belongs to another problem (or to an earlier gustkit's formulation of the constraints)".to_string(),
             };
             anyhow::bail!(
-                "{}: --resume: {what}; only the description, the reference, max_iterations, tolerance, aero.compare_with, aero.fidelity.lfd.warm_start_designs, aero.fidelity.lfd.gmres_batch, the flutter sweep and the sweep section may change between a run and its resumption. Run without --resume to start over",
+                "{}: --resume: {what}; only the description, the reference, max_iterations, tolerance, nonmonotone_memory, aero.compare_with, aero.fidelity.lfd.warm_start_designs, aero.fidelity.lfd.gmres_batch, the flutter sweep and the sweep section may change between a run and its resumption. Run without --resume to start over",
                 study.file.display()
             );
         }
