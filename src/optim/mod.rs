@@ -262,7 +262,12 @@ pub struct PointEvaluation {
     pub gradients: Gradients,
 }
 
+mod managed;
 mod sqp;
+pub use managed::{
+    minimize_managed, ManagedCheckpoint, ManagedInfo, ManagedIterate, ManagedObserver,
+    ManagedParams,
+};
 pub use sqp::{
     minimize, Checkpointing, Clarabel, Control, Executor, Observer, Scaling, SubproblemSolver,
 };

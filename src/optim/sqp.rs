@@ -90,6 +90,7 @@ pub struct Executor<'a> {
     observers: Vec<&'a mut dyn Observer>,
     checkpoints: Option<&'a mut dyn Checkpointing>,
     subproblems: Option<&'a mut dyn SubproblemSolver>,
+    scaling: Option<Scaling>,
 }
 
 impl<'a> Executor<'a> {
@@ -102,7 +103,15 @@ impl<'a> Executor<'a> {
             observers: Vec::new(),
             checkpoints: None,
             subproblems: None,
+            scaling: None,
         }
+    }
+
+    /// Scales the variables by `scaling` instead of the problem's own bounds (the model
+    /// management's corrected problems: bounded by a trust region, scaled by the bounds).
+    pub(super) fn scaling(mut self, scaling: Scaling) -> Self {
+        self.scaling = Some(scaling);
+        self
     }
 
     /// Solves the QP subproblems with `solver` instead of clarabel.
@@ -228,14 +237,14 @@ impl Scaling {
     }
 }
 
-fn violation(v: &Values) -> f64 {
+pub(super) fn violation(v: &Values) -> f64 {
     v.eq.iter()
         .map(|h| h.abs())
         .chain(v.ineq.iter().map(|c| c.max(0.0)))
         .fold(0.0, f64::max)
 }
 
-fn infeasibility_sum(v: &Values) -> f64 {
+pub(super) fn infeasibility_sum(v: &Values) -> f64 {
     v.eq.iter().map(|h| h.abs()).sum::<f64>() + v.ineq.iter().map(|c| c.max(0.0)).sum::<f64>()
 }
 
@@ -264,6 +273,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
         mut observers,
         mut checkpoints,
         subproblems,
+        scaling,
     } = ex;
     let mut clarabel = Clarabel;
     let solver: &mut dyn SubproblemSolver = match subproblems {
@@ -274,7 +284,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
     params.validate()?;
     let (lb, ub) = (problem.lower(), problem.upper());
     check_bounds(&lb, &ub, x0.len())?;
-    let scaling = Scaling::new(&lb, &ub, x0);
+    let scaling = scaling.unwrap_or_else(|| Scaling::new(&lb, &ub, x0));
     let started = std::time::Instant::now();
     let start = match resume {
         Some(c) => Start::resumed(c, problem, params, problem_id, x0.len())?,
