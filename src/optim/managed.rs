@@ -344,23 +344,29 @@ pub fn minimize_managed(
             .initial_hessian(s.hessian.clone())
             .observe(&mut last)
             .run(&mut corrected, &s.x)?;
-        let violation_k = violation(&s.values);
+        let step = inner
+            .x
+            .iter()
+            .zip(&s.x)
+            .zip(scaling.scale())
+            .fold(0.0f64, |a, ((xc, xk), sc)| a.max(((xc - xk) / sc).abs()));
+        let mut record = ManagedIterate {
+            iteration,
+            x: s.x.clone(),
+            values: s.values.clone(),
+            violation: violation(&s.values),
+            radius: s.radius,
+            ratio: None,
+            accepted: false,
+            step,
+            inner_iterations: inner.iterations,
+            high_functions: s.high_functions,
+            high_gradients: s.high_gradients,
+        };
         if inner.converged && inner.iterations == 0 {
             // the corrected problem's KKT test at x_k is the high fidelity's: values and
             // gradients agree there
-            s.history.push(ManagedIterate {
-                iteration,
-                x: s.x.clone(),
-                values: s.values.clone(),
-                violation: violation_k,
-                radius: s.radius,
-                ratio: None,
-                accepted: false,
-                step: 0.0,
-                inner_iterations: 0,
-                high_functions: s.high_functions,
-                high_gradients: s.high_gradients,
-            });
+            s.history.push(record);
             return Ok(finish(
                 &s,
                 true,
@@ -373,26 +379,7 @@ pub fn minimize_managed(
         }
         let penalty = s.penalty;
         let phi = |v: &Values| v.f + penalty * infeasibility_sum(v);
-        let step = inner
-            .x
-            .iter()
-            .zip(&s.x)
-            .zip(scaling.scale())
-            .fold(0.0f64, |a, ((xc, xk), sc)| a.max(((xc - xk) / sc).abs()));
         let predicted = phi(&s.values) - phi(&inner.values);
-        let mut record = ManagedIterate {
-            iteration,
-            x: s.x.clone(),
-            values: s.values.clone(),
-            violation: violation_k,
-            radius: s.radius,
-            ratio: None,
-            accepted: false,
-            step,
-            inner_iterations: inner.iterations,
-            high_functions: s.high_functions,
-            high_gradients: s.high_gradients,
-        };
         let scale_phi = phi(&s.values).abs().max(1.0);
         if predicted > 1e-14 * scale_phi {
             s.high_functions += 1;
