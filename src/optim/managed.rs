@@ -10,7 +10,7 @@
 //! agreement makes the limit a KKT point of the high fidelity, not of the low one.
 
 use super::{
-    sqp::{infeasibility_sum, violation, Scaling},
+    sqp::{dot, infeasibility_sum, violation, Scaling},
     Checkpoint, Control, EvalError, Executor, Gradients, Observer, Problem, SqpError, SqpParams,
     Values,
 };
@@ -186,10 +186,6 @@ impl Problem for Corrected<'_> {
             ineq: rows(&g.ineq, &self.dg.ineq),
         })
     }
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// `high − low`, refusing values of different shapes (the two fidelities must pose the same

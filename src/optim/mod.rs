@@ -77,6 +77,17 @@ fn monotone() -> usize {
     1
 }
 
+/// Why a line-search memory cannot be used (the settings' and the study files' one check).
+pub fn check_nonmonotone_memory(memory: usize) -> Result<(), String> {
+    if (1..=MAX_NONMONOTONE_MEMORY).contains(&memory) {
+        Ok(())
+    } else {
+        Err(format!(
+            "must lie between 1 (the monotone line search) and {MAX_NONMONOTONE_MEMORY} (got {memory})"
+        ))
+    }
+}
+
 impl SqpParams {
     /// Checks the settings (as clarabel's settings are checked before a solve).
     pub fn validate(&self) -> Result<(), SqpError> {
@@ -93,11 +104,8 @@ impl SqpParams {
                 return bad(format!("{name} must be positive and finite (got {v})"));
             }
         }
-        if !(1..=MAX_NONMONOTONE_MEMORY).contains(&self.nonmonotone_memory) {
-            return bad(format!(
-                "nonmonotone_memory must lie between 1 (the monotone line search) and {MAX_NONMONOTONE_MEMORY} (got {})",
-                self.nonmonotone_memory
-            ));
+        if let Err(reason) = check_nonmonotone_memory(self.nonmonotone_memory) {
+            return bad(format!("nonmonotone_memory {reason}"));
         }
         if self.min_step >= 1.0 {
             return bad(format!(

@@ -248,7 +248,7 @@ pub(super) fn infeasibility_sum(v: &Values) -> f64 {
     v.eq.iter().map(|h| h.abs()).sum::<f64>() + v.ineq.iter().map(|c| c.max(0.0)).sum::<f64>()
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
+pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 

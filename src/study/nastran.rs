@@ -357,15 +357,8 @@ impl NastranStudyFile {
                 format!("must lie in (0, 1) (got {})", o.tolerance),
             );
         }
-        if !(1..=crate::optim::MAX_NONMONOTONE_MEMORY).contains(&o.nonmonotone_memory) {
-            return bad(
-                "optimization.nonmonotone_memory".into(),
-                format!(
-                    "must lie between 1 (the monotone line search) and {} (got {})",
-                    crate::optim::MAX_NONMONOTONE_MEMORY,
-                    o.nonmonotone_memory
-                ),
-            );
+        if let Err(reason) = crate::optim::check_nonmonotone_memory(o.nonmonotone_memory) {
+            return bad("optimization.nonmonotone_memory".into(), reason);
         }
         Ok(())
     }

@@ -244,15 +244,8 @@ impl Study {
                     format!("must lie in (0, 1) (got {})", show(o.tolerance)),
                 ));
             }
-            if !(1..=crate::optim::MAX_NONMONOTONE_MEMORY).contains(&o.nonmonotone_memory) {
-                return Err(self.err(
-                    "optimization.nonmonotone_memory",
-                    format!(
-                        "must lie between 1 (the monotone line search) and {} (got {})",
-                        crate::optim::MAX_NONMONOTONE_MEMORY,
-                        o.nonmonotone_memory
-                    ),
-                ));
+            if let Err(reason) = crate::optim::check_nonmonotone_memory(o.nonmonotone_memory) {
+                return Err(self.err("optimization.nonmonotone_memory", reason));
             }
         }
         Ok(())
