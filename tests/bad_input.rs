@@ -210,6 +210,13 @@ fn errors_say_what_is_wrong() {
     );
     refused(
         "run",
+        "optimization.model_management",
+        serde_json::json!({"low_fidelity": {"dlm": {"n_chord": 5, "n_span": 8}}, "initial_radius": 2.0}),
+        "optimization.model_management.initial_radius",
+        &["(0, 1]", "got 2"],
+    );
+    refused(
+        "run",
         "optimization.nonmonotone_memory",
         0.into(),
         "optimization.nonmonotone_memory",

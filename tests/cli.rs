@@ -392,6 +392,67 @@ fn gust_and_flutter_inputs() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `optimization.model_management` through the CLI: the small study minimized through a coarser
+/// lattice; stopped by the outer iteration limit (exit 3, its checkpoint written), then resumed
+/// with a higher limit to the final design an uninterrupted run reaches, bit for bit.
+#[test]
+fn model_management_runs_and_resumes() {
+    let dir = scratch("managed");
+    let opt = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(opt).unwrap()).unwrap();
+    v["aero"]["fidelity"]["dlm"]["n_chord"] = 4.into();
+    v["aero"]["fidelity"]["dlm"]["n_span"] = 6.into();
+    v["structure"]["modes"] = 4.into();
+    v["structure"]["damping_ratio"] = 0.01.into();
+    v["gust"]["points"] = 300.into();
+    v["optimization"]["model_management"] = serde_json::json!({
+        "low_fidelity": {"dlm": {"n_chord": 3, "n_span": 4}},
+        "max_iterations": 2
+    });
+    let run = |v: &serde_json::Value, name: &str, extra: &[&str]| {
+        let mut v = v.clone();
+        v["name"] = name.into();
+        let file = dir.join(format!("{name}.json"));
+        std::fs::write(&file, v.to_string()).unwrap();
+        let o = gustkit()
+            .args(["run", file.to_str().unwrap(), "--reports"])
+            .arg(&dir)
+            .args(extra)
+            .output()
+            .unwrap();
+        let r: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.join(name).join("results.json")).unwrap(),
+        )
+        .unwrap();
+        (o, r)
+    };
+    let (o, r) = run(&v, "managed", &[]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(3), "{stdout}");
+    assert!(stdout.contains("outer iteration   1"), "{stdout}");
+    assert!(!r["converged"].as_bool().unwrap());
+    assert!(dir.join("managed/checkpoint_managed.json").exists());
+    v["optimization"]["model_management"]["max_iterations"] = 40.into();
+    let (o, resumed) = run(&v, "managed", &["--resume"]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("resuming from outer iteration 2"),
+        "{stdout}"
+    );
+    assert!(resumed["converged"].as_bool().unwrap(), "{stdout}");
+    assert_eq!(o.status.code(), Some(0), "{stdout}");
+    let (_, whole) = run(&v, "managed_whole", &[]);
+    assert_eq!(
+        resumed["final"]["design_variables"],
+        whole["final"]["design_variables"]
+    );
+    assert!(
+        whole["final"]["mass_kg"].as_f64().unwrap() < whole["initial"]["mass_kg"].as_f64().unwrap()
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// `gustkit run` with an optimization section (coarse model): results.json has converged,
 /// iterations, initial and final (mass_kg, rms_tip_in, area_m2, design variables) and the history;
 /// `--resume` continues from the checkpoint to the same result, and refuses a missing or corrupted

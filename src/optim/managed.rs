@@ -7,12 +7,15 @@
 //! trust-region box around x_k; its optimum is evaluated with the high fidelity and accepted when
 //! the ℓ1 merit falls by at least a tenth of what the corrected problem predicted. Each outer
 //! iteration costs one high-fidelity function (and one gradient when accepted); the first-order
-//! agreement makes the limit a KKT point of the high fidelity, not of the low one.
+//! agreement makes the limit a KKT point of the high fidelity, not of the low one. Where the low
+//! fidelity cannot serve (it fails at x_k, or its corrected problem stops short without
+//! converging because its trial points fail, as a coarse lattice that flutters where the fine
+//! one does not), the outer iteration is one SQP iteration of the high fidelity in the box.
 
 use super::{
     sqp::{dot, infeasibility_sum, violation, Scaling},
-    Checkpoint, Control, EvalError, Executor, Gradients, Observer, Problem, SqpError, SqpParams,
-    Values,
+    Checkpoint, Control, EvalError, Executor, Gradients, Observer, PointEvaluation, Problem,
+    SqpError, SqpParams, Values,
 };
 use serde::{Deserialize, Serialize};
 
@@ -81,6 +84,12 @@ pub struct ManagedIterate {
     pub x: Vec<f64>,
     pub values: Values,
     pub violation: f64,
+    /// The KKT measure at `x`: the corrected problem's first, which is the high fidelity's
+    /// (values and gradients agree there).
+    pub kkt: f64,
+    /// How the corrected problem's SQP ended (its message).
+    #[serde(default)]
+    pub inner_outcome: String,
     /// Trust-region half width (scaled variables) of the corrected problem's solve.
     pub radius: f64,
     /// Actual over predicted merit decrease at the corrected optimum (none: not evaluated).
@@ -188,6 +197,29 @@ impl Problem for Corrected<'_> {
     }
 }
 
+/// The high fidelity bounded by the trust-region box: where the low fidelity cannot serve, an
+/// outer iteration is one SQP iteration of the high fidelity itself in the box.
+struct Boxed<'a> {
+    high: &'a mut dyn Problem,
+    lower: Vec<f64>,
+    upper: Vec<f64>,
+}
+
+impl Problem for Boxed<'_> {
+    fn lower(&self) -> Vec<f64> {
+        self.lower.clone()
+    }
+    fn upper(&self) -> Vec<f64> {
+        self.upper.clone()
+    }
+    fn values(&mut self, x: &[f64]) -> Result<Values, EvalError> {
+        self.high.values(x)
+    }
+    fn gradients(&mut self, x: &[f64]) -> Result<Gradients, EvalError> {
+        self.high.gradients(x)
+    }
+}
+
 /// `high − low`, refusing values of different shapes (the two fidelities must pose the same
 /// constraints).
 fn differences(
@@ -220,6 +252,9 @@ fn differences(
         },
     ))
 }
+
+/// The low fidelity's values and gradients at a point, or why it could not give them.
+type LowAt = Result<(Values, Gradients), String>;
 
 /// Keeps the last checkpoint of an inner SQP run (its merit penalty and BFGS matrix).
 struct LastInner(Option<Checkpoint>);
@@ -293,6 +328,7 @@ pub fn minimize_managed(
         tolerance: params.tolerance,
         ..params.inner.clone()
     };
+    let mut low_at: Option<(Vec<f64>, LowAt)> = None;
     loop {
         let iteration = s.history.len();
         let finish = |s: &ManagedCheckpoint, converged: bool, message: String| ManagedInfo {
@@ -312,11 +348,15 @@ pub fn minimize_managed(
                 format!("iteration limit {} reached", params.max_iterations),
             ));
         }
-        let lv = low.values(&s.x).map_err(SqpError::Start)?;
-        let lg = low
-            .gradients(&s.x)
-            .map_err(|source| SqpError::Gradient { iteration, source })?;
-        let (dv, dg) = differences((&s.values, &s.gradients), (&lv, &lg))?;
+        // the low fidelity at x_k, kept across rejected steps (which leave x_k where it was)
+        let xk = s.x.clone();
+        let at = match low_at.take() {
+            Some((x, at)) if x == xk => at,
+            _ => low
+                .values(&xk)
+                .and_then(|v| low.gradients(&xk).map(|g| (v, g)))
+                .map_err(|e| format!("{e:#}")),
+        };
         // the trust-region box in the scaled variables, within the bounds
         let (lower, upper): (Vec<f64>, Vec<f64>) = (0..s.x.len())
             .map(|i| {
@@ -324,33 +364,112 @@ pub fn minimize_managed(
                 ((s.x[i] - w).max(lb[i]), (s.x[i] + w).min(ub[i]))
             })
             .unzip();
-        let mut corrected = Corrected {
-            low: &mut *low,
-            xk: s.x.clone(),
-            dv,
-            dg,
-            lower,
-            upper,
+        let step_of = |x: &[f64]| {
+            x.iter()
+                .zip(&s.x)
+                .zip(scaling.scale())
+                .fold(0.0f64, |a, ((xc, xk), sc)| a.max(((xc - xk) / sc).abs()))
         };
-        // the corrected problems are scaled by the bounds, not by the trust region (the KKT
-        // test and the carried BFGS matrix then mean the same in every box)
-        let mut last = LastInner(None);
-        let inner = Executor::new(inner_params.clone(), "corrected")
-            .scaling(scaling.clone())
-            .initial_hessian(s.hessian.clone())
-            .observe(&mut last)
-            .run(&mut corrected, &s.x)?;
-        let step = inner
-            .x
-            .iter()
-            .zip(&s.x)
-            .zip(scaling.scale())
-            .fold(0.0f64, |a, ((xc, xk), sc)| a.max(((xc - xk) / sc).abs()));
+        let corrected_step = |low: &mut dyn Problem, (dv, dg): (Values, Gradients)| {
+            let mut corrected = Corrected {
+                low,
+                xk: s.x.clone(),
+                dv,
+                dg,
+                lower: lower.clone(),
+                upper: upper.clone(),
+            };
+            // the corrected problems are scaled by the bounds, not by the trust region (the
+            // KKT test and the carried BFGS matrix then mean the same in every box)
+            let mut last = LastInner(None);
+            let inner = Executor::new(inner_params.clone(), "corrected")
+                .scaling(scaling.clone())
+                .initial_hessian(s.hessian.clone())
+                .observe(&mut last)
+                .run(&mut corrected, &s.x)?;
+            let step = step_of(&inner.x);
+            Ok::<_, SqpError>((inner, last.0, step))
+        };
+        // one SQP iteration of the high fidelity in the box, started from what x_k's
+        // evaluation gave (its line search evaluates the high fidelity; its BFGS update learns
+        // the high fidelity's curvature)
+        let high_step = |high: &mut dyn Problem| {
+            let n = s.x.len();
+            let params = SqpParams {
+                max_iterations: 1,
+                ..inner_params.clone()
+            };
+            let start = Checkpoint {
+                problem_id: "high".into(),
+                params: params.clone(),
+                iteration: 0,
+                evaluations: 0,
+                z: scaling.z(&s.x),
+                hessian: s.hessian.clone().unwrap_or_else(|| {
+                    (0..n)
+                        .map(|i| (0..n).map(|j| if i == j { 1.0 } else { 0.0 }).collect())
+                        .collect()
+                }),
+                penalty: 0.0,
+                history: Vec::new(),
+                elapsed_s: 0.0,
+                problem_state: serde_json::Value::Null,
+                stopped: None,
+                point: Some(PointEvaluation {
+                    values: s.values.clone(),
+                    gradients: s.gradients.clone(),
+                }),
+            };
+            let mut boxed = Boxed {
+                high,
+                lower: lower.clone(),
+                upper: upper.clone(),
+            };
+            let mut last = LastInner(None);
+            let inner = Executor::new(params, "high")
+                .scaling(scaling.clone())
+                .resume(Some(start))
+                .observe(&mut last)
+                .run(&mut boxed, &s.x)?;
+            let step = step_of(&inner.x);
+            Ok::<_, SqpError>((inner, last.0, step))
+        };
+        // where the low fidelity cannot be evaluated at x_k, or its corrected problem ends
+        // without converging short of a tenth of the box (its trial points failing: a low
+        // fidelity that flutters where the high one does not), the outer iteration is the
+        // high fidelity's own SQP iteration in the box
+        let (inner, last, step, fallback) = match &at {
+            Ok((lv, lg)) => {
+                let d = differences((&s.values, &s.gradients), (lv, lg))?;
+                let (inner, last, step) = corrected_step(&mut *low, d)?;
+                if !inner.converged && step < 0.1 * s.radius {
+                    let why = format!("the low fidelity's problem: {}", inner.message);
+                    let (inner, last, step) = high_step(&mut *high)?;
+                    (inner, last, step, Some(why))
+                } else {
+                    (inner, last, step, None)
+                }
+            }
+            Err(e) => {
+                let why = format!("the low fidelity fails at the point: {e}");
+                let (inner, last, step) = high_step(&mut *high)?;
+                (inner, last, step, Some(why))
+            }
+        };
+        low_at = Some((xk, at));
         let mut record = ManagedIterate {
             iteration,
             x: s.x.clone(),
             values: s.values.clone(),
             violation: violation(&s.values),
+            kkt: inner.history.first().map_or(f64::NAN, |h| h.kkt),
+            inner_outcome: match &fallback {
+                Some(why) => format!(
+                    "{why}; instead the high fidelity's SQP step: {}",
+                    inner.message
+                ),
+                None => inner.message.clone(),
+            },
             radius: s.radius,
             ratio: None,
             accepted: false,
@@ -369,40 +488,74 @@ pub fn minimize_managed(
                 "KKT conditions of the high fidelity satisfied to the tolerance".into(),
             ));
         }
-        if let Some(c) = &last.0 {
+        if let Some(c) = &last {
             s.penalty = s.penalty.max(c.penalty);
             s.hessian = Some(c.hessian.clone());
         }
-        let penalty = s.penalty;
-        let phi = |v: &Values| v.f + penalty * infeasibility_sum(v);
-        let predicted = phi(&s.values) - phi(&inner.values);
-        let scale_phi = phi(&s.values).abs().max(1.0);
-        if predicted > 1e-14 * scale_phi {
-            s.high_functions += 1;
+        if fallback.is_some() {
+            // the high fidelity's own line search accepted the point (or found none)
+            s.high_functions += inner.evaluations;
             record.high_functions = s.high_functions;
-            if let Ok(vc) = high.values(&inner.x) {
-                let ratio = (phi(&s.values) - phi(&vc)) / predicted;
-                record.ratio = Some(ratio);
-                if ratio >= 0.1 {
-                    let gc = high
-                        .gradients(&inner.x)
-                        .map_err(|source| SqpError::Gradient { iteration, source })?;
+            match last.and_then(|c| c.point) {
+                Some(p) if inner.iterations > 0 && step > 0.0 => {
                     s.high_gradients += 1;
                     record.high_gradients = s.high_gradients;
                     record.accepted = true;
                     s.x = inner.x.clone();
-                    s.values = vc;
-                    s.gradients = gc;
-                    if ratio > 0.75 && step >= 0.9 * s.radius {
+                    s.values = p.values;
+                    s.gradients = p.gradients;
+                    if step >= 0.9 * s.radius {
                         s.radius = (2.0 * s.radius).min(1.0);
-                    } else if ratio < 0.25 {
-                        s.radius = 0.5 * step;
+                    }
+                }
+                _ => s.radius *= 0.5,
+            }
+        } else {
+            // a step that restores feasibility at the objective's expense must show as a decrease
+            // of the merit: the penalty then weighs the violation removed at least twice the
+            // objective's rise (the predicted decrease is then at least that rise)
+            let feasibility_gain = infeasibility_sum(&s.values) - infeasibility_sum(&inner.values);
+            let objective_rise = inner.values.f - s.values.f;
+            if feasibility_gain > 0.0 && objective_rise > 0.0 {
+                s.penalty = s.penalty.max(2.0 * objective_rise / feasibility_gain);
+            }
+            let penalty = s.penalty;
+            let phi = |v: &Values| v.f + penalty * infeasibility_sum(v);
+            let predicted = phi(&s.values) - phi(&inner.values);
+            let scale_phi = phi(&s.values).abs().max(1.0);
+            if predicted > 1e-14 * scale_phi {
+                s.high_functions += 1;
+                record.high_functions = s.high_functions;
+                if let Ok(vc) = high.values(&inner.x) {
+                    let ratio = (phi(&s.values) - phi(&vc)) / predicted;
+                    record.ratio = Some(ratio);
+                    if ratio >= 0.1 {
+                        let gc = high
+                            .gradients(&inner.x)
+                            .map_err(|source| SqpError::Gradient { iteration, source })?;
+                        s.high_gradients += 1;
+                        record.high_gradients = s.high_gradients;
+                        record.accepted = true;
+                        s.x = inner.x.clone();
+                        s.values = vc;
+                        s.gradients = gc;
+                        if ratio > 0.75 && step >= 0.9 * s.radius {
+                            s.radius = (2.0 * s.radius).min(1.0);
+                        } else if ratio < 0.25 {
+                            s.radius = 0.5 * step;
+                        }
                     }
                 }
             }
-        }
-        if !record.accepted {
-            s.radius = 0.5 * step.min(s.radius);
+            if !record.accepted {
+                // a corrected problem that made no step is tried again in a smaller box
+                s.radius = 0.5
+                    * if step > 0.0 {
+                        step.min(s.radius)
+                    } else {
+                        s.radius
+                    };
+            }
         }
         s.history.push(record.clone());
         if observer

@@ -226,7 +226,7 @@ impl Scaling {
             .map(|(z, (o, s))| o + s * z)
             .collect()
     }
-    fn z(&self, x: &[f64]) -> Vec<f64> {
+    pub(super) fn z(&self, x: &[f64]) -> Vec<f64> {
         x.iter()
             .zip(self.offset.iter().zip(&self.scale))
             .map(|(x, (o, s))| (x - o) / s)

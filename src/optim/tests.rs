@@ -806,6 +806,79 @@ fn hs71_low() -> impl Problem {
     }
 }
 
+/// A low fidelity that cannot be evaluated where `x[var] < below` (as a coarse lattice that
+/// flutters where the fine one does not).
+struct FailsBelow<P> {
+    low: P,
+    var: usize,
+    below: f64,
+}
+
+impl<P: Problem> Problem for FailsBelow<P> {
+    fn lower(&self) -> Vec<f64> {
+        self.low.lower()
+    }
+    fn upper(&self) -> Vec<f64> {
+        self.low.upper()
+    }
+    fn values(&mut self, x: &[f64]) -> Result<Values, crate::optim::EvalError> {
+        if x[self.var] < self.below {
+            anyhow::bail!("unstable below x[{}] = {}", self.var, self.below);
+        }
+        self.low.values(x)
+    }
+    fn gradients(&mut self, x: &[f64]) -> Result<Gradients, crate::optim::EvalError> {
+        if x[self.var] < self.below {
+            anyhow::bail!("unstable below x[{}] = {}", self.var, self.below);
+        }
+        self.low.gradients(x)
+    }
+}
+
+/// Where the low fidelity cannot be evaluated (HS71's optimum, x2 = 4.743, lies in the region
+/// where it fails), the outer iterations take the high fidelity's own SQP step in the
+/// trust-region box instead and still reach HS71's optimum to the KKT test's accuracy (x within
+/// 1e-5, f within 1e-6).
+#[test]
+fn model_management_steps_on_where_the_low_fidelity_fails() {
+    let params = ManagedParams {
+        tolerance: 1e-8,
+        max_iterations: 200,
+        ..Default::default()
+    };
+    let x_star = [1.0, 4.7429994, 3.8211503, 1.3794082];
+    let mut low = FailsBelow {
+        low: hs71_low(),
+        var: 1,
+        below: 4.8,
+    };
+    let r = minimize_managed(
+        &mut hs71(),
+        &mut low,
+        &[1.0, 5.0, 5.0, 1.0],
+        &params,
+        "m",
+        None,
+        &mut (),
+    )
+    .unwrap();
+    let own_steps = r
+        .history
+        .iter()
+        .filter(|h| h.inner_outcome.contains("the high fidelity's SQP step"))
+        .count();
+    println!(
+        "{} outer iterations ({own_steps} of them the high fidelity's own SQP step), {} high functions, {} gradients, f = {:.10}, x = {:.7?}; {}",
+        r.iterations, r.high_functions, r.high_gradients, r.values.f, r.x, r.message
+    );
+    assert!(r.converged, "{}", r.message);
+    assert!(own_steps > 0);
+    assert!((r.values.f - 17.0140173).abs() < 1e-6, "{}", r.values.f);
+    for (a, b) in r.x.iter().zip(x_star) {
+        assert!((a - b).abs() < 1e-5, "{:?}", r.x);
+    }
+}
+
 /// The model management reaches the high fidelity's optimum, not the low one's: HS71 through a
 /// low fidelity whose own optimum lies elsewhere (and through HS71 itself), to the tolerance the
 /// KKT test allows (1e-8 on the measure: x within about 1e-5, f within 1e-6 of 17.0140173).

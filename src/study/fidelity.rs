@@ -125,4 +125,35 @@ impl Study {
         }
         Ok(Some(other))
     }
+
+    /// The study with its `optimization.model_management.low_fidelity` in place of its own
+    /// fidelity (checked by that fidelity's builder, errors at that JSON path); None without one.
+    pub fn low_fidelity_study(&self) -> Result<Option<Study>, StudyError> {
+        let Some(spec) = self
+            .spec
+            .optimization
+            .as_ref()
+            .and_then(|o| o.model_management.as_ref())
+            .map(|m| &m.low_fidelity)
+        else {
+            return Ok(None);
+        };
+        let builder = spec.builder();
+        let path = format!(
+            "optimization.model_management.low_fidelity.{}",
+            builder.name()
+        );
+        self.with_wing_context(|wing| builder.validate(wing))?
+            .map_err(|e| self.err(&e.path_in(&path), e.reason.clone()))?;
+        let mut low = self.clone();
+        if let Some(aero) = low.spec.aero.as_mut() {
+            aero.fidelity = spec.clone();
+            aero.compare_with = None;
+        }
+        if let Some(o) = low.spec.optimization.as_mut() {
+            o.model_management = None;
+        }
+        low.require_reverse_mode("the model management's corrected problems", true)?;
+        Ok(Some(low))
+    }
 }

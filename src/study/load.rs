@@ -165,6 +165,7 @@ impl Study {
             self.warm_start_design()?;
             self.warm_start_hessian()?;
             self.require_reverse_mode("optimization", true)?;
+            self.low_fidelity_study()?;
         }
         Ok(())
     }

@@ -244,6 +244,23 @@ impl Study {
                     format!("must lie in (0, 1) (got {})", show(o.tolerance)),
                 ));
             }
+            if let Some(m) = &o.model_management {
+                if !(m.initial_radius > 0.0 && m.initial_radius <= 1.0) {
+                    return Err(self.err(
+                        "optimization.model_management.initial_radius",
+                        format!(
+                            "must lie in (0, 1], a fraction of each bound range (got {})",
+                            show(m.initial_radius)
+                        ),
+                    ));
+                }
+                if m.max_iterations == 0 {
+                    return Err(self.err(
+                        "optimization.model_management.max_iterations",
+                        "must be at least 1",
+                    ));
+                }
+            }
             if let Err(reason) = crate::optim::check_nonmonotone_memory(o.nonmonotone_memory) {
                 return Err(self.err("optimization.nonmonotone_memory", reason));
             }

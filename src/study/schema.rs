@@ -134,11 +134,38 @@ pub struct OptimizationSpec {
         skip_serializing_if = "is_default_resolution_corrections"
     )]
     pub resolution_corrections: usize,
+    /// Minimize through a cheaper fidelity corrected to this study's at every accepted point
+    /// (first-order model management): `{"low_fidelity": {"dlm": {…}}}`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model_management: Option<ModelManagementSpec>,
     /// A discrete gust peak limit: `{"output", "max"}` — the largest |value| of a `gust` output
     /// (or its acceleration, `<name>_acceleration`) over the `discrete_gust` section's gusts stays
     /// within `max` (length unit for displacements, N m, m/s²).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub peak_constraint: Option<PeakConstraintSpec>,
+}
+
+/// `optimization.model_management`: the low fidelity and the trust region of
+/// [`crate::optim::minimize_managed`].
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelManagementSpec {
+    /// The cheap fidelity the corrected problems use (`{"dlm": {…}}`).
+    pub low_fidelity: crate::aero::FidelitySpec,
+    /// Initial trust-region half width, a fraction of each design variable's bound range.
+    #[serde(default = "default_initial_radius")]
+    pub initial_radius: f64,
+    /// Outer iterations at most (each one high-fidelity function, and a gradient when its
+    /// point is accepted).
+    #[serde(default = "default_outer_iterations")]
+    pub max_iterations: usize,
+}
+
+fn default_initial_radius() -> f64 {
+    0.1
+}
+fn default_outer_iterations() -> usize {
+    30
 }
 
 /// `optimization.peak_constraint`.

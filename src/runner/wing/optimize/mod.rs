@@ -4,6 +4,7 @@
 mod cross;
 mod design;
 mod flutter_check;
+mod managed;
 mod progress;
 mod resume;
 
@@ -115,7 +116,12 @@ pub fn optimize_pass(
         nonmonotone_memory: o.nonmonotone_memory,
         ..Default::default()
     };
-    let (problem_id, checkpoint) = open_checkpoint(study, dir, pass.number, resume, quiet)?;
+    let low_study = study.low_fidelity_study()?;
+    let (problem_id, checkpoint) = match low_study {
+        // the managed run keeps its own checkpoint
+        Some(_) => (String::new(), None),
+        None => open_checkpoint(study, dir, pass.number, resume, quiet)?,
+    };
     let checkpoint_path = checkpoint_file(dir, pass.number);
     let mut observer = RunObserver::new(
         ev0.mass_kg,
@@ -137,14 +143,31 @@ pub fn optimize_pass(
         );
     }
     let mut problem = DesignProblem::new(&fixed_basis, settings.clone(), spec.clone());
-    let info = Executor::new(params, &problem_id)
-        .resume(checkpoint)
-        .initial_hessian(hessian)
-        .observe(&mut observer)
-        .checkpoint(&mut store)
-        .run(&mut problem, x_start.as_deref().unwrap_or(&x0));
-    observer.bar.finish_and_clear();
-    let info = info.map_err(|e| anyhow::anyhow!("optimization: {e}"))?;
+    let info = match &low_study {
+        Some(low_study) => {
+            observer.bar.finish_and_clear();
+            managed::run_managed(
+                study,
+                low_study,
+                dir,
+                (pass.number, resume, quiet),
+                &mut problem,
+                x_start.as_deref().unwrap_or(&x0),
+                params,
+                (ev0.mass_kg, (unit_scale, unit, rms_limit)),
+            )?
+        }
+        None => {
+            let info = Executor::new(params, &problem_id)
+                .resume(checkpoint)
+                .initial_hessian(hessian)
+                .observe(&mut observer)
+                .checkpoint(&mut store)
+                .run(&mut problem, x_start.as_deref().unwrap_or(&x0));
+            observer.bar.finish_and_clear();
+            info.map_err(|e| anyhow::anyhow!("optimization: {e}"))?
+        }
+    };
     // an ended optimization resumes no more: its warm-start store is not part of the report
     crate::aero::lfd::remove_warm_start_file(dir);
     // over every session of a resumed run

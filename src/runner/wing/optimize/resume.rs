@@ -73,6 +73,13 @@ pub(super) fn defining_spec(study: &Study) -> Result<serde_json::Value> {
             ] {
                 o.remove(key);
             }
+            // the outer iteration limit decides only when a managed run stops
+            if let Some(m) = o
+                .get_mut("model_management")
+                .and_then(|m| m.as_object_mut())
+            {
+                m.remove("max_iterations");
+            }
         }
     }
     Ok(v)
