@@ -34,18 +34,7 @@ impl ManagedObserver for ManagedFile {
         it: &ManagedIterate,
         cp: &ManagedCheckpoint,
     ) -> Result<Control, String> {
-        serde_json::to_vec(cp)
-            .map_err(anyhow::Error::from)
-            .and_then(|b| write_atomic(&self.path, &b))
-            .map_err(|e| format!("{e:#}"))?;
-        if let Some(dir) = self.path.parent() {
-            if let Err(e) = crate::aero::lfd::save_warm_start(dir) {
-                eprintln!(
-                    "warning: cannot write {} ({e}): a resumed run starts its GMRES from zero",
-                    dir.join(crate::aero::lfd::WARM_START_FILE).display()
-                );
-            }
-        }
+        super::resume::save_checkpoint(&self.path, cp)?;
         let took = self.last.elapsed().as_secs_f64();
         self.last = Instant::now();
         if !self.quiet {

@@ -11,22 +11,27 @@ pub(crate) struct FileCheckpoint {
 
 impl Checkpointing for FileCheckpoint {
     fn save(&mut self, cp: &crate::optim::Checkpoint) -> Result<(), String> {
-        serde_json::to_vec(cp)
-            .map_err(anyhow::Error::from)
-            .and_then(|b| write_atomic(&self.path, &b))
-            .map_err(|e| format!("{e:#}"))?;
-        // the LFD's GMRES warm-start store beside it, so that `--resume` in another process
-        // starts from the last designs' solutions; a failed write costs only iterations
-        if let Some(dir) = self.path.parent() {
-            if let Err(e) = crate::aero::lfd::save_warm_start(dir) {
-                eprintln!(
-                    "warning: cannot write {} ({e}): a resumed run starts its GMRES from zero",
-                    dir.join(crate::aero::lfd::WARM_START_FILE).display()
-                );
-            }
-        }
-        Ok(())
+        save_checkpoint(&self.path, cp)
     }
+}
+
+/// Writes a checkpoint atomically, with the LFD's GMRES warm-start store beside it, so that
+/// `--resume` in another process starts from the last designs' solutions (a failed store write
+/// costs only iterations, so it warns).
+pub(crate) fn save_checkpoint(path: &Path, cp: &impl serde::Serialize) -> Result<(), String> {
+    serde_json::to_vec(cp)
+        .map_err(anyhow::Error::from)
+        .and_then(|b| write_atomic(path, &b))
+        .map_err(|e| format!("{e:#}"))?;
+    if let Some(dir) = path.parent() {
+        if let Err(e) = crate::aero::lfd::save_warm_start(dir) {
+            eprintln!(
+                "warning: cannot write {} ({e}): a resumed run starts its GMRES from zero",
+                dir.join(crate::aero::lfd::WARM_START_FILE).display()
+            );
+        }
+    }
+    Ok(())
 }
 
 /// FNV-1a hash of a string, to tie a checkpoint to the study that wrote it.
