@@ -364,11 +364,24 @@ pub fn minimize_managed(
                 ((s.x[i] - w).max(lb[i]), (s.x[i] + w).min(ub[i]))
             })
             .unzip();
-        let step_of = |x: &[f64]| {
-            x.iter()
+        // the inner runs are scaled by the bounds, not by the trust region (the KKT test and the
+        // carried BFGS matrix then mean the same in every box)
+        let solve = |problem: &mut dyn Problem, params, point: Option<PointEvaluation>| {
+            let mut last = LastInner(None);
+            let mut ex = Executor::new(params, "inner")
+                .scaling(scaling.clone())
+                .initial_hessian(s.hessian.clone());
+            if let Some(p) = point {
+                ex = ex.evaluated_at(p);
+            }
+            let inner = ex.observe(&mut last).run(problem, &s.x)?;
+            let step = inner
+                .x
+                .iter()
                 .zip(&s.x)
                 .zip(scaling.scale())
-                .fold(0.0f64, |a, ((xc, xk), sc)| a.max(((xc - xk) / sc).abs()))
+                .fold(0.0f64, |a, ((xc, xk), sc)| a.max(((xc - xk) / sc).abs()));
+            Ok::<_, SqpError>((inner, last.0, step))
         };
         let corrected_step = |low: &mut dyn Problem, (dv, dg): (Values, Gradients)| {
             let mut corrected = Corrected {
@@ -379,60 +392,26 @@ pub fn minimize_managed(
                 lower: lower.clone(),
                 upper: upper.clone(),
             };
-            // the corrected problems are scaled by the bounds, not by the trust region (the
-            // KKT test and the carried BFGS matrix then mean the same in every box)
-            let mut last = LastInner(None);
-            let inner = Executor::new(inner_params.clone(), "corrected")
-                .scaling(scaling.clone())
-                .initial_hessian(s.hessian.clone())
-                .observe(&mut last)
-                .run(&mut corrected, &s.x)?;
-            let step = step_of(&inner.x);
-            Ok::<_, SqpError>((inner, last.0, step))
+            solve(&mut corrected, inner_params.clone(), None)
         };
         // one SQP iteration of the high fidelity in the box, started from what x_k's
         // evaluation gave (its line search evaluates the high fidelity; its BFGS update learns
         // the high fidelity's curvature)
         let high_step = |high: &mut dyn Problem| {
-            let n = s.x.len();
-            let params = SqpParams {
-                max_iterations: 1,
-                ..inner_params.clone()
-            };
-            let start = Checkpoint {
-                problem_id: "high".into(),
-                params: params.clone(),
-                iteration: 0,
-                evaluations: 0,
-                z: scaling.z(&s.x),
-                hessian: s.hessian.clone().unwrap_or_else(|| {
-                    (0..n)
-                        .map(|i| (0..n).map(|j| if i == j { 1.0 } else { 0.0 }).collect())
-                        .collect()
-                }),
-                penalty: 0.0,
-                history: Vec::new(),
-                elapsed_s: 0.0,
-                problem_state: serde_json::Value::Null,
-                stopped: None,
-                point: Some(PointEvaluation {
-                    values: s.values.clone(),
-                    gradients: s.gradients.clone(),
-                }),
-            };
             let mut boxed = Boxed {
                 high,
                 lower: lower.clone(),
                 upper: upper.clone(),
             };
-            let mut last = LastInner(None);
-            let inner = Executor::new(params, "high")
-                .scaling(scaling.clone())
-                .resume(Some(start))
-                .observe(&mut last)
-                .run(&mut boxed, &s.x)?;
-            let step = step_of(&inner.x);
-            Ok::<_, SqpError>((inner, last.0, step))
+            let params = SqpParams {
+                max_iterations: 1,
+                ..inner_params.clone()
+            };
+            let point = PointEvaluation {
+                values: s.values.clone(),
+                gradients: s.gradients.clone(),
+            };
+            solve(&mut boxed, params, Some(point))
         };
         // where the low fidelity cannot be evaluated at x_k, or its corrected problem ends
         // without converging short of a tenth of the box (its trial points failing: a low

@@ -91,6 +91,7 @@ pub struct Executor<'a> {
     checkpoints: Option<&'a mut dyn Checkpointing>,
     subproblems: Option<&'a mut dyn SubproblemSolver>,
     scaling: Option<Scaling>,
+    point: Option<PointEvaluation>,
 }
 
 impl<'a> Executor<'a> {
@@ -104,6 +105,7 @@ impl<'a> Executor<'a> {
             checkpoints: None,
             subproblems: None,
             scaling: None,
+            point: None,
         }
     }
 
@@ -111,6 +113,14 @@ impl<'a> Executor<'a> {
     /// management's corrected problems: bounded by a trust region, scaled by the bounds).
     pub(super) fn scaling(mut self, scaling: Scaling) -> Self {
         self.scaling = Some(scaling);
+        self
+    }
+
+    /// Starts from the values and gradients at `x0` already evaluated (the model management's
+    /// point x_k): the fresh start does not evaluate them again. Ignored when `x0` lies outside
+    /// the bounds (the start is then another point) and when resuming.
+    pub(super) fn evaluated_at(mut self, point: PointEvaluation) -> Self {
+        self.point = Some(point);
         self
     }
 
@@ -274,6 +284,7 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
         mut checkpoints,
         subproblems,
         scaling,
+        point,
     } = ex;
     let mut clarabel = Clarabel;
     let solver: &mut dyn SubproblemSolver = match subproblems {
@@ -288,7 +299,14 @@ fn run(ex: Executor<'_>, problem: &mut dyn Problem, x0: &[f64]) -> Result<SqpInf
     let started = std::time::Instant::now();
     let start = match resume {
         Some(c) => Start::resumed(c, problem, params, problem_id, x0.len())?,
-        None => Start::fresh(x0, &scaling, (&lb, &ub), hessian)?,
+        None => {
+            let start = Start::fresh(x0, &scaling, (&lb, &ub), hessian)?;
+            let at_x0 = start.z == scaling.z(x0);
+            Start {
+                point: point.filter(|p| at_x0 && fits(p, x0.len())),
+                ..start
+            }
+        }
     };
     let elapsed_before = start.elapsed_s;
     let elapsed = || elapsed_before + started.elapsed().as_secs_f64();

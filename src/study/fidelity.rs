@@ -110,11 +110,17 @@ impl Study {
         else {
             return Ok(None);
         };
+        self.with_fidelity(spec, "aero.compare_with").map(Some)
+    }
+
+    /// This study with `spec` in place of its own fidelity (no comparison), checked as that
+    /// fidelity checks a study; errors name the JSON path `at.<fidelity>`.
+    fn with_fidelity(&self, spec: &FidelitySpec, at: &str) -> Result<Study, StudyError> {
         let builder = spec.builder();
         self.with_wing_context(|wing| builder.validate(wing))?
             .map_err(|e| {
                 self.err(
-                    &e.path_in(&format!("aero.compare_with.{}", builder.name())),
+                    &e.path_in(&format!("{at}.{}", builder.name())),
                     e.reason.clone(),
                 )
             })?;
@@ -123,7 +129,7 @@ impl Study {
             aero.fidelity = spec.clone();
             aero.compare_with = None;
         }
-        Ok(Some(other))
+        Ok(other)
     }
 
     /// The study with its `optimization.model_management.low_fidelity` in place of its own
@@ -138,18 +144,7 @@ impl Study {
         else {
             return Ok(None);
         };
-        let builder = spec.builder();
-        let path = format!(
-            "optimization.model_management.low_fidelity.{}",
-            builder.name()
-        );
-        self.with_wing_context(|wing| builder.validate(wing))?
-            .map_err(|e| self.err(&e.path_in(&path), e.reason.clone()))?;
-        let mut low = self.clone();
-        if let Some(aero) = low.spec.aero.as_mut() {
-            aero.fidelity = spec.clone();
-            aero.compare_with = None;
-        }
+        let mut low = self.with_fidelity(spec, "optimization.model_management.low_fidelity")?;
         if let Some(o) = low.spec.optimization.as_mut() {
             o.model_management = None;
         }
