@@ -215,6 +215,18 @@ fn errors_say_what_is_wrong() {
         "optimization.model_management.initial_radius",
         &["(0, 1]", "got 2"],
     );
+    // a warm-start BFGS matrix that a managed run would silently drop
+    let mut o = flagship()["optimization"].clone();
+    o["model_management"] =
+        serde_json::json!({"low_fidelity": {"dlm": {"n_chord": 5, "n_span": 8}}});
+    o["warm_start"] = serde_json::json!({"from": "elsewhere/results.json", "hessian": true});
+    refused(
+        "run",
+        "optimization",
+        o,
+        "optimization.warm_start.hessian",
+        &["model_management", "set it to false"],
+    );
     refused(
         "run",
         "optimization.nonmonotone_memory",

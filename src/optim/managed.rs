@@ -120,6 +120,9 @@ pub struct ManagedCheckpoint {
     pub history: Vec<ManagedIterate>,
     pub high_functions: usize,
     pub high_gradients: usize,
+    /// Wall time over every session of the run so far, in seconds (absent in older files).
+    #[serde(default)]
+    pub elapsed_s: f64,
 }
 
 /// How a managed run ended.
@@ -134,6 +137,8 @@ pub struct ManagedInfo {
     pub high_functions: usize,
     pub high_gradients: usize,
     pub history: Vec<ManagedIterate>,
+    /// Wall time over every session of the run, in seconds.
+    pub elapsed_s: f64,
 }
 
 /// Sees every outer iteration and its checkpoint (saved by the observer, as it wishes).
@@ -320,9 +325,11 @@ pub fn minimize_managed(
                 history: Vec::new(),
                 high_functions: 1,
                 high_gradients: 1,
+                elapsed_s: 0.0,
             }
         }
     };
+    let (started, elapsed_before) = (std::time::Instant::now(), s.elapsed_s);
     s.params = params.clone();
     let inner_params = SqpParams {
         tolerance: params.tolerance,
@@ -340,6 +347,7 @@ pub fn minimize_managed(
             high_functions: s.high_functions,
             high_gradients: s.high_gradients,
             history: s.history.clone(),
+            elapsed_s: elapsed_before + started.elapsed().as_secs_f64(),
         };
         if iteration >= params.max_iterations {
             return Ok(finish(
@@ -537,6 +545,7 @@ pub fn minimize_managed(
             }
         }
         s.history.push(record.clone());
+        s.elapsed_s = elapsed_before + started.elapsed().as_secs_f64();
         if observer
             .iteration(&record, &s)
             .map_err(SqpError::Observer)?

@@ -260,6 +260,12 @@ impl Study {
                         "must be at least 1",
                     ));
                 }
+                if o.warm_start.as_ref().is_some_and(|w| w.hessian) {
+                    return Err(self.err(
+                        "optimization.warm_start.hessian",
+                        "is not used with optimization.model_management (each corrected problem's SQP starts afresh in its trust region): set it to false",
+                    ));
+                }
             }
             if let Err(reason) = crate::optim::check_nonmonotone_memory(o.nonmonotone_memory) {
                 return Err(self.err("optimization.nonmonotone_memory", reason));

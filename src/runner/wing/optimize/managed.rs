@@ -104,6 +104,13 @@ pub(super) fn run_managed(
         if !quiet {
             println!("resuming from outer iteration {}", cp.history.len());
         }
+        // an LFD run's GMRES starts from the solutions kept with the checkpoint
+        if crate::aero::lfd::load_warm_start(dir) && !quiet {
+            println!(
+                "GMRES warm start: the last designs' solutions read from {}",
+                dir.join(crate::aero::lfd::WARM_START_FILE).display()
+            );
+        }
         Some(cp)
     } else if resume {
         anyhow::bail!(
@@ -120,7 +127,6 @@ pub(super) fn run_managed(
         inner,
         ..Default::default()
     };
-    let started = Instant::now();
     let mut observer = ManagedFile {
         path,
         quiet,
@@ -138,12 +144,13 @@ pub(super) fn run_managed(
         &mut observer,
     )
     .map_err(|e| anyhow::anyhow!("optimization (model management): {e}"))?;
-    Ok(as_sqp_info(info, started.elapsed().as_secs_f64()))
+    Ok(as_sqp_info(info))
 }
 
 /// A managed run in the SQP's words: the outer iterations as the history (their KKT measure
 /// the high fidelity's at the point, their evaluations its functions).
-fn as_sqp_info(info: ManagedInfo, elapsed_s: f64) -> SqpInfo {
+fn as_sqp_info(info: ManagedInfo) -> SqpInfo {
+    let elapsed_s = info.elapsed_s;
     let history = info
         .history
         .iter()
