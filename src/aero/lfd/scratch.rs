@@ -1,56 +1,46 @@
 //! Scratch files for the LFD's forward solutions between a GAF table and its reverse sweep
-//! ([`gustkit_cfd::forward_store::ForwardSpill`]): one file a reduced frequency in the system's
-//! temporary folder, every column's complex values as little-endian f64 pairs, deleted when the
-//! model lets the table go. Nothing here is a result: the run folder never sees these files.
+//! ([`gustkit_cfd::forward_store::ForwardSpill`]): one unnamed temporary file a reduced frequency
+//! in the system's temporary folder (`tempfile`: the operating system deletes it when the file is
+//! closed, so a run that is killed leaves nothing behind), every column's complex values as
+//! little-endian f64 pairs. Nothing here is a result: the run folder never sees these files.
 
 use gustkit_cfd::forward_store::{ForwardSpill, Spilled};
 use num_complex::Complex64 as C64;
-use std::io::{BufReader, BufWriter, Read, Write};
+use std::fs::File;
+use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicUsize, Ordering};
-
-/// Files numbered within the process (with its id in the name, so processes sharing the folder
-/// never share files).
-static NEXT_FILE: AtomicUsize = AtomicUsize::new(0);
+use std::sync::Mutex;
 
 /// A folder for scratch files.
 #[derive(Debug)]
 pub struct ScratchFolder(pub PathBuf);
 
-/// One frequency's columns in a scratch file.
+/// One frequency's columns in an unnamed scratch file (read back under a lock: one reader at a
+/// time moves its position).
 struct ScratchFile {
-    path: PathBuf,
+    file: Mutex<File>,
+    folder: PathBuf,
     n: usize,
     columns: usize,
 }
 
 impl ForwardSpill for ScratchFolder {
     fn put(&self, columns: &[Vec<C64>]) -> Result<Box<dyn Spilled>, String> {
-        let path = self.0.join(format!(
-            "gustkit_lfd_forward_{}_{}.bin",
-            std::process::id(),
-            NEXT_FILE.fetch_add(1, Ordering::Relaxed)
-        ));
         let fail = |e: std::io::Error| {
             format!(
-                "the forward LFD solutions kept for the reverse sweep could not be written to {} ({e}): free space there, set TMPDIR, or choose forward_solutions: \"memory\"",
-                path.display()
+                "the forward LFD solutions kept for the reverse sweep could not be written to a temporary file in {} ({e}): free space there, set TMPDIR, or choose forward_solutions: \"memory\"",
+                self.0.display()
             )
         };
         let n = columns.first().map_or(0, Vec::len);
-        // the file exists from here on: removed again should a write fail
-        let file = ScratchFile {
-            path: path.clone(),
-            n,
-            columns: columns.len(),
-        };
-        let mut w = BufWriter::with_capacity(1 << 20, std::fs::File::create(&path).map_err(fail)?);
+        let file = tempfile::tempfile_in(&self.0).map_err(fail)?;
+        let mut w = BufWriter::with_capacity(1 << 20, &file);
         for x in columns {
             if x.len() != n {
                 return Err(format!(
-                    "columns of unequal lengths ({} and {n}) for {}",
+                    "columns of unequal lengths ({} and {n}) for a temporary file in {}",
                     x.len(),
-                    path.display()
+                    self.0.display()
                 ));
             }
             for v in x {
@@ -59,7 +49,13 @@ impl ForwardSpill for ScratchFolder {
             }
         }
         w.flush().map_err(fail)?;
-        Ok(Box::new(file))
+        drop(w);
+        Ok(Box::new(ScratchFile {
+            file: Mutex::new(file),
+            folder: self.0.clone(),
+            n,
+            columns: columns.len(),
+        }))
     }
 }
 
@@ -67,12 +63,13 @@ impl Spilled for ScratchFile {
     fn read(&self) -> Result<Vec<Vec<C64>>, String> {
         let fail = |e: std::io::Error| {
             format!(
-                "the forward LFD solutions kept for the reverse sweep could not be read from {}: {e}",
-                self.path.display()
+                "the forward LFD solutions kept for the reverse sweep could not be read from their temporary file in {}: {e}",
+                self.folder.display()
             )
         };
-        let mut r =
-            BufReader::with_capacity(1 << 20, std::fs::File::open(&self.path).map_err(fail)?);
+        let mut file = self.file.lock().unwrap_or_else(|e| e.into_inner());
+        file.seek(SeekFrom::Start(0)).map_err(fail)?;
+        let mut r = BufReader::with_capacity(1 << 20, &*file);
         let mut buf = [0u8; 16];
         let mut out = Vec::with_capacity(self.columns);
         for _ in 0..self.columns {
@@ -91,18 +88,13 @@ impl Spilled for ScratchFile {
     }
 }
 
-impl Drop for ScratchFile {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.path);
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     /// A scratch file gives back every column bit for bit (subnormal, huge and negative-zero
-    /// values among them) and is gone once dropped.
+    /// values among them), twice, and never has a name in its folder (so a killed run leaves no
+    /// file behind).
     #[test]
     fn scratch_files_return_the_columns_bit_for_bit() {
         let dir = std::env::temp_dir().join(format!("gustkit_scratch_test_{}", std::process::id()));
@@ -123,7 +115,7 @@ mod tests {
             .collect();
         let files = || std::fs::read_dir(&dir).unwrap().count();
         let kept = folder.put(&columns).unwrap();
-        assert_eq!(files(), 1);
+        assert_eq!(files(), 0);
         let bits = |c: &[Vec<C64>]| -> Vec<u64> {
             c.iter()
                 .flatten()
@@ -131,12 +123,13 @@ mod tests {
                 .collect()
         };
         assert_eq!(bits(&kept.read().unwrap()), bits(&columns));
+        assert_eq!(bits(&kept.read().unwrap()), bits(&columns));
         drop(kept);
         assert_eq!(files(), 0);
         std::fs::remove_dir(&dir).unwrap();
     }
 
-    /// A folder that cannot take the file is an error naming the file and the way out, not a
+    /// A folder that cannot take the file is an error naming the folder and the way out, not a
     /// panic.
     #[test]
     fn an_unwritable_folder_is_named() {
