@@ -9,7 +9,9 @@
 
 use super::optimize::{checkpoint_file, optimize_pass, Pass};
 use super::resolution::{FLUTTER_TOLERANCE, RMS_TOLERANCE};
-use crate::report::results::{OptimizationResults, ResolutionCheck, ResolutionCorrection};
+use crate::report::results::{
+    CrossEvaluation, OptimizationResults, ResolutionCheck, ResolutionCorrection,
+};
 use crate::study::Study;
 use anyhow::{Context, Result};
 use std::path::Path;
@@ -148,8 +150,25 @@ fn merge(
         warm_start: before.warm_start,
         history,
         corrections,
+        cross_evaluation: whole_run_designs(before.cross_evaluation, next.cross_evaluation),
         ..next
     }
+}
+
+/// The cross-evaluated designs of the whole run: the first pass's initial and starting designs
+/// (the starting one another run's optimum, for `gustkit compare`'s consistency table) and the
+/// last pass's final design.
+fn whole_run_designs(
+    before: Option<CrossEvaluation>,
+    next: Option<CrossEvaluation>,
+) -> Option<CrossEvaluation> {
+    let (Some(mut all), Some(next)) = (before, next.clone()) else {
+        return next;
+    };
+    all.designs.retain(|d| d.design != "final");
+    all.designs
+        .extend(next.designs.into_iter().filter(|d| d.design == "final"));
+    Some(all)
 }
 
 #[cfg(test)]
@@ -183,6 +202,50 @@ mod tests {
             peak: None,
             refined_peak: None,
         }
+    }
+
+    /// A correction pass's cross-evaluation keeps the run's initial and starting designs (the
+    /// pass starts at the previous optimum, already analysed as its final design) and takes the
+    /// new final design.
+    #[test]
+    fn the_whole_run_keeps_its_first_start_and_its_last_final_design() {
+        let designs = |names: &[(&str, f64)]| CrossEvaluation {
+            output: "tip".into(),
+            unit: "in".into(),
+            flight_speed_m_s: 1.0,
+            searched_up_to_m_s: 2.0,
+            designs: names
+                .iter()
+                .map(|(d, m)| crate::report::results::CrossDesign {
+                    design: d.to_string(),
+                    mass_kg: *m,
+                    design_variables: vec![*m],
+                    evaluations: Vec::new(),
+                })
+                .collect(),
+        };
+        let first = designs(&[("initial", 3.0), ("start", 2.0), ("final", 1.5)]);
+        let second = designs(&[("initial", 3.0), ("final", 1.4)]);
+        let names = |c: Option<CrossEvaluation>| -> Option<Vec<(String, f64)>> {
+            c.map(|c| {
+                c.designs
+                    .iter()
+                    .map(|d| (d.design.clone(), d.mass_kg))
+                    .collect()
+            })
+        };
+        let owned = |v: &[(&str, f64)]| Some(v.iter().map(|(d, m)| (d.to_string(), *m)).collect());
+        let all = whole_run_designs(Some(first.clone()), Some(second.clone()));
+        assert_eq!(
+            names(all),
+            owned(&[("initial", 3.0), ("start", 2.0), ("final", 1.4)])
+        );
+        // without the first pass's evaluations, the last pass's stand
+        assert_eq!(
+            names(whole_run_designs(None, Some(second))),
+            owned(&[("initial", 3.0), ("final", 1.4)])
+        );
+        assert_eq!(names(whole_run_designs(Some(first), None)), None);
     }
 
     #[test]

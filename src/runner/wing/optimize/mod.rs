@@ -211,7 +211,9 @@ pub fn optimize_pass(
     let cross_evaluation = match study.compare_study()? {
         Some(other) => {
             let mut designs = vec![("initial", x0.clone(), Some((&ev0, t_ev0)))];
-            if let Some(x) = &x_start {
+            // a correction pass starts at the previous pass's optimum: analysed as its final
+            // design already (the run keeps the first pass's start)
+            if let (Some(x), None) = (&x_start, &pass.start) {
                 designs.push(("start", x.clone(), None));
             }
             designs.push(("final", info.x.clone(), Some((&ev, t_ev))));
