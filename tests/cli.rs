@@ -1309,6 +1309,7 @@ fn resolution_corrections_meet_the_refined_limit() {
         .unwrap()
         .remove("flutter_margin");
     v["optimization"]["max_iterations"] = 60.into();
+    v["aero"]["compare_with"] = serde_json::json!({"dlm": {"n_chord": 4, "n_span": 6}});
     let run = |corrections: usize, extra: &[&str]| -> (Option<i32>, serde_json::Value) {
         let mut s = v.clone();
         s["optimization"]["resolution_corrections"] = corrections.into();
@@ -1365,6 +1366,19 @@ fn resolution_corrections_meet_the_refined_limit() {
     assert!(history
         .windows(2)
         .all(|w| w[1]["iteration"].as_u64() > w[0]["iteration"].as_u64()));
+    // the cross-evaluation of the whole run: the first pass's initial design and the last
+    // pass's final one, each once
+    let designs = r["cross_evaluation"]["designs"].as_array().unwrap();
+    let names: Vec<&str> = designs
+        .iter()
+        .map(|d| d["design"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["initial", "final"]);
+    assert_eq!(designs[0]["mass_kg"], r["initial"]["mass_kg"]);
+    assert_eq!(
+        designs[1]["design_variables"],
+        r["final"]["design_variables"]
+    );
     let summary = std::fs::read_to_string(dir.join("r3/opt_corr/summary.md")).unwrap();
     assert!(summary.contains("Resolution corrections"), "{summary}");
 

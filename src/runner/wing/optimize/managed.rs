@@ -104,13 +104,7 @@ pub(super) fn run_managed(
         if !quiet {
             println!("resuming from outer iteration {}", cp.history.len());
         }
-        // an LFD run's GMRES starts from the solutions kept with the checkpoint
-        if crate::aero::lfd::load_warm_start(dir) && !quiet {
-            println!(
-                "GMRES warm start: the last designs' solutions read from {}",
-                dir.join(crate::aero::lfd::WARM_START_FILE).display()
-            );
-        }
+        resume_warm_start(dir, quiet);
         Some(cp)
     } else if resume {
         anyhow::bail!(

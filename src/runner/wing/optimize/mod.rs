@@ -58,6 +58,17 @@ impl Pass {
     }
 }
 
+/// A resumed LFD run starts its GMRES from the solutions kept with its checkpoint (read after
+/// the initial design's evaluation, which would otherwise be the newest guess), with a line.
+fn resume_warm_start(dir: &Path, quiet: bool) {
+    if crate::aero::lfd::load_warm_start(dir) && !quiet {
+        println!(
+            "GMRES warm start: the last designs' solutions read from {}",
+            dir.join(crate::aero::lfd::WARM_START_FILE).display()
+        );
+    }
+}
+
 /// The gust-constrained mass minimization of a study (the `optimization` section).
 pub fn optimize(
     study: &Study,
@@ -134,13 +145,8 @@ pub fn optimize_pass(
     let mut store = FileCheckpoint {
         path: checkpoint_path,
     };
-    // a resumed LFD run starts its GMRES from the solutions kept with the checkpoint (read after
-    // the initial design's evaluation above, which would otherwise be the newest guess)
-    if checkpoint.is_some() && crate::aero::lfd::load_warm_start(dir) && !quiet {
-        println!(
-            "GMRES warm start: the last designs' solutions read from {}",
-            dir.join(crate::aero::lfd::WARM_START_FILE).display()
-        );
+    if checkpoint.is_some() {
+        resume_warm_start(dir, quiet);
     }
     let mut problem = DesignProblem::new(&fixed_basis, settings.clone(), spec.clone());
     let info = match &low_study {
@@ -210,11 +216,14 @@ pub fn optimize_pass(
     }
     let cross_evaluation = match study.compare_study()? {
         Some(other) => {
-            let mut designs = vec![("initial", x0.clone(), Some((&ev0, t_ev0)))];
-            // a correction pass starts at the previous pass's optimum: analysed as its final
-            // design already (the run keeps the first pass's start)
-            if let (Some(x), None) = (&x_start, &pass.start) {
-                designs.push(("start", x.clone(), None));
+            // a correction pass analyses only its final design: the run keeps the first pass's
+            // initial and starting designs, and this pass starts at the previous optimum
+            let mut designs = Vec::new();
+            if pass.start.is_none() {
+                designs.push(("initial", x0.clone(), Some((&ev0, t_ev0))));
+                if let Some(x) = &x_start {
+                    designs.push(("start", x.clone(), None));
+                }
             }
             designs.push(("final", info.x.clone(), Some((&ev, t_ev))));
             let c = cross_evaluate(study, &other, &settings, &designs, output, unit_scale, unit)?;
