@@ -3,18 +3,24 @@
 //! names the field and, for lengths, speaks the file's unit — never a panic (101), an abort (134)
 //! or a kill (137), never a backtrace (even with RUST_BACKTRACE=1), and nothing is written.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 fn flagship() -> serde_json::Value {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_dlm.json");
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
-fn scratch() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("gustkit-bad-input-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+mod common;
+
+/// A fresh scratch folder per call (the tests run in parallel), removed when it drops.
+fn scratch() -> common::Scratch {
+    static NEXT: AtomicUsize = AtomicUsize::new(0);
+    common::scratch(
+        "bad-input",
+        &NEXT.fetch_add(1, Ordering::Relaxed).to_string(),
+    )
 }
 
 /// Sets the value at a dotted path (object keys or array indices).
@@ -420,7 +426,8 @@ fn command_line_values() {
 /// 340 m/s), and no report folder.
 #[test]
 fn flutter_without_a_flutter_section_names_what_to_add() {
-    let dir = scratch().join("no_flutter");
+    let base = scratch();
+    let dir = base.join("no_flutter");
     let study = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/minimal_wing.json");
     let o = Command::new(env!("CARGO_BIN_EXE_gustkit"))
         .args(["flutter", study.to_str().unwrap(), "--reports"])
@@ -446,8 +453,8 @@ fn flutter_without_a_flutter_section_names_what_to_add() {
 /// `memory_limit_gb` (named with the estimate and the limit, before anything runs).
 #[test]
 fn mesh_study_refuses_what_it_cannot_run() {
-    let dir = scratch().join("mesh-study");
-    let _ = std::fs::remove_dir_all(&dir);
+    let base = scratch();
+    let dir = base.join("mesh-study");
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let g = |study: &Path, levels: &str| {
         Command::new(env!("CARGO_BIN_EXE_gustkit"))
@@ -470,7 +477,7 @@ fn mesh_study_refuses_what_it_cannot_run() {
     let mut v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&lfd).unwrap()).unwrap();
     set(&mut v, "aero.fidelity.lfd.memory_limit_gb", 4.0.into());
-    let small = scratch().join("mesh_study_4gb.json");
+    let small = base.join("mesh_study_4gb.json");
     std::fs::write(&small, v.to_string()).unwrap();
     let o = g(&small, "coarse,fine");
     let err = String::from_utf8_lossy(&o.stderr);

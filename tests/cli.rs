@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 mod common;
 use common::{assert_success, gustkit};
 
-fn scratch(name: &str) -> PathBuf {
+fn scratch(name: &str) -> common::Scratch {
     common::scratch("cli", name)
 }
 

@@ -7,7 +7,7 @@ use std::process::Output;
 mod common;
 use common::gustkit;
 
-fn scratch(name: &str) -> PathBuf {
+fn scratch(name: &str) -> common::Scratch {
     common::scratch("compare", name)
 }
 

@@ -291,6 +291,8 @@ pub fn minimize_managed(
         });
     }
     let scaling = Scaling::new(&lb, &ub, x0);
+    // the clock starts before the start point's evaluation, as the SQP's does
+    let started = std::time::Instant::now();
     let mut s = match resume {
         Some(c) => {
             if c.problem_id != problem_id || c.x.len() != x0.len() {
@@ -329,7 +331,7 @@ pub fn minimize_managed(
             }
         }
     };
-    let (started, elapsed_before) = (std::time::Instant::now(), s.elapsed_s);
+    let elapsed_before = s.elapsed_s;
     s.params = params.clone();
     let inner_params = SqpParams {
         tolerance: params.tolerance,

@@ -87,12 +87,53 @@ pub fn gustkit() -> std::process::Command {
     std::process::Command::new(env!("CARGO_BIN_EXE_gustkit"))
 }
 
-/// An empty scratch folder `gustkit-<suite>-<name>-<pid>` in the temporary folder.
-pub fn scratch(suite: &str, name: &str) -> PathBuf {
+/// A test's scratch folder, removed when the test ends well and kept (its path printed) when it
+/// panics, so a passing test run leaves nothing in the temporary folder.
+pub struct Scratch(PathBuf);
+
+impl Scratch {
+    /// The folder's path.
+    pub fn path(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<std::ffi::OsStr> for Scratch {
+    fn as_ref(&self) -> &std::ffi::OsStr {
+        self.0.as_os_str()
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            eprintln!("scratch folder kept for inspection: {}", self.0.display());
+        } else {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+}
+
+/// An empty scratch folder `gustkit-<suite>-<name>-<pid>` in the temporary folder, removed when
+/// the returned guard drops (kept when the test fails).
+pub fn scratch(suite: &str, name: &str) -> Scratch {
     let d = std::env::temp_dir().join(format!("gustkit-{suite}-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
-    d
+    Scratch(d)
 }
 
 /// Asserts that a gustkit command succeeded, showing its error output when not.
