@@ -42,7 +42,6 @@ fn modes_json_and_report_files() {
     }
     let vtk = std::fs::read_to_string(dir.join("agard445_dlm_analysis/modes.vtk")).unwrap();
     assert!(vtk.contains("POINTS 121 double") && vtk.contains("VECTORS mode_6 double"));
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// `gustkit run` writes results.json and summary.md.
@@ -100,7 +99,6 @@ fn run_writes_results_and_summary() {
         dir.join("agard445_dlm_analysis/psd.png").exists()
             && dir.join("agard445_dlm_analysis/psd.svg").exists()
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A malformed study fails with the file, the field path and the reason, and no panic.
@@ -123,7 +121,6 @@ fn bad_study_names_file_and_field() {
         "{err}"
     );
     assert!(!err.contains("panicked"), "{err}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// An unwritable report folder is a clear error.
@@ -243,7 +240,6 @@ fn gafs_and_aic_files() {
         !o.status.success() && err.contains("surfaces[0].twist"),
         "{err}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A study with a bad aerodynamic section names the field.
@@ -278,7 +274,6 @@ fn bad_aero_section_names_field() {
             "{needle}: {err}"
         );
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// `gustkit check-gradient --json` prints rows with dv, adjoint, fd_best and rel_error; on a
@@ -322,7 +317,6 @@ fn check_gradient_json_rows() {
         .unwrap();
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("unknown design variable"));
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Bad gust and flutter input: σ_w ≤ 0, a frequency grid that leaves turbulence out, an unknown
@@ -389,7 +383,6 @@ fn gust_and_flutter_inputs() {
     assert_success(&o);
     let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(r["flutter_speed_m_s"].is_null() && r["flutter_frequency_hz"].is_null());
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// `optimization.model_management` through the CLI: the small study minimized through a coarser
@@ -450,7 +443,6 @@ fn model_management_runs_and_resumes() {
     assert!(
         whole["final"]["mass_kg"].as_f64().unwrap() < whole["initial"]["mass_kg"].as_f64().unwrap()
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// `gustkit run` with an optimization section (coarse model): results.json has converged,
@@ -644,7 +636,6 @@ fn run_optimization_and_resume() {
         results()["final"]["design_variables"],
         r["final"]["design_variables"]
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// The sweep study on a coarse lattice: `gustkit sweep` runs a 2 × 2 grid of analyses and a zip
@@ -813,7 +804,6 @@ fn sweep_grid_resume_report_and_errors() {
         assert!(c["error"].is_null(), "{c}");
         assert!(metric(c, "optimum mass") < metric(c, "mass"), "{c}");
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// The CFD verification studies on coarse meshes through `gustkit run`: Table 1 in results.json
@@ -940,7 +930,6 @@ fn cfd_verification_studies() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(err.contains(path) && err.contains("bad.json"), "{err}");
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 fn load_study(name: &str) -> serde_json::Value {
@@ -997,7 +986,6 @@ fn lfd_gust_study() {
     let o = run_json(&dir, &bad, "bad.json");
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("cfd.lfd_gust.amplitude_mach"));
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// The typical section on a coarse mesh through `gustkit run`: both aerodynamic models, the
@@ -1079,7 +1067,6 @@ fn typical_section_study() {
         err.contains("typical_section.structure.r_alpha") && err.contains("bad.json"),
         "{err}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Prescribed pitching on a coarse mesh through `gustkit run`: the lift history at every level,
@@ -1116,7 +1103,6 @@ fn pitch_motion_study() {
     let o = run_json(&dir, &bad, "bad.json");
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("cfd.time_motion.motion"));
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Study kinds: a file with none of the kind sections, or two of them, is refused with a clear
@@ -1192,7 +1178,6 @@ fn study_kinds_and_report_kinds() {
             stderr(&o)
         );
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A user error is one line (`error: file: path: reason`) with exit status 1 and no backtrace,
@@ -1474,7 +1459,6 @@ fn discrete_gust_tuned_search_is_reported() {
         "{err}"
     );
     assert!(!reports.join("discrete_short").exists());
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A tabulated gust profile through `gustkit run`: the 1-cos gust of H = 100 ft and 10 m/s
@@ -1551,7 +1535,6 @@ fn tabulated_profile_matches_the_tuned_gust() {
             .contains(&format!("{name} profile")),
         "{csv:.200}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// An optimization with a discrete gust peak limit (issue 30) on the flagship problem made
@@ -1598,7 +1581,6 @@ fn peak_limit_constrains_the_optimum() {
     assert!((0.99..=1.0 + 1e-4).contains(&k1) && p1 <= k1, "{pl}");
     let rms = r["final"]["rms_display"].as_f64().unwrap();
     assert!(rms < 1.5 * 0.999, "the RMS limit is not what binds: {rms}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// The flagship problem made small for end-to-end optimization tests: 2 modes (damping ratio
@@ -1695,7 +1677,6 @@ fn flutter_of_a_runs_final_design() {
         err.contains("bad.json") && err.contains("holds no finished optimization"),
         "{err}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// `gustkit run --design` with an analysis study: the flagship's DLM model (11 modes, 10 × 15
@@ -1752,5 +1733,4 @@ fn run_of_a_runs_final_design() {
     // a study of another kind has no plate design to take
     let err = refused(&root.join("studies/typical_section_lfd.json"));
     assert!(err.contains("works on wing studies"), "{err}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -136,7 +136,6 @@ fn cross_evaluation_and_compare_report() {
     );
     // written whole: no staging folder left beside it
     assert!(!dir.join(".cmp.partial").exists());
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// The reference DLM optimum, cross-evaluated with a DLM lattice far below the box rule (3 × 4
@@ -174,7 +173,6 @@ fn unstable_cross_evaluation_is_recorded() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let md = std::fs::read_to_string(out.join("compare.md")).unwrap();
     assert!(md.contains("unstable at the flight condition"), "{md}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Runs that cannot be compared are refused with the file and the reason, and nothing is
@@ -215,7 +213,6 @@ fn compare_refuses_what_it_cannot_compare() {
         &["kind: missing", "results schema 1"],
     );
     check(dir.join("nothing"), &["cannot read"]);
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// `aero.compare_with` in an analysis run: the initial design's GAFs, gust response and p-k
@@ -305,5 +302,4 @@ fn analysis_with_a_second_fidelity() {
         stderr.contains("aero.compare_with.dlm") && stderr.contains("n_chord"),
         "{stderr}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }

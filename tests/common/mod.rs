@@ -91,13 +91,6 @@ pub fn gustkit() -> std::process::Command {
 /// panics, so a passing test run leaves nothing in the temporary folder.
 pub struct Scratch(PathBuf);
 
-impl Scratch {
-    /// The folder's path.
-    pub fn path(&self) -> &Path {
-        &self.0
-    }
-}
-
 impl std::ops::Deref for Scratch {
     type Target = Path;
     fn deref(&self) -> &Path {
