@@ -139,11 +139,11 @@ pub enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// The LFD analysis of the study's initial design on the built-in mesh levels: RMS, GAF
-    /// differences to the DLM of `aero.compare_with`, model-build and GAF-table times, peak
-    /// memory, and over three levels the Richardson extrapolate (mesh_study.json, a figure and
-    /// summary.md in reports/<study name>/; levels already in the file are kept, so each level
-    /// can run on its own)
+    /// The LFD analysis of the study's initial design (or of a run's optimum, `--design`) on
+    /// the built-in mesh levels: RMS, GAF differences to the DLM of `aero.compare_with`,
+    /// model-build and GAF-table times, peak memory, and over three levels the Richardson
+    /// extrapolate (mesh_study.json, a figure and summary.md in reports/<study name>/; levels
+    /// already in the file are kept, so each level can run on its own)
     MeshStudy {
         study: PathBuf,
         /// Comma-separated levels: coarse, medium, fine.
@@ -152,6 +152,11 @@ pub enum Command {
         /// Folder that holds the per-study report folders (the study's is <reports>/<study name>).
         #[arg(long, default_value = "reports")]
         reports: PathBuf,
+        /// Study the final design of a run (its results.json) instead of the study's initial
+        /// design: another run's optimum on the mesh levels, against the study's DLM. The
+        /// report goes to <reports>/<study>_at_<run folder>/.
+        #[arg(long, value_name = "RESULTS_JSON")]
+        design: Option<PathBuf>,
     },
     /// Benchmarks of a study (warm-up, repetitions, median/min/max, thread count): the
     /// structural chain (assembly, modes, all sensitivities), the aerodynamics, the gust
@@ -244,10 +249,19 @@ pub fn dispatch(cli: Cli) -> Result<runner::Outcome> {
             study,
             levels,
             reports,
+            design,
         } => {
-            let study = wing(&study, "mesh-study")?;
+            let study = match (wing(&study, "mesh-study")?, design.as_deref()) {
+                (s, Some(d)) => s.at_final_design(d)?,
+                (s, None) => s,
+            };
             let dir = reports.join(&study.spec.name);
-            done(runner::wing::mesh_study::mesh_study(&study, &levels, &dir))
+            done(runner::wing::mesh_study::mesh_study(
+                &study,
+                &levels,
+                &dir,
+                design.as_deref(),
+            ))
         }
         Command::Bench {
             study,

@@ -449,8 +449,9 @@ fn flutter_without_a_flutter_section_names_what_to_add() {
 }
 
 /// `gustkit mesh-study` refuses, with exit status 1 and nothing written: a study that is not an
-/// LFD one, an unknown level, and a level whose memory estimate is above the study's
-/// `memory_limit_gb` (named with the estimate and the limit, before anything runs).
+/// LFD one, an unknown level, a level whose memory estimate is above the study's
+/// `memory_limit_gb` (named with the estimate and the limit, before anything runs), and a
+/// `--design` file that is not there.
 #[test]
 fn mesh_study_refuses_what_it_cannot_run() {
     let base = scratch();
@@ -489,5 +490,22 @@ fn mesh_study_refuses_what_it_cannot_run() {
         "{err}"
     );
     assert_eq!(err.lines().count(), 1, "{err}");
+    // `--design` of a results.json that is not there: the file named, nothing run
+    let missing = base.join("no_run").join("results.json");
+    let o = Command::new(env!("CARGO_BIN_EXE_gustkit"))
+        .arg("mesh-study")
+        .arg(&lfd)
+        .args(["--levels", "coarse", "--reports"])
+        .arg(&dir)
+        .arg("--design")
+        .arg(&missing)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("no_run") && err.contains("cannot read the file"),
+        "{err}"
+    );
     assert!(!dir.exists(), "nothing written");
 }

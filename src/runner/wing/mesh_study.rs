@@ -70,6 +70,15 @@ pub struct Richardson {
 #[derive(Clone, Debug, Deserialize, Serialize)]
 pub struct MeshStudy {
     pub study: String,
+    /// The results.json whose final design is studied (`--design`); none: the study's initial
+    /// design.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub design_from: Option<String>,
+    /// Hash of what every row must share (wing, design, structure, modes, flight, gust,
+    /// frequencies, the DLM compared with; not the LFD's level or solver settings): rows of
+    /// another case are never mixed in. Absent in files written before it was kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub case_fingerprint: Option<String>,
     pub output: String,
     /// The DLM's RMS of the first output (the study's `aero.compare_with`), m.
     pub dlm_rms: f64,
@@ -84,8 +93,14 @@ const REPORTED_K: [f64; 4] = [0.0, 0.5, 1.0, 2.0];
 /// Cells refine by 2 in each direction from one level to the next.
 const REFINEMENT_RATIO: f64 = 2.0;
 
-/// Runs the levels of `levels` (names) that `dir/mesh_study.json` does not hold yet.
-pub fn mesh_study(study: &Study, levels: &[String], dir: &Path) -> Result<()> {
+/// Runs the levels of `levels` (names) that `dir/mesh_study.json` does not hold yet;
+/// `design_from` names the results.json whose final design `study` carries (`--design`).
+pub fn mesh_study(
+    study: &Study,
+    levels: &[String],
+    dir: &Path,
+    design_from: Option<&Path>,
+) -> Result<()> {
     let file = study.file.display().to_string();
     let Some(crate::study::AeroSpec {
         fidelity: FidelitySpec::Lfd(_),
@@ -117,15 +132,22 @@ pub fn mesh_study(study: &Study, levels: &[String], dir: &Path) -> Result<()> {
     let case_other = other.resolve()?;
     let mut dlm = Some(aeroelastic(&case_other, &case_other.initial.to_vec()).context("the DLM")?);
     let dlm_table = dlm.as_ref().expect("just built").table.clone();
+    let case = case_fingerprint(study)?;
     let mut doc: MeshStudy = match std::fs::read_to_string(&path) {
-        Ok(text) => serde_json::from_str(&text)
-            .with_context(|| format!("{}: not a mesh study", path.display()))?,
+        Ok(text) => {
+            let doc: MeshStudy = serde_json::from_str(&text)
+                .with_context(|| format!("{}: not a mesh study", path.display()))?;
+            same_case(&doc, &case, &path)?;
+            doc
+        }
         Err(_) => {
             // the DLM's RMS: the reference of every level (its model built once, above)
             let rms = first_rms(dlm.take().expect("built once"), &settings)
                 .context("the DLM's gust response")?;
             MeshStudy {
                 study: study.spec.name.clone(),
+                design_from: design_from.map(|d| d.display().to_string()),
+                case_fingerprint: None,
                 output: output.clone(),
                 dlm_rms: rms[0],
                 dlm_model: other
@@ -155,6 +177,7 @@ pub fn mesh_study(study: &Study, levels: &[String], dir: &Path) -> Result<()> {
             row.baseline_memory_gb.unwrap_or(f64::NAN)
         );
         doc.rows.push(row);
+        doc.case_fingerprint = Some(case.clone());
         doc.rows.sort_by_key(|r| r.cells);
         doc.richardson = richardson(&doc);
         write_atomic(&path, serde_json::to_string_pretty(&doc)?.as_bytes())?;
@@ -242,6 +265,37 @@ fn fingerprint(s: &Study) -> Result<String> {
         "{:016x}",
         super::optimize::fnv(&serde_json::to_string(&spec)?)
     ))
+}
+
+/// A hash of what the rows of one mesh study share: the study without its name, description
+/// and LFD fidelity (level and solver settings), so a row is of the same wing, design, modes,
+/// flight, gust, frequencies and DLM as the others whatever memory limit or GMRES batch it ran
+/// with.
+fn case_fingerprint(s: &Study) -> Result<String> {
+    let mut v = serde_json::to_value(&s.spec)?;
+    if let Some(o) = v.as_object_mut() {
+        o.remove("name");
+        o.remove("description");
+        if let Some(a) = o.get_mut("aero").and_then(|a| a.as_object_mut()) {
+            a.remove("fidelity");
+        }
+    }
+    Ok(format!(
+        "{:016x}",
+        super::optimize::fnv(&serde_json::to_string(&v)?)
+    ))
+}
+
+/// Refuses a `mesh_study.json` whose rows are of another case (another design, modes,
+/// frequencies, …): its rows and this run's must not share a table or an extrapolate.
+fn same_case(doc: &MeshStudy, case: &str, path: &Path) -> Result<()> {
+    match doc.case_fingerprint.as_deref() {
+        Some(f) if f != case => bail!(
+            "{}: its rows were computed for another case (design, modes, flight, gust, frequencies or the DLM compared with differ from this study's): move the file away or give --reports another folder",
+            path.display()
+        ),
+        _ => Ok(()),
+    }
 }
 
 /// The partial table in `file` when it is this level's, of this study and of `n_shapes`
@@ -492,8 +546,12 @@ fn figure(doc: &MeshStudy) -> crate::report::figures::LinePlot {
 
 fn summary(doc: &MeshStudy) -> String {
     let to_in = 1.0 / 0.0254;
+    let design = match &doc.design_from {
+        Some(f) => format!("the final design of `{f}`"),
+        None => "the study's initial design".into(),
+    };
     let mut s = format!(
-        "# Mesh study: {}\n\nRMS of `{}` on the built-in LFD mesh levels; the DLM ({}) gives {:.4} in.\n\n| level | cells | RMS (in) | vs DLM | model build (s) | GAF table (s) | peak memory (GB) | threads |\n|---|---|---|---|---|---|---|---|\n",
+        "# Mesh study: {}\n\nRMS of `{}` at {design} on the built-in LFD mesh levels; the DLM ({}) gives {:.4} in.\n\n| level | cells | RMS (in) | vs DLM | model build (s) | GAF table (s) | peak memory (GB) | threads |\n|---|---|---|---|---|---|---|---|\n",
         doc.study,
         doc.output,
         doc.dlm_model,
@@ -527,11 +585,16 @@ fn summary(doc: &MeshStudy) -> String {
     match &doc.richardson {
         Some(r) => {
             s += &format!(
-                "\nRichardson extrapolate of the three levels: {:.4} in (observed order {:.2}); the DLM lies {:+.1} % from it (the paper: DLM 1.94 in against its LFD's 1.88 in, the LFD −3.1 %).\n",
+                "\nRichardson extrapolate of the three levels: {:.4} in (observed order {:.2}); the DLM lies {:+.1} % from it",
                 r.extrapolate * to_in,
                 r.order,
                 r.dlm_difference_percent
-            )
+            );
+            s += if doc.design_from.is_none() {
+                " (at the flagship's initial design the paper finds DLM 1.94 in against its LFD's 1.88 in, the LFD −3.1 %).\n"
+            } else {
+                ".\n"
+            };
         }
         None => s += "\nNo extrapolate: it needs three levels converging monotonically.\n",
     }
@@ -645,6 +708,68 @@ mod tests {
         assert_ne!(plain, print(&|l| l.gmres_tolerance *= 0.1));
     }
 
+    /// The rows of one mesh study share a case: the LFD's level, memory limit and the study's
+    /// name leave the case fingerprint; another design (a run's optimum, `--design`) or
+    /// another mode count changes it, and a file of another case is refused (one written
+    /// before the fingerprint was kept is accepted).
+    #[test]
+    fn rows_of_another_case_are_refused() {
+        let file =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("studies/agard445_lfd_mesh_study.json");
+        let study = Study::load(&file).unwrap();
+        let plain = case_fingerprint(&study).unwrap();
+        let mut settings = study.clone();
+        put_on_level(&mut settings, WingMeshLevel::Fine).unwrap();
+        match settings.spec.aero.as_mut().map(|a| &mut a.fidelity) {
+            Some(FidelitySpec::Lfd(l)) => l.memory_limit_gb = 23.0,
+            _ => panic!("an LFD study"),
+        }
+        settings.spec.name = "renamed".into();
+        assert_eq!(plain, case_fingerprint(&settings).unwrap());
+        let mut modes = study.clone();
+        modes.spec.structure.modes = crate::study::schema::ModesSpec::Count(7);
+        assert_ne!(plain, case_fingerprint(&modes).unwrap());
+        // a run's optimum: every thickness 10 % thinner
+        let dir = std::env::temp_dir().join(format!("gustkit-mesh-case-{}", std::process::id()));
+        let x = study.initial_design().unwrap();
+        let names: Vec<String> = (0..x.len()).map(|i| x.name(i)).collect();
+        let mut thin = x.to_vec();
+        for t in thin.iter_mut().take(x.thickness.len()) {
+            *t *= 0.9;
+        }
+        let results = dir.join("run").join("results.json");
+        std::fs::create_dir_all(results.parent().unwrap()).unwrap();
+        std::fs::write(
+            &results,
+            serde_json::json!({"design_variable_names": names, "final": {"design_variables": thin}})
+                .to_string(),
+        )
+        .unwrap();
+        let optimum = study.at_final_design(&results).unwrap();
+        let other = case_fingerprint(&optimum).unwrap();
+        assert_ne!(plain, other);
+        let path = dir.join("mesh_study.json");
+        let doc = MeshStudy {
+            study: study.spec.name.clone(),
+            design_from: None,
+            case_fingerprint: Some(plain.clone()),
+            output: "tip_te_w".into(),
+            dlm_rms: 0.05,
+            dlm_model: String::new(),
+            rows: Vec::new(),
+            richardson: None,
+        };
+        assert!(same_case(&doc, &plain, &path).is_ok());
+        let refused = same_case(&doc, &other, &path).unwrap_err().to_string();
+        assert!(refused.contains("mesh_study.json") && refused.contains("another case"));
+        let older = MeshStudy {
+            case_fingerprint: None,
+            ..doc
+        };
+        assert!(same_case(&older, &other, &path).is_ok());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     /// A partial table is used only when it is this level's, of this study and consistent;
     /// anything else is ignored (never trusted).
     #[test]
@@ -719,6 +844,8 @@ mod tests {
             let r = |h: f64| 0.05 + c * f64::powf(h, p);
             let mut doc = MeshStudy {
                 study: "s".into(),
+                design_from: None,
+                case_fingerprint: None,
                 output: "o".into(),
                 dlm_rms: 0.048,
                 dlm_model: "DLM".into(),
@@ -735,6 +862,8 @@ mod tests {
         }
         let mut doc = MeshStudy {
             study: "s".into(),
+            design_from: None,
+            case_fingerprint: None,
             output: "o".into(),
             dlm_rms: 0.048,
             dlm_model: "DLM".into(),
