@@ -424,13 +424,21 @@ fn model_management_runs_and_resumes() {
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert_eq!(o.status.code(), Some(3), "{stdout}");
     assert!(stdout.contains("outer iteration   1"), "{stdout}");
+    // the start point's evaluation has its own line, before the first outer iteration's
+    let start = stdout
+        .find("start point: mass")
+        .expect("the start point's line");
+    assert!(
+        start < stdout.find("outer iteration   0").unwrap(),
+        "{stdout}"
+    );
     assert!(!r["converged"].as_bool().unwrap());
     assert!(dir.join("managed/checkpoint_managed.json").exists());
     v["optimization"]["model_management"]["max_iterations"] = 40.into();
     let (o, resumed) = run(&v, "managed", &["--resume"]);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(
-        stdout.contains("resuming from outer iteration 2"),
+        stdout.contains("resuming from outer iteration 2") && !stdout.contains("start point: mass"),
         "{stdout}"
     );
     assert!(resumed["converged"].as_bool().unwrap(), "{stdout}");

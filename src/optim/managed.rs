@@ -141,8 +141,13 @@ pub struct ManagedInfo {
     pub elapsed_s: f64,
 }
 
-/// Sees every outer iteration and its checkpoint (saved by the observer, as it wishes).
+/// Sees the start point's evaluation and every outer iteration with its checkpoint (saved by
+/// the observer, as it wishes).
 pub trait ManagedObserver {
+    /// The start point's high-fidelity function and gradient are done (a fresh run only; a
+    /// resumed run has them in its checkpoint): its cost is then not counted in the first
+    /// outer iteration's.
+    fn start(&mut self, _values: &Values) {}
     fn iteration(
         &mut self,
         record: &ManagedIterate,
@@ -315,6 +320,7 @@ pub fn minimize_managed(
                 iteration: 0,
                 source,
             })?;
+            observer.start(&values);
             ManagedCheckpoint {
                 problem_id: problem_id.to_string(),
                 params: params.clone(),

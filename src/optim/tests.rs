@@ -908,8 +908,12 @@ fn model_management_converges_to_the_high_fidelity_optimum() {
         low_alone.x
     );
     let x_star = [1.0, 4.7429994, 3.8211503, 1.3794082];
-    struct Keep(Vec<ManagedCheckpoint>);
+    /// The checkpoints, and how many outer iterations had been seen at each `start` call.
+    struct Keep(Vec<ManagedCheckpoint>, Vec<usize>);
     impl ManagedObserver for Keep {
+        fn start(&mut self, _: &Values) {
+            self.1.push(self.0.len());
+        }
         fn iteration(
             &mut self,
             _: &ManagedIterate,
@@ -920,7 +924,7 @@ fn model_management_converges_to_the_high_fidelity_optimum() {
             Ok(Control::Continue)
         }
     }
-    let mut kept = Keep(Vec::new());
+    let mut kept = Keep(Vec::new(), Vec::new());
     let exact =
         minimize_managed(&mut hs71(), &mut hs71(), &x0, &params, "m", None, &mut ()).unwrap();
     let wrong = minimize_managed(
@@ -948,7 +952,11 @@ fn model_management_converges_to_the_high_fidelity_optimum() {
             assert!((a - b).abs() < 1e-5, "{name}: {:?}", r.x);
         }
     }
-    // resume from the third outer iteration's checkpoint: the same end, bit for bit
+    // the start point's evaluation is reported once, before the first outer iteration
+    assert_eq!(kept.1, vec![0]);
+    // resume from the third outer iteration's checkpoint: the same end, bit for bit, and no
+    // start point evaluated again
+    let mut resumed = Keep(Vec::new(), Vec::new());
     let again = minimize_managed(
         &mut hs71(),
         &mut hs71_low(),
@@ -956,11 +964,12 @@ fn model_management_converges_to_the_high_fidelity_optimum() {
         &params,
         "m",
         Some(kept.0[2].clone()),
-        &mut (),
+        &mut resumed,
     )
     .unwrap();
     assert_eq!(again.x, wrong.x);
     assert_eq!(again.history, wrong.history);
+    assert!(resumed.1.is_empty());
     // fidelities posing different constraints are refused
     let mut other = Fns {
         lb: vec![1.0; 4],

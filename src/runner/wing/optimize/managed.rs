@@ -29,6 +29,20 @@ struct ManagedFile {
 }
 
 impl ManagedObserver for ManagedFile {
+    fn start(&mut self, values: &crate::optim::Values) {
+        let took = self.last.elapsed().as_secs_f64();
+        self.last = Instant::now();
+        if !self.quiet {
+            let (scale, unit, limit) = self.rms;
+            println!(
+                "start point: mass {:.5} kg ({:+.2} %), RMS {:.4} {unit}: its high-fidelity function and gradient {}",
+                values.f * self.mass0,
+                100.0 * (values.f - 1.0),
+                (values.ineq[0] + 1.0) * limit * scale,
+                progress::duration(took)
+            );
+        }
+    }
     fn iteration(
         &mut self,
         it: &ManagedIterate,
