@@ -129,13 +129,38 @@ fn cross_evaluation_and_compare_report() {
     let cons = doc["consistency"].as_array().unwrap();
     assert_eq!(cons.len(), 1, "{cons:?}");
     assert_eq!(cons[0]["relative_difference"].as_f64().unwrap(), 0.0);
+    assert_eq!(ra["aero_model"], "DLM 3 × 4 boxes");
+    assert_eq!(cons[0]["model_here"], ra["aero_model"]);
+    assert_eq!(cons[0]["model_there"], ra["aero_model"]);
     let md = std::fs::read_to_string(out.join("compare.md")).unwrap();
+    assert!(!md.contains("Where the two models differ"), "{md}");
     assert!(
         md.contains("## Cross-evaluation") && md.contains("cmp_b (dlm)"),
         "{md}"
     );
     // written whole: no staging folder left beside it
     assert!(!dir.join(".cmp.partial").exists());
+
+    // a run C on another lattice from A's optimum, cross-evaluated with a third: no evaluation
+    // of C's has A's model, so its row compares two models, and the report says so
+    let mut c = b.clone();
+    c["name"] = "cmp_c".into();
+    c["optimization"]["max_iterations"] = 1.into();
+    c["aero"]["fidelity"]["dlm"]["n_chord"] = 4.into();
+    c["aero"]["fidelity"]["dlm"]["n_span"] = 5.into();
+    run(&dir, &c);
+    let out = dir.join("cmp_ac");
+    let o = compare(&[dir.join("cmp_a"), dir.join("cmp_c")], &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("compare.json")).unwrap()).unwrap();
+    let cons = doc["consistency"].as_array().unwrap();
+    assert_eq!(cons.len(), 1, "{cons:?}");
+    assert_eq!(cons[0]["model_here"], "DLM 4 × 5 boxes");
+    assert_eq!(cons[0]["model_there"], "DLM 3 × 4 boxes");
+    assert!(cons[0]["relative_difference"].as_f64().unwrap() > 0.0);
+    let md = std::fs::read_to_string(out.join("compare.md")).unwrap();
+    assert!(md.contains("Where the two models differ"), "{md}");
 }
 
 /// The reference DLM optimum, cross-evaluated with a DLM lattice far below the box rule (3 × 4

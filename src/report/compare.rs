@@ -102,7 +102,8 @@ struct CrossRow {
 }
 
 /// A start design of one run that is another run's optimum, analysed with that run's fidelity
-/// by both: the two numbers must agree (the same design, the same model).
+/// by both: the two numbers must agree where the two models are the same (the same lattice or
+/// mesh); where they differ the row compares the two models, not the runs' consistency.
 #[derive(Serialize)]
 struct Consistency {
     run: String,
@@ -111,6 +112,16 @@ struct Consistency {
     rms_here: f64,
     rms_there: f64,
     relative_difference: f64,
+    /// The model of each side in words (absent where a results.json predates the record).
+    model_here: Option<String>,
+    model_there: Option<String>,
+}
+
+impl Consistency {
+    /// Whether both sides used one model: unknown where either side did not record it.
+    fn same_model(&self) -> Option<bool> {
+        Some(self.model_here.as_ref()? == self.model_there.as_ref()?)
+    }
 }
 
 /// compare.json: the tables of the report as numbers.
@@ -179,12 +190,18 @@ fn consistency(runs: &[ComparedRun]) -> Vec<Consistency> {
                 .iter()
                 .find(|d| d.design_variables == of.final_.design_variables);
             if let Some(d) = same {
+                // that run's own model where this run evaluated with it, else its fidelity
+                let there_model = other.results.aero_model.as_ref();
                 let here = d
                     .evaluations
                     .iter()
-                    .find(|e| e.fidelity == fidelity)
-                    .and_then(|e| e.rms_display);
-                if let Some(rms_here) = here {
+                    .find(|e| {
+                        e.fidelity == fidelity
+                            && e.model.is_some()
+                            && e.model.as_ref() == there_model
+                    })
+                    .or_else(|| d.evaluations.iter().find(|e| e.fidelity == fidelity));
+                if let Some((rms_here, e)) = here.and_then(|e| Some((e.rms_display?, e))) {
                     out.push(Consistency {
                         run: r.label.clone(),
                         other: other.label.clone(),
@@ -192,6 +209,8 @@ fn consistency(runs: &[ComparedRun]) -> Vec<Consistency> {
                         rms_here,
                         rms_there: of.final_.rms_display,
                         relative_difference: (rms_here / of.final_.rms_display - 1.0).abs(),
+                        model_here: e.model.clone(),
+                        model_there: other.results.aero_model.clone(),
                     });
                 }
             }
@@ -396,12 +415,30 @@ fn markdown(runs: &[ComparedRun], doc: &CompareDoc, figures: &[&str]) -> String 
         }
     }
     if !doc.consistency.is_empty() {
-        md += "\nThe same design with the same fidelity in two runs (a warm start's first design is the other run's optimum):\n\n| run | other run | fidelity | RMS here | RMS there | relative difference |\n|---|---|---|---:|---:|---:|\n";
+        md += "\nThe same design with the same fidelity in two runs (a warm start's first design is the other run's optimum); the two numbers must agree where the models are the same:\n\n| run | other run | fidelity | model here | model there | RMS here | RMS there | relative difference |\n|---|---|---|---|---|---:|---:|---:|\n";
+        let words = |m: &Option<String>| m.clone().unwrap_or_else(|| "not recorded".into());
         for c in &doc.consistency {
             md += &format!(
-                "| {} | {} | {} | {:.6} | {:.6} | {:.1e} |\n",
-                c.run, c.other, c.fidelity, c.rms_here, c.rms_there, c.relative_difference
+                "| {} | {} | {} | {} | {} | {:.6} | {:.6} | {:.1e} |\n",
+                c.run,
+                c.other,
+                c.fidelity,
+                words(&c.model_here),
+                words(&c.model_there),
+                c.rms_here,
+                c.rms_there,
+                c.relative_difference
             );
+        }
+        if doc
+            .consistency
+            .iter()
+            .any(|c| c.same_model() == Some(false))
+        {
+            md += "\nWhere the two models differ (another lattice or mesh), the row measures the difference of the models, not the runs' consistency.\n";
+        }
+        if doc.consistency.iter().any(|c| c.same_model().is_none()) {
+            md += "\nWhere a model is not recorded (results.json written before 2026-12-07), whether the two sides share one is unknown: the same fidelity on another lattice or mesh differs by its discretization.\n";
         }
     }
     md += "\n## Figures\n\n";

@@ -303,6 +303,10 @@ pub struct Timing {
 pub struct FidelityEvaluation {
     /// `dlm` or `lfd`.
     pub fidelity: String,
+    /// The fidelity's model in words (lattice, mesh or strips; absent in results before this
+    /// field).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model: Option<String>,
     /// RMS of each gust output (SI), in the study's output order; absent where this fidelity
     /// finds the design unstable at the flight condition (see `unstable`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -400,6 +404,10 @@ pub struct RunResults {
     /// The aerodynamic fidelity of the run (`dlm`, `lfd`; absent in results before this field).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fidelity: Option<String>,
+    /// Its model in words (lattice, mesh or strips; absent in results before this field), so
+    /// that a comparison knows whether two runs of one fidelity share a model.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub aero_model: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gust: Option<GustResults>,
     /// The discrete gust analysis at the study's design (absent without the section).

@@ -24,6 +24,7 @@ pub(super) fn fidelity_evaluation(
     };
     Ok(FidelityEvaluation {
         fidelity: aero.name.to_string(),
+        model: None,
         rms_display: rms.as_ref().map(|r| r[output] * unit_scale),
         rms,
         unstable,
@@ -32,6 +33,11 @@ pub(super) fn fidelity_evaluation(
         gafs: table.clone(),
         time_s: 0.0,
     })
+}
+
+/// A study's aerodynamic model in words (lattice, mesh or strips).
+fn model_words(s: &Study) -> Option<String> {
+    s.spec.aero.as_ref().map(|a| a.fidelity.words())
 }
 
 /// A design to cross-evaluate: its name, design vector, and its evaluation with the study's own
@@ -71,6 +77,7 @@ pub(super) fn cross_evaluate(
             v_max,
         )?;
         e.time_s = t.elapsed().as_secs_f64();
+        e.model = model_words(s);
         Ok(e)
     };
     let designs = designs
@@ -79,6 +86,7 @@ pub(super) fn cross_evaluate(
             let own_eval = match own {
                 Some((ev, t)) => FidelityEvaluation {
                     time_s: *t,
+                    model: model_words(study),
                     ..fidelity_evaluation(
                         (&ev.aero, &ev.modes, &ev.table),
                         Ok(ev),
