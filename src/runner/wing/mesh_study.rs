@@ -535,7 +535,7 @@ fn figure(doc: &MeshStudy) -> crate::report::figures::LinePlot {
         dotted.push(2);
     }
     let mut plot = line_plot(
-        format!("{}: RMS of {} against cell size", doc.study, doc.output),
+        format!("RMS of {} against cell size", doc.output),
         "cell size / coarse cell size",
         "RMS (in)",
         series,
