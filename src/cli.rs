@@ -164,8 +164,10 @@ pub enum Command {
     Bench {
         study: PathBuf,
         /// Timed repetitions of each line after one warm-up run (median, min and max are
-        /// reported), at least 1; default 20, and 1 for an LFD study (a GAF table takes a minute).
-        #[arg(long, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
+        /// reported); default 20, and 1 for an LFD study (a GAF table takes a minute). 0, for an
+        /// LFD study only: the first calls alone (the model, one GAF table, one reverse call and
+        /// their peak memory), for a mesh level where a call takes hours.
+        #[arg(long, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(0..))]
         repeat: Option<usize>,
         /// Also time the study's whole optimization once (from scratch, no checkpoint).
         #[arg(long)]
@@ -174,12 +176,27 @@ pub enum Command {
         /// per-level figures of the same study.
         #[arg(long)]
         mesh: Option<String>,
+        /// With `--repeat 0`: the GAF table and reverse call at these reduced frequencies
+        /// instead of the study's (comma separated): the cost and peak memory of one frequency
+        /// of a level where the whole table takes hours.
+        #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+        k: Vec<f64>,
     },
 }
 
 /// Loads a study that must be a wing study (`command` names the subcommand in the error).
 fn wing(file: &Path, command: &str) -> Result<crate::study::Study> {
     LoadedStudy::load(file)?.into_wing(file, command)
+}
+
+/// The wing study of `file`, at the final design of the run whose results.json is `design`
+/// where one is given (`--design` of `flutter` and `mesh-study`).
+fn wing_at(file: &Path, command: &str, design: Option<&Path>) -> Result<crate::study::Study> {
+    let study = wing(file, command)?;
+    Ok(match design {
+        Some(d) => study.at_final_design(d)?,
+        None => study,
+    })
 }
 
 /// Runs the parsed command line.
@@ -226,10 +243,7 @@ pub fn dispatch(cli: Cli) -> Result<runner::Outcome> {
             no_resolution_check,
             design,
         } => done(runner::wing::flutter::flutter(
-            &match (wing(&study, "flutter")?, design) {
-                (s, Some(d)) => s.at_final_design(&d)?,
-                (s, None) => s,
-            },
+            &wing_at(&study, "flutter", design.as_deref())?,
             json,
             &reports,
             !no_resolution_check,
@@ -251,10 +265,7 @@ pub fn dispatch(cli: Cli) -> Result<runner::Outcome> {
             reports,
             design,
         } => {
-            let study = match (wing(&study, "mesh-study")?, design.as_deref()) {
-                (s, Some(d)) => s.at_final_design(d)?,
-                (s, None) => s,
-            };
+            let study = wing_at(&study, "mesh-study", design.as_deref())?;
             let dir = reports.join(&study.spec.name);
             done(runner::wing::mesh_study::mesh_study(
                 &study,
@@ -268,10 +279,14 @@ pub fn dispatch(cli: Cli) -> Result<runner::Outcome> {
             repeat,
             optimization,
             mesh,
+            k,
         } => {
             let mut study = wing(&study, "bench")?;
             if let Some(level) = mesh {
                 runner::wing::mesh_study::set_level(&mut study, &level)?;
+            }
+            if !k.is_empty() {
+                runner::bench::set_frequencies(&mut study, &k, repeat)?;
             }
             done(runner::bench::bench(&study, repeat, optimization))
         }

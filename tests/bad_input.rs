@@ -353,7 +353,7 @@ fn byte_order_mark_is_accepted() {
 }
 
 /// Command-line values: a negative reduced frequency is a value (and refused as one), a zero
-/// repeat count is refused, several design variables follow one `--dv`, and an `--out` that is
+/// repeat count (an LFD study's first calls only) is refused for a DLM study, several design variables follow one `--dv`, and an `--out` that is
 /// a folder is refused without leaving a temporary file in it.
 #[test]
 fn command_line_values() {
@@ -378,6 +378,16 @@ fn command_line_values() {
     assert!(err.contains("--k: k[0]") && err.contains("-0.5"), "{err}");
     let o = g()
         .args(["bench", study.to_str().unwrap(), "--repeat", "0"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("--repeat 0") && err.contains("LFD study"),
+        "{err}"
+    );
+    let o = g()
+        .args(["bench", study.to_str().unwrap(), "--repeat", "-1"])
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(2));

@@ -866,7 +866,8 @@ fn steady_euler_lift_converges_on_the_medium_mesh() {
 
 /// `gustkit bench` on an LFD study (the small wing mesh): the model build once, the first GAF
 /// table and reverse call as the warm-up, then `--repeat` timed runs of each with median, min
-/// and max, and the thread count in the header.
+/// and max, and the thread count in the header; `--repeat 0` the first calls alone (their
+/// times and peaks, no repetitions and no warm-start figures).
 #[test]
 fn lfd_bench_prints_repetitions() {
     let dir = std::env::temp_dir().join(format!("gustkit-lfd-bench-{}", std::process::id()));
@@ -897,6 +898,50 @@ fn lfd_bench_prints_repetitions() {
                 .any(|l| l.contains("GAF reverse, Jacobians reused")),
         "{out}"
     );
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_gustkit"))
+        .args(["bench", file.to_str().unwrap(), "--repeat", "0"])
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        out.contains("GAF table, first call") && out.contains("GAF reverse, first call"),
+        "{out}"
+    );
+    assert!(out.contains("core-seconds a cell (first calls)"), "{out}");
+    assert!(
+        !out.lines().any(|l| l.contains("GAF") && l.contains("reps"))
+            && !out.contains("neighbouring design"),
+        "{out}"
+    );
+    // one frequency's first calls (fewer than the gust spline's 4: the response is not run)
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_gustkit"))
+        .args([
+            "bench",
+            file.to_str().unwrap(),
+            "--repeat",
+            "0",
+            "--k",
+            "0.5",
+        ])
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.contains("1 reduced frequencies"), "{out}");
+    for (args, says) in [
+        (vec!["--k", "0.5"], "--k needs --repeat 0"),
+        (vec!["--repeat", "0", "--k", "0.5,0.5"], "--k: k[1]"),
+    ] {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_gustkit"))
+            .args(["bench", file.to_str().unwrap()])
+            .args(&args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -103,6 +103,11 @@ pub fn bench(study: &Study, repeat: Option<usize>, optimization: bool) -> Result
         Some(crate::study::FidelitySpec::Lfd(_))
     );
     let repeat = repeat.unwrap_or(if lfd { 1 } else { 20 });
+    if repeat == 0 && !lfd {
+        anyhow::bail!(
+            "--repeat 0 (the first calls only) is for an LFD study; this study's aerodynamics repeat in seconds: give --repeat 1 or more"
+        );
+    }
     let file = &study.file;
     let study = study.clone();
     println!(
@@ -110,7 +115,7 @@ pub fn bench(study: &Study, repeat: Option<usize>, optimization: bool) -> Result
         study.spec.name,
         rayon::current_num_threads()
     );
-    let t = bench_structure(&study, repeat)?;
+    let t = bench_structure(&study, repeat.max(1))?;
     println!(
         "structure ({} design variables, {} modes):",
         t.n_dv, t.n_modes
@@ -156,19 +161,19 @@ pub fn bench(study: &Study, repeat: Option<usize>, optimization: bool) -> Result
             "  GAF table, first call                                        {:>9.2} s",
             t.gafs_first_s
         );
-        println!(
-            "{}",
-            t.gafs.line_s("GAF table (the function's aerodynamics)")
-        );
+        if let Some(gafs) = &t.gafs {
+            println!("{}", gafs.line_s("GAF table (the function's aerodynamics)"));
+        }
         println!(
             "  GAF reverse, first call (assembles the Jacobians), all variables {:>7.2} s",
             t.vjp_first_s
         );
-        println!(
-            "{}",
-            t.vjp
-                .line_s("GAF reverse, Jacobians reused (∂R/∂x recomputed a call)")
-        );
+        if let Some(vjp) = &t.vjp {
+            println!(
+                "{}",
+                vjp.line_s("GAF reverse, Jacobians reused (∂R/∂x recomputed a call)")
+            );
+        }
         let cells = spec.mesh_spec().n_cells() as f64;
         for (what, peak) in [
             ("model (mesh, steady state, Jacobians)", t.peak_build_gb),
@@ -182,18 +187,27 @@ pub fn bench(study: &Study, repeat: Option<usize>, optimization: bool) -> Result
                 );
             }
         }
+        // the medians of the repetitions, or the first calls where there were none
+        let (function_s, reverse_s, which) = match (&t.gafs, &t.vjp) {
+            (Some(g), Some(v)) => (g.median_s, v.median_s, "medians"),
+            _ => (t.gafs_first_s, t.vjp_first_s, "first calls"),
+        };
         println!(
-            "  reverse / function (medians): {:.2} (paper: 146.4 / 70.5 min = 2.08 on 400 cores)",
-            t.vjp.median_s / t.gafs.median_s
+            "  reverse / function ({which}): {:.2} (paper: 146.4 / 70.5 min = 2.08 on 400 cores)",
+            reverse_s / function_s
         );
         let threads = rayon::current_num_threads() as f64;
         println!(
-            "  core-seconds a cell: function {:.4}, reverse {:.4} (paper: {:.1} and {:.1} a node: 70.5 and 146.4 min on 400 cores, 219 555 nodes)",
-            t.gafs.median_s * threads / cells,
-            t.vjp.median_s * threads / cells,
+            "  core-seconds a cell ({which}): function {:.4}, reverse {:.4} (paper: {:.1} and {:.1} a node: 70.5 and 146.4 min on 400 cores, 219 555 nodes)",
+            function_s * threads / cells,
+            reverse_s * threads / cells,
             PAPER_FUNCTION_MIN * 60.0 * PAPER_CORES / PAPER_NODES,
             PAPER_GRADIENT_MIN * 60.0 * PAPER_CORES / PAPER_NODES
         );
+        if repeat == 0 {
+            println!("  (--repeat 0: the first calls only; no warm-start or line-search figures)");
+            return Ok(());
+        }
         let w = bench_lfd_warm_start(&study)?;
         println!(
             "  the function at a neighbouring design (every thickness × 1.01), GMRES from zero      {:>9.2} s, {} iterations ({:.1} a right-hand side)",
@@ -300,13 +314,13 @@ pub struct LfdTimings {
     pub build_s: f64,
     /// The first `Aerodynamics::gafs` call: every k, every mode and the gust.
     pub gafs_first_s: f64,
-    /// The timed GAF tables after it.
-    pub gafs: Stats,
+    /// The timed GAF tables after it (none with `repeat` 0).
+    pub gafs: Option<Stats>,
     /// The first reverse call (it assembles the reverse mode's Jacobians) with a seed on every
     /// GAF entry.
     pub vjp_first_s: f64,
-    /// The timed reverse calls after it (Jacobians reused).
-    pub vjp: Stats,
+    /// The timed reverse calls after it (Jacobians reused; none with `repeat` 0).
+    pub vjp: Option<Stats>,
     /// Peak resident memory of the process over the model's build, the GAF tables and the
     /// reverse calls (GB; where the system reports it: Linux).
     pub peak_build_gb: Option<f64>,
@@ -314,7 +328,40 @@ pub struct LfdTimings {
     pub peak_vjp_gb: Option<f64>,
 }
 
-/// The LFD stages on the study's initial design (no steady-state cache), see [`LfdTimings`].
+/// Puts the LFD study's GAF table on the reduced frequencies `k` for a first-calls-only bench
+/// (`--k` with `--repeat 0`): the gust response and warm-start figures need the study's own
+/// list (at least 4 frequencies for its spline), so other repeat counts are refused.
+pub fn set_frequencies(study: &mut Study, k: &[f64], repeat: Option<usize>) -> Result<()> {
+    if repeat != Some(0) {
+        anyhow::bail!(
+            "--k needs --repeat 0: the repetitions' gust response and warm starts use the study's own reduced frequencies"
+        );
+    }
+    gustkit_core::check_reduced_frequencies(k).map_err(|e| anyhow::anyhow!("--k: {e}"))?;
+    match study.spec.aero.as_mut() {
+        Some(aero) if matches!(aero.fidelity, crate::study::FidelitySpec::Lfd(_)) => {
+            aero.reduced_frequencies = k.to_vec();
+            Ok(())
+        }
+        _ => anyhow::bail!(
+            "--k: {}: the study's fidelity is not the LFD",
+            study.file.display()
+        ),
+    }
+}
+
+/// `repeat` timed calls of `f` (none for 0: a level where one call takes hours).
+fn repeated(repeat: usize, mut f: impl FnMut() -> Result<f64>) -> Result<Option<Stats>> {
+    if repeat == 0 {
+        return Ok(None);
+    }
+    Ok(Some(Stats::of(
+        (0..repeat).map(|_| f()).collect::<Result<_>>()?,
+    )))
+}
+
+/// The LFD stages on the study's initial design (no steady-state cache), see [`LfdTimings`];
+/// `repeat` 0 times the first calls alone.
 pub fn bench_lfd(study: &Study, repeat: usize) -> Result<LfdTimings> {
     let (plate, modes, _) = analyze(study)?;
     let mut study = study.clone();
@@ -335,7 +382,7 @@ pub fn bench_lfd(study: &Study, repeat: usize) -> Result<LfdTimings> {
         Ok(t.elapsed().as_secs_f64())
     };
     let gafs_first_s = gafs()?;
-    let gafs = Stats::of((0..repeat.max(1)).map(|_| gafs()).collect::<Result<_>>()?);
+    let gafs = repeated(repeat, gafs)?;
     let peak_gafs_gb = peak_memory_gb();
     reset_peak_memory();
     let mut seed = table.expect("computed above");
@@ -355,7 +402,7 @@ pub fn bench_lfd(study: &Study, repeat: usize) -> Result<LfdTimings> {
         Ok(t.elapsed().as_secs_f64())
     };
     let vjp_first_s = vjp()?;
-    let vjp = Stats::of((0..repeat.max(1)).map(|_| vjp()).collect::<Result<_>>()?);
+    let vjp = repeated(repeat, vjp)?;
     let peak_vjp_gb = peak_memory_gb();
     Ok(LfdTimings {
         n_k,

@@ -2,7 +2,7 @@
 //! as it finishes (so `--resume` redoes only the missing ones), then the table, CSV and figure.
 
 use crate::report::write_atomic;
-use crate::runner::wing::{analyze, optimize::fnv, optimize::optimize};
+use crate::runner::wing::{analyze, optimize::optimize, optimize::spec_hash};
 use crate::study::Study;
 use anyhow::{Context, Result};
 use std::path::Path;
@@ -131,7 +131,7 @@ pub fn sweep(study: &Study, reports: &Path, resume: bool) -> Result<crate::runne
     let results: Vec<Result<CaseResult>> = cases
         .par_iter()
         .map(|case| {
-            let hash = format!("{:016x}", fnv(&serde_json::to_string(&case.study.spec)?));
+            let hash = spec_hash(&case.study.spec)?;
             let path = dir.join(format!("cases/case_{:04}.json", case.index));
             if resume {
                 if let Ok(text) = std::fs::read_to_string(&path) {

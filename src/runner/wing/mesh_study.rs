@@ -261,10 +261,7 @@ fn fingerprint(s: &Study) -> Result<String> {
         l.warm_start_designs = None;
         l.gmres_batch = None;
     }
-    Ok(format!(
-        "{:016x}",
-        super::optimize::fnv(&serde_json::to_string(&spec)?)
-    ))
+    super::optimize::spec_hash(&spec)
 }
 
 /// A hash of what the rows of one mesh study share: the study without its name, description
@@ -280,10 +277,7 @@ fn case_fingerprint(s: &Study) -> Result<String> {
             a.remove("fidelity");
         }
     }
-    Ok(format!(
-        "{:016x}",
-        super::optimize::fnv(&serde_json::to_string(&v)?)
-    ))
+    super::optimize::spec_hash(&v)
 }
 
 /// Refuses a `mesh_study.json` whose rows are of another case (another design, modes,

@@ -41,6 +41,12 @@ pub(crate) fn fnv(text: &str) -> u64 {
     })
 }
 
+/// The FNV-1a hash of a value's JSON text as 16 hex digits: what ties a checkpoint, a sweep's
+/// case file or a mesh study's rows to the study that wrote them (stable across Rust releases).
+pub(crate) fn spec_hash<T: serde::Serialize + ?Sized>(value: &T) -> Result<String> {
+    Ok(format!("{:016x}", fnv(&serde_json::to_string(value)?)))
+}
+
 /// The part of a study that defines its optimization problem: everything but what only labels
 /// the run (description, reference), decides when it stops or what the line search accepts from
 /// here on (max_iterations, tolerance, nonmonotone_memory), belongs
@@ -158,9 +164,9 @@ pub(super) fn open_checkpoint(
 ) -> Result<(String, Option<crate::optim::Checkpoint>)> {
     let defining = defining_spec(study)?;
     let mut problem_id = format!(
-        "{}:{:016x}:f{FORMULATION}",
+        "{}:{}:f{FORMULATION}",
         study.spec.name,
-        fnv(&serde_json::to_string(&defining)?)
+        spec_hash(&defining)?
     );
     if pass > 1 {
         problem_id += &format!(":pass{}", pass);
