@@ -9,7 +9,7 @@ use super::contract::{
 };
 use crate::wing::{planform_point, Planform, N_PLANFORM};
 use gustkit_core::scalar::Dual;
-use gustkit_dlm::{Dlm, SurfaceSpec};
+use gustkit_dlm::{Dlm, Spacing, SurfaceSpec};
 use serde::{Deserialize, Serialize};
 
 /// Box layout of the DLM on the planform.
@@ -77,9 +77,23 @@ impl DlmSpec {
         (d, words)
     }
 
-    /// The model in words: its lattice.
+    /// The model in words: its lattice, and its spacings where either is not uniform (two
+    /// lattices of the same box counts are different models when their spacings differ).
     pub fn words(&self) -> String {
-        format!("DLM {} × {} boxes", self.n_chord, self.n_span)
+        let lattice = format!("DLM {} × {} boxes", self.n_chord, self.n_span);
+        let name = |s: &Spacing| match s {
+            Spacing::Uniform => "uniform",
+            Spacing::Cosine => "cosine",
+            Spacing::Fractions(_) => "given divisions",
+        };
+        if self.chord_spacing == Spacing::Uniform && self.span_spacing == Spacing::Uniform {
+            return lattice;
+        }
+        format!(
+            "{lattice} (chordwise {}, spanwise {})",
+            name(&self.chord_spacing),
+            name(&self.span_spacing)
+        )
     }
 
     /// The lattice on a planform (boxes only; influence matrices come with the first GAFs).

@@ -229,7 +229,7 @@ fn strip_binding_matches_its_surface() {
 }
 
 /// Each fidelity's next resolution for the resolution check, in its own words: the DLM's lattice
-/// doubled each way, the LFD's next mesh level (coarse 7 168 → medium 57 344 cells; none above
+/// doubled each way (its spacings named where not uniform), the LFD's next mesh level (coarse 7 168 → medium 57 344 cells; none above
 /// the fine one), twice the strips.
 #[test]
 fn each_fidelity_refines_itself() {
@@ -238,6 +238,12 @@ fn each_fidelity_refines_itself() {
         .refined()
         .unwrap();
     assert_eq!((d.words(), w.as_str()), (w.clone(), "DLM 16 × 24 boxes"));
+    // the spacings are part of the model: named where either is not uniform
+    let (_, w) =
+        spec(serde_json::json!({"dlm": {"n_chord": 8, "n_span": 12, "chord_spacing": "cosine"}}))
+            .refined()
+            .unwrap();
+    assert_eq!(w, "DLM 16 × 24 boxes (chordwise cosine, spanwise uniform)");
     let (_, w) = spec(serde_json::json!({"lfd": {"mesh": "coarse"}}))
         .refined()
         .unwrap();
