@@ -78,6 +78,10 @@ pub struct LfdWingSpec {
     /// GMRES stops at ‖A q̂ + b‖ ≤ tolerance ‖b‖.
     #[serde(default = "default_gmres_tolerance")]
     pub gmres_tolerance: f64,
+    /// GMRES restarts after this many iterations (its basis: restart + 1 vectors of 80 bytes a
+    /// cell a right-hand side in flight). 40 by default: on the medium mesh (1 thread, 12
+    /// right-hand sides at k = 0.5, interleaved runs) as fast as 80 in 6 % more iterations, and
+    /// 0.15–0.3 GB lighter; at M = 0.954 the same time and GAFs within 4e-9.
     #[serde(default = "default_gmres_restart")]
     pub gmres_restart: usize,
     #[serde(default = "default_gmres_max")]
@@ -147,7 +151,7 @@ fn default_gmres_tolerance() -> f64 {
 }
 
 fn default_gmres_restart() -> usize {
-    80
+    40
 }
 
 fn default_gmres_max() -> usize {
@@ -208,19 +212,22 @@ impl LfdWingSpec {
     /// Bytes per cell of the LFD wing model on `threads` threads (each works on one frequency
     /// at a time, with its factorization and one right-hand side's GMRES basis), from its parts:
     /// shared by the threads, the mesh, geometry, states and deformation, the exact second-order
-    /// Jacobian (25 blocks a row, 5.2 kB) and the preconditioner's first-order blocks (7.5 kB
-    /// in all, with a margin over the measurements below), and with `forward_solutions: "memory"` the forward solutions of one GAF table
+    /// Jacobian (25 blocks a row, 5.2 kB) and the preconditioner's first-order blocks (10 kB
+    /// in all: 7.5 kB covered the medium mesh, the fine one measured 9.9 kB above the per-thread
+    /// part), and with `forward_solutions: "memory"` the forward solutions of one GAF table
     /// kept for the reverse sweep (11 k × 7 columns × 80 B, 6.2 kB); per thread the block
     /// ILU(k) of one frequency (6.9 blocks a row for ILU(0) and the fill blocks of ILU(k), the
     /// diagonal's inverse among them: 25 complex numbers each, 200 B in single precision or
     /// 400 B in double, and a 4-byte column), the GMRES bases of one batch of right-hand sides
     /// (`gmres_batch` × (restart + 1) complex vectors of 5 unknowns; the preconditioned vectors
     /// are not kept) and the
-    /// frequency's right-hand sides and dual-number geometry (3 kB). 32 kB a cell on 2 threads
-    /// at the defaults (restart 80, ILU(1) in single precision, forward solutions on disk),
-    /// 43 kB with double-precision factors and the solutions in memory; measured on the medium
-    /// wing mesh (57 344 cells, 2 threads, 6 modes): the whole `gustkit gafs` peaks at 1.75 GB
-    /// (30.4 kB a cell) at the defaults, 2.30 GB (40.0 kB) with the latter.
+    /// frequency's right-hand sides and dual-number geometry (3 kB). 27.8 kB a cell on 2 threads
+    /// at the defaults (restart 40, ILU(1) in single precision, forward solutions on disk).
+    /// Measured (the whole process's peak): the medium wing mesh (57 344 cells, 2 threads,
+    /// 6 modes, `gustkit gafs`) 1.44 GB (25.1 kB a cell) at the defaults and 1.75 GB (30.4 kB)
+    /// with restart 80 (estimates 1.59 and 1.96 GB); the fine one (458 752 cells) 8.61 GB on
+    /// 1 thread with restart 40 (18.8 kB a cell, estimate 8.67 GB) and 15.5 GB on 2 threads with
+    /// restart 80 (33.8 kB, estimate 15.7 GB).
     fn bytes_per_cell(&self, threads: usize) -> f64 {
         let threads = threads.max(1) as f64;
         // the blocks a row of ILU(k) (measured on the medium wing mesh: 6.9, 12.7, 22.1 and
@@ -235,8 +242,7 @@ impl LfdWingSpec {
             ForwardSolutionsSpec::Disk => 0.0,
             ForwardSolutionsSpec::Memory => 6.2e3,
         };
-        7.5e3
-            + forward
+        10e3 + forward
             + threads
                 * (ilu_blocks * block
                     + 16.0
