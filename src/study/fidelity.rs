@@ -3,6 +3,12 @@
 use super::*;
 
 impl Study {
+    /// The aerodynamic model in words (lattice, mesh or strips), as results and reports name it;
+    /// `None` without an `aero` section.
+    pub fn aero_model_words(&self) -> Option<String> {
+        self.spec.aero.as_ref().map(|a| a.fidelity.words())
+    }
+
     /// Refuses a study whose fidelity has no reverse mode where `what` needs gradients (those of
     /// the planform variables too when `planform`).
     pub fn require_reverse_mode(&self, what: &str, planform: bool) -> Result<(), StudyError> {

@@ -150,11 +150,7 @@ pub fn mesh_study(
                 case_fingerprint: None,
                 output: output.clone(),
                 dlm_rms: rms[0],
-                dlm_model: other
-                    .spec
-                    .aero
-                    .as_ref()
-                    .map_or(String::new(), |a| a.fidelity.words()),
+                dlm_model: other.aero_model_words().unwrap_or_default(),
                 rows: Vec::new(),
                 richardson: None,
             }

@@ -247,7 +247,7 @@ pub fn run(study: &Study, reports: &Path, resume: bool) -> Result<crate::runner:
             .aero
             .as_ref()
             .map(|a| a.fidelity.builder().name().to_string()),
-        aero_model: study.spec.aero.as_ref().map(|a| a.fidelity.words()),
+        aero_model: study.aero_model_words(),
         gust,
         discrete_gust,
         flutter,

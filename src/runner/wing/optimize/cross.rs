@@ -35,11 +35,6 @@ pub(super) fn fidelity_evaluation(
     })
 }
 
-/// A study's aerodynamic model in words (lattice, mesh or strips).
-fn model_words(s: &Study) -> Option<String> {
-    s.spec.aero.as_ref().map(|a| a.fidelity.words())
-}
-
 /// A design to cross-evaluate: its name, design vector, and its evaluation with the study's own
 /// fidelity with the time it took, when the run already has it.
 pub(super) type CrossPoint<'e> = (
@@ -77,7 +72,7 @@ pub(super) fn cross_evaluate(
             v_max,
         )?;
         e.time_s = t.elapsed().as_secs_f64();
-        e.model = model_words(s);
+        e.model = s.aero_model_words();
         Ok(e)
     };
     let designs = designs
@@ -86,7 +81,7 @@ pub(super) fn cross_evaluate(
             let own_eval = match own {
                 Some((ev, t)) => FidelityEvaluation {
                     time_s: *t,
-                    model: model_words(study),
+                    model: study.aero_model_words(),
                     ..fidelity_evaluation(
                         (&ev.aero, &ev.modes, &ev.table),
                         Ok(ev),
